@@ -1,0 +1,31 @@
+# Set-up and everyday commands.  Only python3 and make are assumed.
+PY ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.inskit-installed
+
+.PHONY: run test bench install clean
+
+$(BIN)/python:
+	$(PY) tools/make_venv.py $(VENV)
+
+$(STAMP): pyproject.toml | $(BIN)/python
+	$(BIN)/python -m pip install --disable-pip-version-check -q -e '.[test]'
+	touch $(STAMP)
+
+install: $(STAMP)
+
+## run: install, then the main job on the bundled default data
+run: install
+	$(BIN)/inskit run
+
+## test: install, then the whole default test suite
+test: install
+	$(BIN)/python -m pytest -q
+
+## bench: throughput figures as one JSON object
+bench: install
+	$(BIN)/inskit bench --json
+
+clean:
+	rm -rf $(VENV) build dist src/*.egg-info

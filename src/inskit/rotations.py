@@ -1,0 +1,232 @@
+"""Attitude math: DCM, quaternion, Euler angles, rotation vector.
+
+One convention, stated once (see :mod:`inskit`):
+
+* ``C_ab`` maps vectors from frame b to frame a: ``x_a = C_ab @ x_b``.
+* Quaternions are ``[q0, q1, q2, q3]`` (scalar first), Hamilton product;
+  ``q_ab`` represents the same rotation as ``C_ab``.
+* Euler angles are ``[roll, pitch, yaw]`` of the ZYX sequence:
+  ``C_nb = Rz(yaw) @ Ry(pitch) @ Rx(roll)``.
+* A rotation vector ``phi`` (axis times angle) gives ``C = exp([phi x])``.
+
+Every function takes a single item (``(3,)``, ``(4,)``, ``(3, 3)``) or a batch
+(``(n, 3)``, ``(n, 4)``, ``(n, 3, 3)``) and returns the same batch shape.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def skew(v):
+    """Skew-symmetric matrix ``[v x]`` so that ``skew(a) @ b == cross(a, b)``.
+
+    Parameters
+    ----------
+    v : (3,) or (n, 3) array_like
+
+    Returns
+    -------
+    (3, 3) or (n, 3, 3) ndarray
+    """
+    v = np.asarray(v, dtype=float)
+    z = np.zeros_like(v[..., 0])
+    x, y, w = v[..., 0], v[..., 1], v[..., 2]
+    return np.stack(
+        [np.stack([z, -w, y], -1), np.stack([w, z, -x], -1), np.stack([-y, x, z], -1)], -2
+    )
+
+
+def unskew(m):
+    """Vector of a skew-symmetric matrix (the antisymmetric part's axial vector)."""
+    m = np.asarray(m, dtype=float)
+    return 0.5 * np.stack(
+        [m[..., 2, 1] - m[..., 1, 2], m[..., 0, 2] - m[..., 2, 0], m[..., 1, 0] - m[..., 0, 1]], -1
+    )
+
+
+# --- Euler angles --------------------------------------------------------------
+def dcm_from_euler(rpy):
+    """``C_nb`` from ``[roll, pitch, yaw]`` [rad] of a ZYX rotation."""
+    rpy = np.asarray(rpy, dtype=float)
+    cr, sr = np.cos(rpy[..., 0]), np.sin(rpy[..., 0])
+    cp, sp = np.cos(rpy[..., 1]), np.sin(rpy[..., 1])
+    cy, sy = np.cos(rpy[..., 2]), np.sin(rpy[..., 2])
+    return np.stack(
+        [
+            np.stack([cp * cy, sr * sp * cy - cr * sy, cr * sp * cy + sr * sy], -1),
+            np.stack([cp * sy, sr * sp * sy + cr * cy, cr * sp * sy - sr * cy], -1),
+            np.stack([-sp, sr * cp, cr * cp], -1),
+        ],
+        -2,
+    )
+
+
+def euler_from_dcm(C_nb):
+    """``[roll, pitch, yaw]`` [rad] from ``C_nb``; yaw in (-pi, pi].
+
+    At pitch = +-90 deg roll and yaw are not separable; roll is then reported
+    as 0 and the combined rotation goes to yaw.
+    """
+    C = np.asarray(C_nb, dtype=float)
+    pitch = np.arcsin(np.clip(-C[..., 2, 0], -1.0, 1.0))
+    roll = np.arctan2(C[..., 2, 1], C[..., 2, 2])
+    yaw = np.arctan2(C[..., 1, 0], C[..., 0, 0])
+    gimbal = np.hypot(C[..., 2, 1], C[..., 2, 2]) < 1e-12
+    if np.any(gimbal):
+        roll = np.where(gimbal, 0.0, roll)
+        yaw = np.where(gimbal, np.arctan2(-C[..., 0, 1], C[..., 1, 1]), yaw)
+    return np.stack([roll, pitch, yaw], -1)
+
+
+# --- quaternions ------------------------------------------------------------------
+def quat_multiply(p, q):
+    """Hamilton product ``p * q`` (so ``q_ac = quat_multiply(q_ab, q_bc)``)."""
+    p = np.asarray(p, dtype=float)
+    q = np.asarray(q, dtype=float)
+    p0, p1, p2, p3 = p[..., 0], p[..., 1], p[..., 2], p[..., 3]
+    q0, q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    return np.stack(
+        [
+            p0 * q0 - p1 * q1 - p2 * q2 - p3 * q3,
+            p0 * q1 + p1 * q0 + p2 * q3 - p3 * q2,
+            p0 * q2 - p1 * q3 + p2 * q0 + p3 * q1,
+            p0 * q3 + p1 * q2 - p2 * q1 + p3 * q0,
+        ],
+        -1,
+    )
+
+
+def quat_conjugate(q):
+    """Conjugate (the inverse of a unit quaternion): ``q_ba`` from ``q_ab``."""
+    q = np.asarray(q, dtype=float)
+    return q * np.array([1.0, -1.0, -1.0, -1.0])
+
+
+def quat_normalize(q):
+    """Unit quaternion with a non-negative scalar part."""
+    q = np.asarray(q, dtype=float)
+    q = q / np.linalg.norm(q, axis=-1, keepdims=True)
+    return np.where(q[..., :1] < 0.0, -q, q)
+
+
+def dcm_from_quat(q):
+    """DCM ``C_ab`` from the unit quaternion ``q_ab``."""
+    q = np.asarray(q, dtype=float)
+    q0, q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    return np.stack(
+        [
+            np.stack([q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2 * (q1 * q2 - q0 * q3), 2 * (q1 * q3 + q0 * q2)], -1),
+            np.stack([2 * (q1 * q2 + q0 * q3), q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3, 2 * (q2 * q3 - q0 * q1)], -1),
+            np.stack([2 * (q1 * q3 - q0 * q2), 2 * (q2 * q3 + q0 * q1), q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3], -1),
+        ],
+        -2,
+    )
+
+
+def quat_from_dcm(C):
+    """Unit quaternion (scalar part >= 0) from a DCM, by Shepperd's method."""
+    C = np.asarray(C, dtype=float)
+    tr = C[..., 0, 0] + C[..., 1, 1] + C[..., 2, 2]
+    # four candidate solutions; pick the numerically largest denominator
+    cand = np.stack([tr, C[..., 0, 0], C[..., 1, 1], C[..., 2, 2]], -1)
+    k = np.argmax(cand, axis=-1)
+    c = C
+    s0 = 2.0 * np.sqrt(np.maximum(1.0 + tr, 0.0))
+    s1 = 2.0 * np.sqrt(np.maximum(1.0 + 2.0 * c[..., 0, 0] - tr, 0.0))
+    s2 = 2.0 * np.sqrt(np.maximum(1.0 + 2.0 * c[..., 1, 1] - tr, 0.0))
+    s3 = 2.0 * np.sqrt(np.maximum(1.0 + 2.0 * c[..., 2, 2] - tr, 0.0))
+    d21, d02, d10 = c[..., 2, 1] - c[..., 1, 2], c[..., 0, 2] - c[..., 2, 0], c[..., 1, 0] - c[..., 0, 1]
+    a01, a02, a12 = c[..., 0, 1] + c[..., 1, 0], c[..., 0, 2] + c[..., 2, 0], c[..., 1, 2] + c[..., 2, 1]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cands = np.stack(
+            [
+                np.stack([0.25 * s0, d21 / s0, d02 / s0, d10 / s0], -1),
+                np.stack([d21 / s1, 0.25 * s1, a01 / s1, a02 / s1], -1),
+                np.stack([d02 / s2, a01 / s2, 0.25 * s2, a12 / s2], -1),
+                np.stack([d10 / s3, a02 / s3, a12 / s3, 0.25 * s3], -1),
+            ],
+            -2,
+        )
+    q = np.take_along_axis(cands, k[..., None, None], axis=-2)[..., 0, :]
+    return quat_normalize(q)
+
+
+def quat_from_rotvec(phi):
+    """Unit quaternion of the rotation vector ``phi`` [rad] (exact, series near 0)."""
+    phi = np.asarray(phi, dtype=float)
+    a = np.linalg.norm(phi, axis=-1)
+    half = 0.5 * a
+    small = a < 1e-8
+    with np.errstate(invalid="ignore", divide="ignore"):
+        k = np.where(small, 0.5 - a * a / 48.0, np.sin(half) / np.where(small, 1.0, a))
+    return np.concatenate([np.cos(half)[..., None], k[..., None] * phi], -1)
+
+
+def rotvec_from_quat(q):
+    """Rotation vector [rad] (angle in [0, pi]) of a unit quaternion."""
+    q = quat_normalize(q)
+    s = np.linalg.norm(q[..., 1:], axis=-1)
+    a = 2.0 * np.arctan2(s, q[..., 0])
+    small = s < 1e-8
+    with np.errstate(invalid="ignore", divide="ignore"):
+        k = np.where(small, 2.0 / np.maximum(q[..., 0], 1e-300) * (1.0 + s * s / 6.0), a / np.where(small, 1.0, s))
+    return k[..., None] * q[..., 1:]
+
+
+def dcm_from_rotvec(phi):
+    """DCM ``exp([phi x])`` of a rotation vector [rad] (Rodrigues)."""
+    return dcm_from_quat(quat_from_rotvec(phi))
+
+
+def rotvec_from_dcm(C):
+    """Rotation vector [rad] of a DCM."""
+    return rotvec_from_quat(quat_from_dcm(C))
+
+
+def quat_from_euler(rpy):
+    """``q_nb`` from ``[roll, pitch, yaw]`` [rad] (ZYX)."""
+    rpy = np.asarray(rpy, dtype=float)
+    hr, hp, hy = 0.5 * rpy[..., 0], 0.5 * rpy[..., 1], 0.5 * rpy[..., 2]
+    cr, sr, cp, sp, cy, sy = np.cos(hr), np.sin(hr), np.cos(hp), np.sin(hp), np.cos(hy), np.sin(hy)
+    q = np.stack(
+        [
+            cr * cp * cy + sr * sp * sy,
+            sr * cp * cy - cr * sp * sy,
+            cr * sp * cy + sr * cp * sy,
+            cr * cp * sy - sr * sp * cy,
+        ],
+        -1,
+    )
+    return quat_normalize(q)
+
+
+def euler_from_quat(q):
+    """``[roll, pitch, yaw]`` [rad] from ``q_nb``."""
+    return euler_from_dcm(dcm_from_quat(q))
+
+
+def quat_rotate(q, v):
+    """Rotate vectors: ``C(q) @ v`` for ``q_ab`` and ``v_b``, returning ``v_a``."""
+    return np.einsum("...ij,...j->...i", dcm_from_quat(q), np.asarray(v, dtype=float))
+
+
+def orthonormalize(C):
+    """Nearest rotation matrix (in the Frobenius sense) by SVD."""
+    u, _, vt = np.linalg.svd(np.asarray(C, dtype=float))
+    return u @ vt
+
+
+def attitude_error(C_est, C_true):
+    """Small-angle attitude error ``psi`` [rad], resolved in the reference frame.
+
+    ``C_est = (I - [psi x]) C_true`` to first order, i.e. ``psi`` is the
+    rotation vector of ``C_true @ C_est.T``; exact for any angle.
+    """
+    return rotvec_from_dcm(np.asarray(C_true) @ np.swapaxes(np.asarray(C_est), -1, -2))
+
+
+def wrap_angle(a):
+    """Wrap angles [rad] into (-pi, pi]."""
+    a = np.asarray(a, dtype=float)
+    return -((-a + np.pi) % (2.0 * np.pi) - np.pi)

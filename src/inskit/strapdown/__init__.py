@@ -1,0 +1,319 @@
+"""Strapdown INS mechanizations: local-level NED, wander-azimuth, ECEF, inertial.
+
+Every mechanization takes :class:`~inskit.types.ImuData` (angle and velocity
+increments with timestamps; build it with ``ImuData.from_rates`` from rates)
+and an initial :class:`~inskit.types.NavState`, and returns a
+:class:`~inskit.types.NavSolution` in NED terms, whatever frame it integrates
+in, so that solutions compare directly.
+
+Two ways to call:
+
+* whole array: ``mechanize(imu, initial, frame="ned")``;
+* streaming: ``integ = NedIntegrator(initial); integ.run(chunk)`` repeatedly,
+  the state (and the memory of the two-sample algorithms) carried from one
+  chunk to the next, so logs larger than memory can be processed.  Chunked and
+  whole-array runs give identical numbers.
+
+The per-epoch loops are compiled (:mod:`inskit.strapdown._kernels`).
+
+References
+----------
+SYSTEM.md §1.1 (wander-azimuth block diagram), §1.2 (inertial frame), §1.4
+(NED, source 000 eq. 1-37..1-42); Savage, *Strapdown Analytics*, 2000;
+Groves 2013 ch. 5.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import earth
+from .. import rotations as rot
+from ..errors import InputError
+from ..types import ImuData, NavSolution, NavState
+from . import _kernels as K
+
+__all__ = [
+    "EcefIntegrator",
+    "InertialIntegrator",
+    "NedIntegrator",
+    "WanderIntegrator",
+    "mechanize",
+    "FRAMES",
+]
+
+_HEIGHT_MODES = {"free": K.HEIGHT_FREE, "hold": K.HEIGHT_HOLD, "aid": K.HEIGHT_AID}
+
+
+def _qz(angle):
+    """Quaternion(s) of a rotation by ``angle`` about the z (down) axis."""
+    angle = np.asarray(angle, dtype=float)
+    z = np.zeros_like(angle)
+    return np.stack([np.cos(0.5 * angle), z, z, np.sin(0.5 * angle)], -1)
+
+
+class _Integrator:
+    """Common streaming logic: carried state, chunk bookkeeping."""
+
+    def __init__(self, initial: NavState, *, coning: bool = True):
+        if not isinstance(initial, NavState):
+            raise InputError("`initial` must be a NavState")
+        self.initial = initial
+        self.coning = bool(coning)
+        self._carry = np.zeros(11)
+        self._carry[0] = initial.time
+        self._started = False
+
+    def _start_index(self, imu: ImuData):
+        if not isinstance(imu, ImuData):
+            raise InputError("`imu` must be an ImuData (see ImuData.from_rates)")
+        if len(imu) == 0:
+            raise InputError("the IMU chunk is empty")
+        t_prev = self._carry[0]
+        if not self._started:
+            self._started = True
+            tol = 1e-9 * max(1.0, abs(t_prev))
+            if abs(imu.time[0] - t_prev) <= tol:
+                return 1
+            if imu.time[0] < t_prev:
+                raise InputError(
+                    f"the IMU data start at {imu.time[0]:.6f} s, before the initial state at {t_prev:.6f} s"
+                )
+            return 0
+        if imu.time[0] <= t_prev:
+            raise InputError(
+                f"chunk starts at {imu.time[0]:.6f} s, not after the previous chunk's end {t_prev:.6f} s"
+            )
+        return 0
+
+    def run(self, imu: ImuData, **kwargs) -> NavSolution:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+
+class NedIntegrator(_Integrator):
+    """Local-level NED mechanization (SYSTEM.md §1.4), streaming.
+
+    Parameters
+    ----------
+    initial : NavState
+    coning : bool
+        Two-sample coning and sculling compensation (default on).
+    height : {"free", "hold", "aid"}
+        Height channel: free inertial (unstable over long runs, SYSTEM.md
+        §1.3's ``gamma_d`` gradient), held to an external height (height and
+        vertical velocity taken from it), or aided by it through a
+        second-order critically damped loop of time constant
+        ``height_time_constant``.
+    height_time_constant : float
+        [s], for ``height="aid"``.
+    """
+
+    def __init__(self, initial, *, coning=True, height="free", height_time_constant=10.0):
+        super().__init__(initial, coning=coning)
+        if height not in _HEIGHT_MODES:
+            raise InputError(f"`height` must be one of {sorted(_HEIGHT_MODES)}, got {height!r}")
+        if not height_time_constant > 0:
+            raise InputError(f"`height_time_constant` must be > 0 s, got {height_time_constant}")
+        self.height_mode = _HEIGHT_MODES[height]
+        tau = float(height_time_constant)
+        self._gains = np.array([2.0 / tau, 1.0 / tau**2])
+        self._lla = initial.lla.copy()
+        self._v = initial.v_n.copy()
+        self._q = initial.q_nb.copy()
+
+    def run(self, imu: ImuData, height_ref=None) -> NavSolution:
+        """Integrate one chunk; return the solution at its sample times.
+
+        Parameters
+        ----------
+        imu : ImuData
+        height_ref : float or (n,) array_like, optional
+            External height [m] at the chunk's sample times; required when the
+            height channel is held or aided.
+        """
+        start = self._start_index(imu)
+        n = len(imu)
+        if self.height_mode != K.HEIGHT_FREE:
+            if height_ref is None:
+                raise InputError("an external height (`height_ref`) is needed to hold or aid the height channel")
+            h_ref = np.broadcast_to(np.asarray(height_ref, dtype=float), (n,)).copy()
+            if not np.isfinite(h_ref).all():
+                raise InputError("`height_ref` has a NaN value")
+        else:
+            h_ref = np.zeros(1)
+        lla = np.empty((n, 3))
+        v = np.empty((n, 3))
+        q = np.empty((n, 4))
+        K.ned_kernel(imu.time, imu.dtheta_b, imu.dv_b, start, self._lla, self._v, self._q, self._carry,
+                     self.coning, self.height_mode, h_ref, self._gains, lla, v, q)
+        return NavSolution(imu.time, lla, v, q)
+
+    @property
+    def state(self) -> NavState:
+        return NavState(self._carry[0], self._lla, self._v, self._q)
+
+
+class WanderIntegrator(_Integrator):
+    """Wander-azimuth mechanization (SYSTEM.md §1.1), valid over the poles.
+
+    The solution carries the wander angle as ``extra["alpha_rad"]`` (the angle
+    from north to the wander x axis, positive toward east).  At a pole the
+    longitude and the wander angle are individually undefined; their
+    difference, the attitude and the position stay well defined.
+
+    Parameters
+    ----------
+    initial : NavState
+    coning : bool
+    alpha0 : float
+        Initial wander angle [rad].
+    """
+
+    def __init__(self, initial, *, coning=True, alpha0=0.0):
+        super().__init__(initial, coning=coning)
+        lat, lon, h = initial.lla
+        C_ew = earth.dcm_en(lat, lon) @ rot.dcm_from_quat(_qz(alpha0))
+        self._q_ew = rot.quat_from_dcm(C_ew)
+        self._h = np.array([h])
+        self._v = rot.dcm_from_quat(_qz(-alpha0)) @ initial.v_n
+        self._q = rot.quat_multiply(_qz(-alpha0), initial.q_nb)
+
+    def run(self, imu: ImuData) -> NavSolution:
+        start = self._start_index(imu)
+        n = len(imu)
+        q_ew = np.empty((n, 4))
+        h = np.empty(n)
+        v_w = np.empty((n, 3))
+        q_wb = np.empty((n, 4))
+        K.wander_kernel(imu.time, imu.dtheta_b, imu.dv_b, start, self._q_ew, self._h, self._v, self._q,
+                        self._carry, self.coning, q_ew, h, v_w, q_wb)
+        return wander_to_ned(imu.time, q_ew, h, v_w, q_wb)
+
+
+def wander_to_ned(time, q_ew, h, v_w, q_wb) -> NavSolution:
+    """Convert wander-azimuth states to a NED NavSolution (vectorised)."""
+    C = rot.dcm_from_quat(q_ew)
+    lat = np.arcsin(np.clip(-C[:, 2, 2], -1.0, 1.0))
+    alpha = np.arctan2(-C[:, 2, 1], C[:, 2, 0])
+    lon = np.arctan2(-C[:, 1, 2], -C[:, 0, 2])
+    q_nw = _qz(alpha)
+    v_n = np.einsum("nij,nj->ni", rot.dcm_from_quat(q_nw), v_w)
+    q_nb = rot.quat_multiply(q_nw, q_wb)
+    return NavSolution(time, np.column_stack([lat, lon, h]), v_n, q_nb, {"alpha_rad": alpha})
+
+
+class EcefIntegrator(_Integrator):
+    """ECEF mechanization (Groves 2013 §5.2), streaming."""
+
+    def __init__(self, initial, *, coning=True):
+        super().__init__(initial, coning=coning)
+        lat, lon, _ = initial.lla
+        C_en = earth.dcm_en(lat, lon)
+        self._r = earth.lla_to_ecef(initial.lla)
+        self._v = C_en @ initial.v_n
+        self._q = rot.quat_multiply(rot.quat_from_dcm(C_en), initial.q_nb)
+
+    def run(self, imu: ImuData) -> NavSolution:
+        start = self._start_index(imu)
+        n = len(imu)
+        r = np.empty((n, 3))
+        v = np.empty((n, 3))
+        q = np.empty((n, 4))
+        K.ecef_kernel(imu.time, imu.dtheta_b, imu.dv_b, start, self._r, self._v, self._q, self._carry,
+                      self.coning, r, v, q)
+        return ecef_to_ned_solution(imu.time, r, v, q)
+
+
+def ecef_to_ned_solution(time, r_e, v_e, q_eb) -> NavSolution:
+    """Convert ECEF position, velocity and attitude to a NED NavSolution."""
+    lla = earth.ecef_to_lla(r_e)
+    C_ne = np.swapaxes(earth.dcm_en(lla[:, 0], lla[:, 1]), -1, -2)
+    v_n = np.einsum("nij,nj->ni", C_ne, v_e)
+    q_nb = rot.quat_multiply(rot.quat_from_dcm(C_ne), q_eb)
+    return NavSolution(time, lla, v_n, q_nb)
+
+
+class InertialIntegrator(_Integrator):
+    """Inertial-frame mechanization (SYSTEM.md §1.2), streaming.
+
+    The inertial frame coincides with ECEF at the initial epoch.  The state is
+    the inertial position and velocity ``dr_i/dt``; the solution is converted
+    to Earth-referenced NED terms.
+    """
+
+    def __init__(self, initial, *, coning=True):
+        super().__init__(initial, coning=coning)
+        lat, lon, _ = initial.lla
+        C_en = earth.dcm_en(lat, lon)
+        self.t0 = initial.time
+        self._r = earth.lla_to_ecef(initial.lla)
+        w = np.array([0.0, 0.0, earth.OMEGA_IE])
+        self._v = C_en @ initial.v_n + np.cross(w, self._r)
+        self._q = rot.quat_multiply(rot.quat_from_dcm(C_en), initial.q_nb)
+
+    def run(self, imu: ImuData) -> NavSolution:
+        start = self._start_index(imu)
+        n = len(imu)
+        r = np.empty((n, 3))
+        v = np.empty((n, 3))
+        q = np.empty((n, 4))
+        K.inertial_kernel(imu.time, imu.dtheta_b, imu.dv_b, start, self.t0, self._r, self._v, self._q,
+                          self._carry, self.coning, r, v, q)
+        theta = earth.OMEGA_IE * (imu.time - self.t0)
+        q_ei = _qz(-theta)
+        C_ei = rot.dcm_from_quat(q_ei)
+        w = np.array([0.0, 0.0, earth.OMEGA_IE])
+        r_e = np.einsum("nij,nj->ni", C_ei, r)
+        v_e = np.einsum("nij,nj->ni", C_ei, v - np.cross(w, r))
+        return ecef_to_ned_solution(imu.time, r_e, v_e, rot.quat_multiply(q_ei, q))
+
+
+FRAMES = {
+    "ned": NedIntegrator,
+    "wander": WanderIntegrator,
+    "ecef": EcefIntegrator,
+    "inertial": InertialIntegrator,
+}
+
+
+def mechanize(imu: ImuData, initial: NavState, *, frame="ned", chunk_size=1_000_000,
+              progress=None, height_ref=None, **options) -> NavSolution:
+    """Free-inertial navigation from IMU increments and an initial state.
+
+    Parameters
+    ----------
+    imu : ImuData
+        Increments; ``imu.time[0]`` is normally the initial epoch.
+    initial : NavState
+    frame : {"ned", "wander", "ecef", "inertial"}
+        Frame the equations are integrated in; the result is always in NED
+        terms.
+    chunk_size : int
+        Rows per compiled call (a progress bar advances per chunk).
+    progress : callable, optional
+        Called with the number of rows done after each chunk.
+    height_ref : float or (n,) array, optional
+        External height for ``frame="ned"`` with ``height="hold"`` or ``"aid"``.
+    **options
+        Passed to the integrator (``coning``, ``height``, ``alpha0`` ...).
+
+    Returns
+    -------
+    NavSolution
+    """
+    if frame not in FRAMES:
+        raise InputError(f"`frame` must be one of {sorted(FRAMES)}, got {frame!r}")
+    integ = FRAMES[frame](initial, **options)
+    parts = []
+    n = len(imu)
+    href = None if height_ref is None else np.broadcast_to(np.asarray(height_ref, float), (n,))
+    for a in range(0, n, int(chunk_size)):
+        b = min(n, a + int(chunk_size))
+        chunk = imu.slice(a, b)
+        if frame == "ned":
+            parts.append(integ.run(chunk, None if href is None else href[a:b]))
+        else:
+            parts.append(integ.run(chunk))
+        if progress is not None:
+            progress(b - a)
+    return NavSolution.concat(parts)

@@ -1,0 +1,270 @@
+"""Data containers shared across the package: IMU samples, navigation states.
+
+They are valid when constructed or refuse to be: shapes, finiteness and time
+order are checked once here, so the compiled kernels can trust their input.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import rotations as rot
+from .errors import InputError
+
+
+def _as_array(name, x, shape_tail, n=None):
+    a = np.ascontiguousarray(x, dtype=float)
+    if a.ndim != 1 + len(shape_tail) or a.shape[1:] != tuple(shape_tail):
+        want = "(n" + "".join(f", {s}" for s in shape_tail) + ")"
+        raise InputError(f"`{name}` must have shape {want}, got {a.shape}")
+    if n is not None and a.shape[0] != n:
+        raise InputError(f"`{name}` has {a.shape[0]} rows but `time` has {n}")
+    bad = ~np.isfinite(a.reshape(a.shape[0], -1)).all(axis=1)
+    if bad.any():
+        raise InputError(f"`{name}` has a NaN or infinite value at row {int(np.argmax(bad))}")
+    return a
+
+
+def check_time(name, t):
+    """Validate a strictly increasing, finite time vector; return it as float64."""
+    t = np.ascontiguousarray(t, dtype=float)
+    if t.ndim != 1:
+        raise InputError(f"`{name}` must have shape (n,), got {t.shape}")
+    if not np.isfinite(t).all():
+        raise InputError(f"`{name}` has a NaN or infinite value at row {int(np.argmax(~np.isfinite(t)))}")
+    d = np.diff(t)
+    if (d <= 0).any():
+        k = int(np.argmax(d <= 0)) + 1
+        what = "repeats" if d[k - 1] == 0 else "goes back from"
+        raise InputError(
+            f"`{name}` must strictly increase: row {k} ({t[k]!r}) {what} row {k - 1} ({t[k - 1]!r})"
+        )
+    return t
+
+
+@dataclass(frozen=True)
+class ImuData:
+    """Strapdown IMU output as angle and velocity increments.
+
+    Row ``k`` holds the increments over ``(time[k-1], time[k]]``; row 0 holds
+    those over the interval that ends at ``time[0]`` (ignored when ``time[0]``
+    is the initial epoch of a run).  Irregular steps are allowed.
+
+    Attributes
+    ----------
+    time : (n,) ndarray
+        Sample times [s], strictly increasing.
+    dtheta_b : (n, 3) ndarray
+        Angle increments of the body rate ``omega_ib_b`` [rad].
+    dv_b : (n, 3) ndarray
+        Velocity increments of the specific force ``f_b`` [m/s].
+    """
+
+    time: np.ndarray
+    dtheta_b: np.ndarray
+    dv_b: np.ndarray
+
+    def __post_init__(self):
+        t = check_time("time", self.time)
+        object.__setattr__(self, "time", t)
+        object.__setattr__(self, "dtheta_b", _as_array("dtheta_b", self.dtheta_b, (3,), len(t)))
+        object.__setattr__(self, "dv_b", _as_array("dv_b", self.dv_b, (3,), len(t)))
+
+    def __len__(self):
+        return len(self.time)
+
+    @classmethod
+    def from_rates(cls, time, gyro_b, accel_b, *, sampled="instant"):
+        """Build increments from sampled rates.
+
+        Parameters
+        ----------
+        time : (n,) array_like
+            Sample times [s].
+        gyro_b : (n, 3) array_like
+            Angular rate ``omega_ib_b`` [rad/s].
+        accel_b : (n, 3) array_like
+            Specific force ``f_b`` [m/s^2].
+        sampled : {"instant", "average"}
+            ``"instant"``: rates are point samples at ``time`` and are
+            integrated with the trapezoid rule (second order);
+            ``"average"``: each sample is the mean over the preceding interval
+            (what most MEMS output after their anti-alias filter).
+        """
+        t = check_time("time", time)
+        w = _as_array("gyro_b", gyro_b, (3,), len(t))
+        f = _as_array("accel_b", accel_b, (3,), len(t))
+        dt = np.empty_like(t)
+        dt[1:] = np.diff(t)
+        dt[0] = dt[1] if len(t) > 1 else 0.0
+        if sampled == "instant":
+            wm = np.vstack([w[:1], 0.5 * (w[1:] + w[:-1])])
+            fm = np.vstack([f[:1], 0.5 * (f[1:] + f[:-1])])
+        elif sampled == "average":
+            wm, fm = w, f
+        else:
+            raise InputError(f"`sampled` must be 'instant' or 'average', got {sampled!r}")
+        return cls(t, wm * dt[:, None], fm * dt[:, None])
+
+    def rates(self):
+        """Mean rates over each interval: ``(gyro_b, accel_b)`` [rad/s, m/s^2]."""
+        dt = np.empty_like(self.time)
+        dt[1:] = np.diff(self.time)
+        dt[0] = dt[1] if len(dt) > 1 else 1.0
+        return self.dtheta_b / dt[:, None], self.dv_b / dt[:, None]
+
+    def slice(self, start, stop=None):
+        """Rows ``start:stop`` as a new ImuData."""
+        s = slice(start, stop)
+        return ImuData(self.time[s], self.dtheta_b[s], self.dv_b[s])
+
+
+@dataclass(frozen=True)
+class NavState:
+    """Navigation state at one epoch, in NED terms.
+
+    Attributes
+    ----------
+    time : float
+        [s].
+    lla : (3,) ndarray
+        Latitude, longitude [rad], ellipsoidal height [m].
+    v_n : (3,) ndarray
+        Earth-relative velocity resolved in NED [m/s].
+    q_nb : (4,) ndarray
+        Attitude quaternion, body to NED, scalar first.
+    """
+
+    time: float
+    lla: np.ndarray
+    v_n: np.ndarray
+    q_nb: np.ndarray
+
+    def __post_init__(self):
+        lla = np.asarray(self.lla, dtype=float).reshape(3)
+        v = np.asarray(self.v_n, dtype=float).reshape(3)
+        q = np.asarray(self.q_nb, dtype=float).reshape(4)
+        if not (np.isfinite(lla).all() and np.isfinite(v).all() and np.isfinite(q).all()):
+            raise InputError("initial state has a NaN or infinite value")
+        if abs(lla[0]) > np.pi / 2:
+            raise InputError(f"latitude must be within +-90 deg, got {np.degrees(lla[0]):.6f} deg")
+        nq = np.linalg.norm(q)
+        if abs(nq - 1.0) > 1e-6:
+            raise InputError(f"`q_nb` must be a unit quaternion, its norm is {nq}")
+        object.__setattr__(self, "time", float(self.time))
+        object.__setattr__(self, "lla", lla)
+        object.__setattr__(self, "v_n", v)
+        object.__setattr__(self, "q_nb", q / nq)
+
+    @classmethod
+    def from_euler(cls, time, lla, v_n, rpy):
+        """State from roll, pitch, yaw [rad] (ZYX) instead of a quaternion."""
+        return cls(time, lla, v_n, rot.quat_from_euler(np.asarray(rpy, dtype=float)))
+
+    @property
+    def C_nb(self):
+        return rot.dcm_from_quat(self.q_nb)
+
+    @property
+    def euler(self):
+        """``[roll, pitch, yaw]`` [rad]."""
+        return rot.euler_from_quat(self.q_nb)
+
+
+@dataclass(frozen=True)
+class NavSolution:
+    """A navigation solution (or a truth trajectory) over time, in NED terms.
+
+    Attributes
+    ----------
+    time : (n,) ndarray
+        [s].
+    lla : (n, 3) ndarray
+        Latitude, longitude [rad], height [m].
+    v_n : (n, 3) ndarray
+        NED velocity [m/s].
+    q_nb : (n, 4) ndarray
+        Attitude quaternions, body to NED.
+    extra : dict of str -> ndarray
+        Further per-epoch columns (sigmas, wander angle, biases ...), each with
+        ``n`` rows; names carry their unit (``sigma_n_m``, ``alpha_rad``).
+    """
+
+    time: np.ndarray
+    lla: np.ndarray
+    v_n: np.ndarray
+    q_nb: np.ndarray
+    extra: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        t = check_time("time", self.time)
+        object.__setattr__(self, "time", t)
+        object.__setattr__(self, "lla", _as_array("lla", self.lla, (3,), len(t)))
+        object.__setattr__(self, "v_n", _as_array("v_n", self.v_n, (3,), len(t)))
+        object.__setattr__(self, "q_nb", _as_array("q_nb", self.q_nb, (4,), len(t)))
+        for k, v in self.extra.items():
+            if len(v) != len(t):
+                raise InputError(f"extra column `{k}` has {len(v)} rows, expected {len(t)}")
+
+    def __len__(self):
+        return len(self.time)
+
+    @classmethod
+    def from_euler(cls, time, lla, v_n, rpy, extra=None):
+        return cls(time, lla, v_n, rot.quat_from_euler(np.asarray(rpy, dtype=float)), extra or {})
+
+    @property
+    def euler(self):
+        """``(n, 3)`` roll, pitch, yaw [rad]."""
+        return rot.euler_from_quat(self.q_nb)
+
+    @property
+    def C_nb(self):
+        return rot.dcm_from_quat(self.q_nb)
+
+    def state(self, k):
+        """The NavState at row ``k``."""
+        return NavState(self.time[k], self.lla[k], self.v_n[k], self.q_nb[k])
+
+    def slice(self, start, stop=None):
+        s = slice(start, stop)
+        return NavSolution(self.time[s], self.lla[s], self.v_n[s], self.q_nb[s],
+                           {k: v[s] for k, v in self.extra.items()})
+
+    @staticmethod
+    def concat(parts):
+        """Join solutions that follow each other in time."""
+        parts = [p for p in parts if len(p)]
+        keys = set(parts[0].extra) if parts else set()
+        return NavSolution(
+            np.concatenate([p.time for p in parts]),
+            np.concatenate([p.lla for p in parts]),
+            np.concatenate([p.v_n for p in parts]),
+            np.concatenate([p.q_nb for p in parts]),
+            {k: np.concatenate([p.extra[k] for p in parts]) for k in keys},
+        )
+
+    def interpolate(self, t):
+        """Solution at times ``t`` (linear in position/velocity, slerp-free
+        normalised linear quaternion blend, adequate at IMU rates)."""
+        t = np.asarray(t, dtype=float)
+        if len(t) and (t[0] < self.time[0] or t[-1] > self.time[-1]):
+            raise InputError(
+                f"requested times {t[0]:.3f}..{t[-1]:.3f} s fall outside the solution span "
+                f"{self.time[0]:.3f}..{self.time[-1]:.3f} s"
+            )
+        i = np.clip(np.searchsorted(self.time, t, side="right") - 1, 0, len(self.time) - 2)
+        w = ((t - self.time[i]) / (self.time[i + 1] - self.time[i]))[:, None]
+
+        def lin(a):
+            return a[i] * (1 - w) + a[i + 1] * w
+
+        q0, q1 = self.q_nb[i], self.q_nb[i + 1]
+        q1 = np.where((np.sum(q0 * q1, axis=1) < 0)[:, None], -q1, q1)
+        q = q0 * (1 - w) + q1 * w
+        q /= np.linalg.norm(q, axis=1, keepdims=True)
+        extra = {k: (v[i] * (1 - w[:, 0]) + v[i + 1] * w[:, 0]) if v.ndim == 1 else lin(v)
+                 for k, v in self.extra.items()}
+        return NavSolution(t, lin(self.lla), lin(self.v_n), q, extra)
