@@ -39,7 +39,7 @@ def check_time(name, t):
         k = int(np.argmax(d <= 0)) + 1
         what = "repeats" if d[k - 1] == 0 else "goes back from"
         raise InputError(
-            f"`{name}` must strictly increase: row {k} ({t[k]!r}) {what} row {k - 1} ({t[k - 1]!r})"
+            f"`{name}` must strictly increase: row {k} ({float(t[k])!r}) {what} row {k - 1} ({float(t[k - 1])!r})"
         )
     return t
 
@@ -212,6 +212,16 @@ class NavSolution:
         return len(self.time)
 
     @classmethod
+    def _trusted(cls, time, lla, v_n, q_nb, extra=None):
+        """Build without validation, for arrays a compiled kernel just produced
+        from validated input (checking 10^6 rows again would cost more than the
+        integration).  Not for user data."""
+        obj = object.__new__(cls)
+        for k, v in (("time", time), ("lla", lla), ("v_n", v_n), ("q_nb", q_nb), ("extra", extra or {})):
+            object.__setattr__(obj, k, v)
+        return obj
+
+    @classmethod
     def from_euler(cls, time, lla, v_n, rpy, extra=None):
         return cls(time, lla, v_n, rot.quat_from_euler(np.asarray(rpy, dtype=float)), extra or {})
 
@@ -237,6 +247,8 @@ class NavSolution:
     def concat(parts):
         """Join solutions that follow each other in time."""
         parts = [p for p in parts if len(p)]
+        if len(parts) == 1:
+            return parts[0]
         keys = set(parts[0].extra) if parts else set()
         return NavSolution(
             np.concatenate([p.time for p in parts]),
@@ -268,3 +280,59 @@ class NavSolution:
         extra = {k: (v[i] * (1 - w[:, 0]) + v[i + 1] * w[:, 0]) if v.ndim == 1 else lin(v)
                  for k, v in self.extra.items()}
         return NavSolution(t, lin(self.lla), lin(self.v_n), q, extra)
+
+
+@dataclass(frozen=True)
+class GnssData:
+    """GNSS position (and optionally velocity) fixes with their sigmas.
+
+    Attributes
+    ----------
+    time : (n,) ndarray
+        [s], on the same time base as the IMU.
+    lla : (n, 3) ndarray
+        Antenna latitude, longitude [rad], height [m].
+    sigma_ned : (n, 3) ndarray
+        1-sigma position errors north, east, down [m], all > 0.
+    v_n : (n, 3) ndarray or None
+        NED velocity [m/s].
+    sigma_v_ned : (n, 3) ndarray or None
+        1-sigma velocity errors [m/s], all > 0.
+    """
+
+    time: np.ndarray
+    lla: np.ndarray
+    sigma_ned: np.ndarray
+    v_n: np.ndarray | None = None
+    sigma_v_ned: np.ndarray | None = None
+
+    def __post_init__(self):
+        t = check_time("time", self.time)
+        object.__setattr__(self, "time", t)
+        object.__setattr__(self, "lla", _as_array("lla", self.lla, (3,), len(t)))
+        s = _as_array("sigma_ned", self.sigma_ned, (3,), len(t))
+        if (s <= 0).any():
+            raise InputError(f"`sigma_ned` must be > 0, row {int(np.argmax((s <= 0).any(axis=1)))} has {s[(s <= 0).any(axis=1)][0]}")
+        object.__setattr__(self, "sigma_ned", s)
+        if (self.v_n is None) != (self.sigma_v_ned is None):
+            raise InputError("GNSS velocity and its sigmas must be given together")
+        if self.v_n is not None:
+            object.__setattr__(self, "v_n", _as_array("v_n", self.v_n, (3,), len(t)))
+            sv = _as_array("sigma_v_ned", self.sigma_v_ned, (3,), len(t))
+            if (sv <= 0).any():
+                raise InputError("`sigma_v_ned` must be > 0")
+            object.__setattr__(self, "sigma_v_ned", sv)
+
+    def __len__(self):
+        return len(self.time)
+
+    @property
+    def has_velocity(self):
+        return self.v_n is not None
+
+    def select(self, mask):
+        """Fixes where ``mask`` is true."""
+        m = np.asarray(mask, dtype=bool)
+        return GnssData(self.time[m], self.lla[m], self.sigma_ned[m],
+                        None if self.v_n is None else self.v_n[m],
+                        None if self.sigma_v_ned is None else self.sigma_v_ned[m])

@@ -146,7 +146,7 @@ class NedIntegrator(_Integrator):
         q = np.empty((n, 4))
         K.ned_kernel(imu.time, imu.dtheta_b, imu.dv_b, start, self._lla, self._v, self._q, self._carry,
                      self.coning, self.height_mode, h_ref, self._gains, lla, v, q)
-        return NavSolution(imu.time, lla, v, q)
+        return NavSolution._trusted(imu.time, lla, v, q)
 
     @property
     def state(self) -> NavState:
@@ -199,7 +199,7 @@ def wander_to_ned(time, q_ew, h, v_w, q_wb) -> NavSolution:
     q_nw = _qz(alpha)
     v_n = np.einsum("nij,nj->ni", rot.dcm_from_quat(q_nw), v_w)
     q_nb = rot.quat_multiply(q_nw, q_wb)
-    return NavSolution(time, np.column_stack([lat, lon, h]), v_n, q_nb, {"alpha_rad": alpha})
+    return NavSolution._trusted(time, np.column_stack([lat, lon, h]), v_n, q_nb, {"alpha_rad": alpha})
 
 
 class EcefIntegrator(_Integrator):
@@ -230,7 +230,7 @@ def ecef_to_ned_solution(time, r_e, v_e, q_eb) -> NavSolution:
     C_ne = np.swapaxes(earth.dcm_en(lla[:, 0], lla[:, 1]), -1, -2)
     v_n = np.einsum("nij,nj->ni", C_ne, v_e)
     q_nb = rot.quat_multiply(rot.quat_from_dcm(C_ne), q_eb)
-    return NavSolution(time, lla, v_n, q_nb)
+    return NavSolution._trusted(time, lla, v_n, q_nb)
 
 
 class InertialIntegrator(_Integrator):

@@ -1,0 +1,59 @@
+"""Throughput benchmarks (``inskit bench``): numbers, not timed tests.
+
+Each figure is the best of several repeats after a warm-up call, so compile
+time is excluded; numba runs on one core (no parallel kernels).
+"""
+
+from __future__ import annotations
+
+import platform
+import time
+
+import numpy as np
+
+from . import __version__
+from .simulation import StationaryTrajectory, ideal_imu, truth_solution
+from .strapdown import mechanize
+from .types import ImuData
+
+
+def _best_rate(fn, n, repeats):
+    fn()  # warm-up: compile or load the cache
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        best = min(best, time.perf_counter() - t0)
+    return n / best
+
+
+def _static_imu(duration_s, rate_hz, rng):
+    """A 100 Hz static log with white noise, built without the slow quadrature."""
+    t = np.arange(0.0, duration_s, 1.0 / rate_hz)
+    traj = StationaryTrajectory((np.radians(45.0), 0.0, 100.0))
+    one = ideal_imu(traj, t[:2], nodes=1)
+    dt = 1.0 / rate_hz
+    dth = np.tile(one.dtheta_b[1], (len(t), 1)) + rng.normal(0, 1e-6, (len(t), 3))
+    dv = np.tile(one.dv_b[1], (len(t), 1)) + rng.normal(0, 1e-4 * dt, (len(t), 3))
+    return ImuData(t, dth, dv), truth_solution(traj, t[:1]).state(0)
+
+
+def run_benchmarks(quick=False, progress=None):
+    """Run the benchmarks; return a flat dict of figures.
+
+    Keys: ``ned_epochs_per_s`` (NED mechanization over a 1 h, 100 Hz run,
+    whole-array call including result construction), ``wander_epochs_per_s``,
+    ``ecef_epochs_per_s``, ``inertial_epochs_per_s``.
+    """
+    rng = np.random.default_rng(0)
+    duration = 600.0 if quick else 3600.0
+    imu, init = _static_imu(duration, 100.0, rng)
+    n = len(imu) - 1
+    repeats = 2 if quick else 5
+    out = {"inskit_version": __version__, "python": platform.python_version(),
+           "machine": platform.machine(), "bench_imu_epochs": n, "bench_imu_rate_hz": 100.0}
+    for frame in ("ned", "wander", "ecef", "inertial"):
+        out[f"{frame}_epochs_per_s"] = round(_best_rate(lambda f=frame: mechanize(imu, init, frame=f), n, repeats))
+        if progress:
+            progress(frame)
+    return out

@@ -1,0 +1,234 @@
+"""The ``inskit`` command line: a thin layer over the library.
+
+Every command that reports results takes ``--json`` and then prints exactly
+one JSON object on stdout; logs and progress go to stderr.  User errors print
+one line ``inskit: error: ...`` and exit with status 2.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+import click
+import numpy as np
+
+from . import __version__
+from .errors import InputError, InskitError
+from .units import DEG
+
+
+def _log(msg):
+    click.echo(msg, err=True)
+
+
+def _emit(obj, as_json, table=None):
+    if as_json:
+        click.echo(json.dumps(obj, indent=None, sort_keys=False, default=_jsonable))
+    elif table is not None:
+        click.echo(table)
+
+
+def _jsonable(x):
+    if isinstance(x, (np.floating, np.integer)):
+        return x.item()
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    if isinstance(x, Path):
+        return str(x)
+    raise TypeError(type(x))
+
+
+def _progress(total, desc):
+    from tqdm import tqdm
+
+    return tqdm(total=total, desc=desc, unit="epoch", unit_scale=True, file=sys.stderr,
+                disable=not sys.stderr.isatty(), leave=False)
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="inskit")
+def cli():
+    """inskit: inertial navigation and INS/GNSS integration."""
+
+
+# --- mechanize -------------------------------------------------------------------
+def _parse_init(text):
+    parts = [p for p in text.replace(" ", "").split(",") if p != ""]
+    if len(parts) != 9:
+        raise InputError(
+            f"--init needs 9 comma-separated numbers lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg; "
+            f"got {len(parts)}"
+        )
+    try:
+        x = [float(p) for p in parts]
+    except ValueError:
+        raise InputError(f"--init: not a number in {text!r}") from None
+    return x
+
+
+@cli.command()
+@click.argument("imu_file", type=click.Path(dir_okay=False))
+@click.option("--init", "init_text", help="Initial state: lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg.")
+@click.option("--init-from", type=click.Path(dir_okay=False), help="Take the initial state from a solution/truth file (at the first IMU time).")
+@click.option("--frame", type=click.Choice(["ned", "wander", "ecef", "inertial"]), default="ned", show_default=True)
+@click.option("--height", type=click.Choice(["free", "hold", "aid"]), default="free", show_default=True,
+              help="Height channel (NED only): free, held to or aided by --height-ref.")
+@click.option("--height-ref", type=float, help="External height [m] for --height hold/aid (default: initial height).")
+@click.option("--no-coning", is_flag=True, help="Single-sample attitude update (no coning/sculling compensation).")
+@click.option("--no-unit-check", is_flag=True, help="Skip the unit-plausibility checks of the IMU reader.")
+@click.option("--out", "out_file", type=click.Path(dir_okay=False), help="Write the solution CSV here.")
+@click.option("--force", is_flag=True, help="Overwrite --out if it exists.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON summary object on stdout.")
+def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coning, no_unit_check, out_file, force,
+              as_json):
+    """Free-inertial navigation from an IMU file and an initial state."""
+    from . import io
+    from .strapdown import mechanize as run_mech
+    from .types import NavState
+
+    if out_file and Path(out_file).exists() and not force:
+        raise InputError(f"{out_file}: already exists; refusing to overwrite it (use --force)")
+    imu = io.read_imu(imu_file, check_units=not no_unit_check)
+    if init_text and init_from:
+        raise InputError("give either --init or --init-from, not both")
+    if init_from:
+        ref = io.read_solution(init_from)
+        init = ref.interpolate(imu.time[:1]).state(0)
+    elif init_text:
+        x = _parse_init(init_text)
+        init = NavState.from_euler(imu.time[0], [x[0] * DEG, x[1] * DEG, x[2]], x[3:6], np.array(x[6:9]) * DEG)
+    else:
+        raise InputError("an initial state is needed: --init ... or --init-from FILE")
+    if frame != "ned" and height != "free":
+        raise InputError("--height hold/aid is available with --frame ned only")
+    opts = {"coning": not no_coning}
+    if frame == "ned":
+        opts["height"] = height
+    href = None if height == "free" else (init.lla[2] if height_ref is None else height_ref)
+    t0 = time.perf_counter()
+    with _progress(len(imu), f"mechanize ({frame})") as bar:
+        sol = run_mech(imu, init, frame=frame, height_ref=href, progress=bar.update, chunk_size=200_000, **opts)
+    elapsed = time.perf_counter() - t0
+    if out_file:
+        io.write_solution(out_file, sol, overwrite=force)
+        _log(f"wrote {out_file}")
+    end = sol.state(len(sol) - 1)
+    rpy = end.euler / DEG
+    summary = {
+        "frame": frame,
+        "epochs": len(sol),
+        "duration_s": float(sol.time[-1] - sol.time[0]),
+        "elapsed_s": elapsed,
+        "final": {
+            "time_s": end.time, "lat_deg": end.lla[0] / DEG, "lon_deg": end.lla[1] / DEG, "height_m": end.lla[2],
+            "vn_m_s": end.v_n[0], "ve_m_s": end.v_n[1], "vd_m_s": end.v_n[2],
+            "roll_deg": rpy[0], "pitch_deg": rpy[1], "yaw_deg": rpy[2],
+        },
+        "out": out_file,
+    }
+    f = summary["final"]
+    table = (
+        f"{len(sol)} epochs over {summary['duration_s']:.1f} s in {elapsed:.2f} s ({frame})\n"
+        f"final: lat {f['lat_deg']:.8f} deg  lon {f['lon_deg']:.8f} deg  h {f['height_m']:.2f} m\n"
+        f"       v_n [{f['vn_m_s']:.3f}, {f['ve_m_s']:.3f}, {f['vd_m_s']:.3f}] m/s  "
+        f"rpy [{f['roll_deg']:.3f}, {f['pitch_deg']:.3f}, {f['yaw_deg']:.3f}] deg"
+    )
+    _emit(summary, as_json, table)
+
+
+# --- evaluate ----------------------------------------------------------------------
+def _summary_table(s):
+    rows = [("north_m", "m"), ("east_m", "m"), ("down_m", "m"), ("horizontal_m", "m"), ("3d_m", "m"),
+            ("vn_m_s", "m/s"), ("ve_m_s", "m/s"), ("vd_m_s", "m/s"),
+            ("roll_arcmin", "arcmin"), ("pitch_arcmin", "arcmin"), ("yaw_arcmin", "arcmin")]
+    lines = [f"{'error':<14}{'rms':>12}{'max':>12}{'final':>12}  unit"]
+    for k, u in rows:
+        v = s[k]
+        lines.append(f"{k:<14}{v['rms']:>12.4g}{v['max']:>12.4g}{v['final']:>12.4g}  {u}")
+    lines.append(f"{s['epochs']} epochs over {s['duration_s']:.1f} s")
+    return "\n".join(lines)
+
+
+@cli.command()
+@click.argument("solution_file", type=click.Path(dir_okay=False))
+@click.argument("truth_file", type=click.Path(dir_okay=False))
+@click.option("--plot", "plot_file", type=click.Path(dir_okay=False), help="Write an error plot (PNG).")
+@click.option("--force", is_flag=True, help="Overwrite --plot if it exists.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
+def evaluate(solution_file, truth_file, plot_file, force, as_json):
+    """Errors of a navigation solution against a truth file."""
+    from . import analysis, io
+
+    if plot_file and Path(plot_file).exists() and not force:
+        raise InputError(f"{plot_file}: already exists; refusing to overwrite it (use --force)")
+    sol = io.read_solution(solution_file)
+    truth = io.read_solution(truth_file)
+    err = analysis.nav_error(sol, truth)
+    s = analysis.summarize(err)
+    if plot_file:
+        analysis.plot_errors(err, plot_file, title=f"{Path(solution_file).name} vs {Path(truth_file).name}")
+        _log(f"wrote {plot_file}")
+        s["plot"] = plot_file
+    _emit(s, as_json, _summary_table(s))
+
+
+# --- bench ----------------------------------------------------------------------------
+@cli.command()
+@click.option("--quick", is_flag=True, help="Shorter runs (10 min of data instead of 1 h).")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
+def bench(quick, as_json):
+    """Throughput of the compiled kernels (epochs per second, one core)."""
+    from .bench import run_benchmarks
+
+    res = run_benchmarks(quick=quick, progress=lambda name: _log(f"bench: {name} done"))
+    table = "\n".join(f"{k:<28}{v}" for k, v in res.items())
+    _emit(res, as_json, table)
+
+
+# --- run (the main job) ------------------------------------------------------------------
+@cli.command()
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
+def run(as_json):
+    """The main job on the bundled default."""
+    from .demo import demo_run
+
+    res, table = demo_run(log=_log)
+    _emit(res, as_json, table)
+
+
+def main(argv=None):
+    """Entry point: run the CLI, turning user errors into one line and exit 2."""
+    debug = os.environ.get("INSKIT_DEBUG")
+    try:
+        cli.main(args=argv, prog_name="inskit", standalone_mode=False)
+    except click.exceptions.Abort:
+        click.echo("inskit: aborted", err=True)
+        sys.exit(130)
+    except click.exceptions.ClickException as exc:
+        exc.show()
+        sys.exit(exc.exit_code)
+    except InskitError as exc:
+        if debug:
+            raise
+        click.echo(f"inskit: error: {exc}", err=True)
+        sys.exit(2)
+    except (OSError, MemoryError) as exc:
+        if debug:
+            raise
+        click.echo(f"inskit: error: {exc}", err=True)
+        sys.exit(2)
+    except Exception as exc:  # noqa: BLE001 - last line of defence: never a traceback
+        if debug:
+            raise
+        click.echo(f"inskit: internal error: {type(exc).__name__}: {exc} "
+                   "(this is a bug; set INSKIT_DEBUG=1 for the traceback)", err=True)
+        sys.exit(3)
+    sys.exit(0)
+
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

@@ -1,0 +1,23 @@
+"""Reading and writing navigation data files.
+
+Formats (all CSV with one header line; units are carried in column names):
+
+* IMU: :func:`read_imu` / :func:`write_imu`
+* GNSS fixes: :func:`read_gnss` / :func:`write_gnss`
+* navigation solutions and truth: :func:`read_solution` / :func:`write_solution`
+
+See ``docs/formats.md`` for the column lists.  Every reader validates what it
+reads and raises :class:`~inskit.errors.InputError` with the file, the line or
+column, and what was expected.
+"""
+
+from .csv_formats import (
+    read_gnss,
+    read_imu,
+    read_solution,
+    write_gnss,
+    write_imu,
+    write_solution,
+)
+
+__all__ = ["read_gnss", "read_imu", "read_solution", "write_gnss", "write_imu", "write_solution"]

@@ -1,0 +1,310 @@
+"""The project's CSV formats for IMU data, GNSS fixes and navigation solutions.
+
+Every file has one header line; units are part of the column names
+(``gyro_x_deg_s``, ``accel_z_g``, ``lat_deg``).  Degrees and g appear only
+here: what the readers return is SI and radians.
+
+Line numbers in messages count the header as line 1, so data row ``i``
+(0-based) is line ``i + 2``, as a text editor shows it.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .. import rotations as rot
+from ..errors import InputError
+from ..types import GnssData, ImuData, NavSolution
+from ..units import DEG, DEG_PER_HOUR, G0
+
+AXES = ("x", "y", "z")
+GYRO_UNITS = {"rad_s": 1.0, "deg_s": DEG, "deg_h": DEG_PER_HOUR}
+ACCEL_UNITS = {"m_s2": 1.0, "g": G0}
+DTHETA_UNITS = {"rad": 1.0, "deg": DEG}
+DV_UNITS = {"m_s": 1.0}
+
+SOLUTION_COLUMNS = ["time_s", "lat_deg", "lon_deg", "height_m", "vn_m_s", "ve_m_s", "vd_m_s",
+                    "roll_deg", "pitch_deg", "yaw_deg"]
+GNSS_COLUMNS = ["time_s", "lat_deg", "lon_deg", "height_m", "sigma_n_m", "sigma_e_m", "sigma_d_m"]
+GNSS_VEL_COLUMNS = ["vn_m_s", "ve_m_s", "vd_m_s", "sigma_vn_m_s", "sigma_ve_m_s", "sigma_vd_m_s"]
+
+# unit plausibility thresholds (see read_imu)
+_ACCEL_G_LIKE = 2.0       # median |f| in m/s^2 below this looks like g
+_ACCEL_MS2_LIKE = 3.0     # median |f| in g above this looks like m/s^2
+_GYRO_RAD_MAX = 10.0      # 99th percentile |w| in rad/s above this looks like deg/s
+_GYRO_RAD_MEDIAN = 1.0    # median |w| in rad/s above this looks like deg/s
+
+
+def _read_table(path) -> tuple[Path, pd.DataFrame]:
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path}: no such file")
+    try:
+        df = pd.read_csv(path, skipinitialspace=True)
+    except pd.errors.EmptyDataError:
+        raise InputError(f"{path}: the file is empty; expected a header line and data rows") from None
+    except (pd.errors.ParserError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: not a readable CSV file ({str(exc).splitlines()[0]})") from None
+    df.columns = [str(c).strip() for c in df.columns]
+    if len(df) == 0:
+        raise InputError(f"{path}: has a header but no data rows")
+    return path, df
+
+
+def _numeric(path, df, columns):
+    """The named columns as a float array; names the line of a bad value."""
+    out = np.empty((len(df), len(columns)))
+    for j, c in enumerate(columns):
+        col = pd.to_numeric(df[c], errors="coerce").to_numpy(dtype=float)
+        bad = ~np.isfinite(col)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raw = df[c].iloc[i]
+            what = "is empty" if (isinstance(raw, float) and np.isnan(raw)) else f"has {raw!r}"
+            raise InputError(f"{path}: line {i + 2}: column '{c}' {what}; expected a finite number")
+        out[:, j] = col
+    return out
+
+
+def _require(path, df, columns, hint=""):
+    missing = [c for c in columns if c not in df.columns]
+    if missing:
+        raise InputError(
+            f"{path}: missing column(s) {', '.join(missing)}{hint}; found {', '.join(df.columns)}"
+        )
+
+
+def _check_time(path, t, column="time_s"):
+    d = np.diff(t)
+    bad = d <= 0
+    if bad.any():
+        i = int(np.argmax(bad)) + 1
+        if d[i - 1] == 0:
+            raise InputError(f"{path}: line {i + 2}: duplicate timestamp {column}={float(t[i])!r} (same as line {i + 1})")
+        raise InputError(
+            f"{path}: line {i + 2}: {column}={float(t[i])!r} goes back in time from line {i + 1} ({float(t[i - 1])!r}); "
+            "timestamps must strictly increase"
+        )
+
+
+def _find_triplet(df, prefix, units):
+    """Unit of the first complete x/y/z column triplet ``prefix_<axis>_<unit>``."""
+    for u in units:
+        if all(f"{prefix}_{a}_{u}" in df.columns for a in AXES):
+            return u
+    return None
+
+
+def read_imu(path, *, check_units=True, sampled="instant") -> ImuData:
+    """Read an IMU CSV file.
+
+    Columns: ``time_s`` and either rates ``gyro_{x,y,z}_{rad_s|deg_s|deg_h}``
+    with ``accel_{x,y,z}_{m_s2|g}``, or increments
+    ``dtheta_{x,y,z}_{rad|deg}`` with ``dv_{x,y,z}_m_s`` (over the interval
+    that ends at the row's time).  Body axes forward-right-down.
+
+    Parameters
+    ----------
+    path : str or Path
+    check_units : bool
+        Refuse magnitudes that betray a wrong unit: a median specific force
+        below 2 m/s^2 in a column said to be m/s^2 (it looks like g), above 3
+        in one said to be g; a gyro said to be in rad/s whose 99th percentile
+        exceeds 10 rad/s or median exceeds 1 rad/s (it looks like deg/s).
+        Turn off for unusual data (free fall, spinning bodies).
+    sampled : {"instant", "average"}
+        How rates were sampled (see :meth:`ImuData.from_rates`).
+
+    Returns
+    -------
+    ImuData
+    """
+    path, df = _read_table(path)
+    _require(path, df, ["time_s"])
+    t = _numeric(path, df, ["time_s"])[:, 0]
+    _check_time(path, t)
+    gu, au = _find_triplet(df, "gyro", GYRO_UNITS), _find_triplet(df, "accel", ACCEL_UNITS)
+    du, vu = _find_triplet(df, "dtheta", DTHETA_UNITS), _find_triplet(df, "dv", DV_UNITS)
+    if gu and au:
+        gcols = [f"gyro_{a}_{gu}" for a in AXES]
+        acols = [f"accel_{a}_{au}" for a in AXES]
+        w = _numeric(path, df, gcols) * GYRO_UNITS[gu]
+        f = _numeric(path, df, acols) * ACCEL_UNITS[au]
+        if check_units:
+            _check_imu_units(path, w, f, gcols[0], acols[0], gu, au)
+        if len(t) < 2:
+            raise InputError(f"{path}: needs at least two rows to integrate rates")
+        return ImuData.from_rates(t, w, f, sampled=sampled)
+    if du and vu:
+        tcols = [f"dtheta_{a}_{du}" for a in AXES]
+        vcols = [f"dv_{a}_{vu}" for a in AXES]
+        dth = _numeric(path, df, tcols) * DTHETA_UNITS[du]
+        dv = _numeric(path, df, vcols)
+        if check_units and len(t) > 1:
+            dt = np.diff(t)
+            _check_imu_units(path, dth[1:] / dt[:, None], dv[1:] / dt[:, None], tcols[0], vcols[0],
+                             "rad_s" if du == "rad" else "deg_s", "m_s2")
+        return ImuData(t, dth, dv)
+    raise InputError(
+        f"{path}: no complete set of IMU columns: expected gyro_{{x,y,z}}_{{rad_s|deg_s|deg_h}} with "
+        f"accel_{{x,y,z}}_{{m_s2|g}}, or dtheta_{{x,y,z}}_{{rad|deg}} with dv_{{x,y,z}}_m_s; "
+        f"found {', '.join(df.columns)}"
+    )
+
+
+def _check_imu_units(path, w, f, gcol, acol, gunit, aunit):
+    fn = np.median(np.linalg.norm(f, axis=1))
+    if aunit in ("m_s2",) and fn < _ACCEL_G_LIKE:
+        raise InputError(
+            f"{path}: column '{acol}': the median specific force is {fn:.3f} m/s^2, which looks like "
+            "values in g; rename the columns accel_*_g (or pass check_units=False / --no-unit-check)"
+        )
+    if aunit == "g" and fn / G0 > _ACCEL_MS2_LIKE:
+        raise InputError(
+            f"{path}: column '{acol}': the median specific force is {fn / G0:.3f} g, which looks like "
+            "values in m/s^2; rename the columns accel_*_m_s2 (or pass check_units=False / --no-unit-check)"
+        )
+    wn = np.linalg.norm(w, axis=1)
+    if gunit == "rad_s" and (np.percentile(wn, 99) > _GYRO_RAD_MAX or np.median(wn) > _GYRO_RAD_MEDIAN):
+        raise InputError(
+            f"{path}: column '{gcol}': angular rates reach {np.percentile(wn, 99):.1f} rad/s "
+            f"(median {np.median(wn):.2f}), which looks like values in deg/s; rename the columns "
+            "gyro_*_deg_s (or pass check_units=False / --no-unit-check)"
+        )
+
+
+def write_imu(path, imu: ImuData, *, overwrite=False):
+    """Write increments in the IMU format (``dtheta_*_rad``, ``dv_*_m_s``)."""
+    path = _writable(path, overwrite)
+    data = {"time_s": imu.time}
+    for i, a in enumerate(AXES):
+        data[f"dtheta_{a}_rad"] = imu.dtheta_b[:, i]
+    for i, a in enumerate(AXES):
+        data[f"dv_{a}_m_s"] = imu.dv_b[:, i]
+    pd.DataFrame(data).to_csv(path, index=False, float_format="%.17g")
+
+
+def _writable(path, overwrite):
+    path = Path(path)
+    if path.exists() and not overwrite:
+        raise InputError(f"{path}: already exists; refusing to overwrite it (use --force / overwrite=True)")
+    path.parent.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def read_gnss(path) -> GnssData:
+    """Read GNSS fixes.
+
+    Columns: ``time_s, lat_deg, lon_deg, height_m, sigma_n_m, sigma_e_m,
+    sigma_d_m`` and optionally ``vn_m_s, ve_m_s, vd_m_s, sigma_vn_m_s,
+    sigma_ve_m_s, sigma_vd_m_s``.  Sigmas are 1-sigma and must be > 0.
+    """
+    path, df = _read_table(path)
+    _require(path, df, GNSS_COLUMNS)
+    a = _numeric(path, df, GNSS_COLUMNS)
+    _check_time(path, a[:, 0])
+    _check_latlon(path, a[:, 1], a[:, 2])
+    _check_positive(path, df, a[:, 4:7], GNSS_COLUMNS[4:7])
+    v = sv = None
+    have = [c in df.columns for c in GNSS_VEL_COLUMNS]
+    if any(have):
+        _require(path, df, GNSS_VEL_COLUMNS, " (velocity needs all six velocity columns)")
+        b = _numeric(path, df, GNSS_VEL_COLUMNS)
+        _check_positive(path, df, b[:, 3:], GNSS_VEL_COLUMNS[3:])
+        v, sv = b[:, :3], b[:, 3:]
+    lla = np.column_stack([a[:, 1] * DEG, a[:, 2] * DEG, a[:, 3]])
+    return GnssData(a[:, 0], lla, a[:, 4:7], v, sv)
+
+
+def _check_latlon(path, lat, lon):
+    bad = np.abs(lat) > 90
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise InputError(f"{path}: line {i + 2}: lat_deg={float(lat[i])!r} is outside [-90, 90] degrees")
+    bad = (lon < -180) | (lon > 360)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise InputError(f"{path}: line {i + 2}: lon_deg={float(lon[i])!r} is outside [-180, 360] degrees")
+
+
+def _check_positive(path, df, a, columns):
+    bad = a <= 0
+    if bad.any():
+        i, j = np.argwhere(bad)[0]
+        raise InputError(f"{path}: line {i + 2}: column '{columns[j]}' is {float(a[i, j])!r}; sigmas must be > 0")
+
+
+def write_gnss(path, gnss: GnssData, *, overwrite=False):
+    path = _writable(path, overwrite)
+    cols = {
+        "time_s": gnss.time,
+        "lat_deg": gnss.lla[:, 0] / DEG,
+        "lon_deg": gnss.lla[:, 1] / DEG,
+        "height_m": gnss.lla[:, 2],
+        "sigma_n_m": gnss.sigma_ned[:, 0],
+        "sigma_e_m": gnss.sigma_ned[:, 1],
+        "sigma_d_m": gnss.sigma_ned[:, 2],
+    }
+    if gnss.has_velocity:
+        for i, c in enumerate(GNSS_VEL_COLUMNS[:3]):
+            cols[c] = gnss.v_n[:, i]
+        for i, c in enumerate(GNSS_VEL_COLUMNS[3:]):
+            cols[c] = gnss.sigma_v_ned[:, i]
+    pd.DataFrame(cols).to_csv(path, index=False, float_format="%.15g")
+
+
+def read_solution(path) -> NavSolution:
+    """Read a navigation solution or truth file.
+
+    Columns: ``time_s, lat_deg, lon_deg, height_m, vn_m_s, ve_m_s, vd_m_s,
+    roll_deg, pitch_deg, yaw_deg``; any further numeric columns are kept in
+    ``NavSolution.extra`` under their own names.
+    """
+    path, df = _read_table(path)
+    _require(path, df, SOLUTION_COLUMNS)
+    a = _numeric(path, df, SOLUTION_COLUMNS)
+    _check_time(path, a[:, 0])
+    _check_latlon(path, a[:, 1], a[:, 2])
+    extra = {}
+    for c in df.columns:
+        if c not in SOLUTION_COLUMNS:
+            extra[c] = _numeric(path, df, [c])[:, 0]
+    lla = np.column_stack([a[:, 1] * DEG, a[:, 2] * DEG, a[:, 3]])
+    rpy = a[:, 7:10] * DEG
+    return NavSolution(a[:, 0], lla, a[:, 4:7], rot.quat_from_euler(rpy), extra)
+
+
+def write_solution(path, sol: NavSolution, *, overwrite=False):
+    """Write a navigation solution; ``extra`` columns follow the standard ones.
+
+    Refuses to write a NaN (a solution with NaN is a bug upstream).
+    """
+    path = _writable(path, overwrite)
+    rpy = sol.euler / DEG
+    cols = {
+        "time_s": sol.time,
+        "lat_deg": sol.lla[:, 0] / DEG,
+        "lon_deg": sol.lla[:, 1] / DEG,
+        "height_m": sol.lla[:, 2],
+        "vn_m_s": sol.v_n[:, 0],
+        "ve_m_s": sol.v_n[:, 1],
+        "vd_m_s": sol.v_n[:, 2],
+        "roll_deg": rpy[:, 0],
+        "pitch_deg": rpy[:, 1],
+        "yaw_deg": rpy[:, 2],
+    }
+    for k, v in sol.extra.items():
+        v = np.asarray(v)
+        if v.ndim == 1:
+            cols[k] = v
+        else:
+            for j in range(v.shape[1]):
+                cols[f"{k}_{j}"] = v[:, j]
+    df = pd.DataFrame(cols)
+    if df.isna().any().any():
+        c = df.columns[df.isna().any()][0]
+        raise InputError(f"{path}: refusing to write a NaN (column '{c}'); the solution is invalid")
+    df.to_csv(path, index=False, float_format="%.15g")

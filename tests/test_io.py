@@ -1,0 +1,152 @@
+"""Every reader validation of issue 2 item 5 has a test here."""
+
+import numpy as np
+import pytest
+
+from inskit import io
+from inskit.errors import InputError
+from inskit.simulation import StationaryTrajectory, ideal_imu, truth_solution
+from inskit.units import DEG, G0
+
+HEADER_RATES = "time_s,gyro_x_deg_s,gyro_y_deg_s,gyro_z_deg_s,accel_x_g,accel_y_g,accel_z_g\n"
+
+
+def write(tmp_path, name, text):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def static_rows(n=5, dt=0.01, gyro=0.01, acc_z=-1.0):
+    return "".join(f"{k * dt:.2f},{gyro},0,0,0,0,{acc_z}\n" for k in range(n))
+
+
+def test_read_imu_rates_in_degrees_and_g(tmp_path):
+    p = write(tmp_path, "imu.csv", HEADER_RATES + static_rows())
+    imu = io.read_imu(p)
+    assert len(imu) == 5
+    gyro, acc = imu.rates()
+    assert np.allclose(gyro[1:, 0], 0.01 * DEG)
+    assert np.allclose(acc[1:, 2], -G0)
+
+
+def test_imu_round_trip_increments(tmp_path):
+    traj = StationaryTrajectory((0.7, 0.1, 10.0), (0.1, 0.2, 0.3))
+    imu = ideal_imu(traj, np.arange(0, 1, 0.01), nodes=1)
+    io.write_imu(tmp_path / "inc.csv", imu)
+    back = io.read_imu(tmp_path / "inc.csv")
+    assert np.array_equal(back.dtheta_b, imu.dtheta_b)
+    assert np.array_equal(back.dv_b, imu.dv_b)
+
+
+def test_missing_column(tmp_path):
+    p = write(tmp_path, "imu.csv", "time_s,gyro_x_deg_s,gyro_y_deg_s,accel_x_g,accel_y_g,accel_z_g\n0,0,0,0,0,1\n")
+    with pytest.raises(InputError, match=r"imu\.csv: no complete set of IMU columns.*gyro_"):
+        io.read_imu(p)
+    p = write(tmp_path, "nt.csv", "t,gyro_x_deg_s\n0,1\n")
+    with pytest.raises(InputError, match=r"nt\.csv: missing column\(s\) time_s"):
+        io.read_imu(p)
+
+
+def test_nan_names_line_and_column(tmp_path):
+    rows = static_rows().splitlines(True)
+    rows[2] = "0.02,0.01,,0,0,0,-1.0\n"
+    p = write(tmp_path, "imu.csv", HEADER_RATES + "".join(rows))
+    with pytest.raises(InputError, match=r"imu\.csv: line 4: column 'gyro_y_deg_s' is empty"):
+        io.read_imu(p)
+    rows[2] = "0.02,0.01,nan,0,0,0,-1.0\n"
+    p = write(tmp_path, "imu.csv", HEADER_RATES + "".join(rows))
+    with pytest.raises(InputError, match=r"line 4: column 'gyro_y_deg_s'"):
+        io.read_imu(p)
+    rows[2] = "0.02,0.01,abc,0,0,0,-1.0\n"
+    p = write(tmp_path, "imu.csv", HEADER_RATES + "".join(rows))
+    with pytest.raises(InputError, match=r"line 4: column 'gyro_y_deg_s' has 'abc'"):
+        io.read_imu(p)
+
+
+def test_duplicate_and_backward_timestamps(tmp_path):
+    rows = static_rows().splitlines(True)
+    dup = rows.copy()
+    dup[3] = dup[2]
+    p = write(tmp_path, "imu.csv", HEADER_RATES + "".join(dup))
+    with pytest.raises(InputError, match=r"imu\.csv: line 5: duplicate timestamp"):
+        io.read_imu(p)
+    back = rows.copy()
+    back[3] = "0.01,0.01,0,0,0,0,-1.0\n"
+    p = write(tmp_path, "imu.csv", HEADER_RATES + "".join(back))
+    with pytest.raises(InputError, match=r"imu\.csv: line 5: time_s=0\.01 goes back in time"):
+        io.read_imu(p)
+
+
+def test_wrong_units_betrayed_by_magnitude(tmp_path):
+    # accelerations in g written under an m/s^2 header
+    hdr = "time_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s,accel_x_m_s2,accel_y_m_s2,accel_z_m_s2\n"
+    p = write(tmp_path, "a.csv", hdr + static_rows(gyro=0.0))
+    with pytest.raises(InputError, match=r"a\.csv: column 'accel_x_m_s2'.*looks like values in g"):
+        io.read_imu(p)
+    # m/s^2 under a g header
+    p = write(tmp_path, "b.csv", HEADER_RATES + static_rows(acc_z=-9.81))
+    with pytest.raises(InputError, match=r"looks like values in m/s\^2"):
+        io.read_imu(p)
+    # deg/s values under a rad/s header (a car turning at 30 deg/s)
+    p = write(tmp_path, "c.csv", hdr + static_rows(gyro=30.0, acc_z=-9.81))
+    with pytest.raises(InputError, match=r"c\.csv: column 'gyro_x_rad_s'.*looks like values in deg/s"):
+        io.read_imu(p)
+    # the check can be turned off, and correct units pass
+    assert len(io.read_imu(p, check_units=False)) == 5
+    p = write(tmp_path, "d.csv", hdr + static_rows(gyro=0.3, acc_z=-9.81))
+    assert len(io.read_imu(p)) == 5
+
+
+def test_empty_and_missing_files(tmp_path):
+    with pytest.raises(InputError, match="no such file"):
+        io.read_imu(tmp_path / "nope.csv")
+    with pytest.raises(InputError, match="empty"):
+        io.read_imu(write(tmp_path, "e.csv", ""))
+    with pytest.raises(InputError, match="no data rows"):
+        io.read_imu(write(tmp_path, "h.csv", HEADER_RATES))
+
+
+GNSS_HDR = "time_s,lat_deg,lon_deg,height_m,sigma_n_m,sigma_e_m,sigma_d_m\n"
+
+
+def test_gnss_reader(tmp_path):
+    p = write(tmp_path, "g.csv", GNSS_HDR + "0,40.1,-105.1,1600,0.01,0.01,0.02\n1,40.1,-105.1,1600,0.01,0.01,0.02\n")
+    g = io.read_gnss(p)
+    assert np.allclose(g.lla[0, :2], np.radians([40.1, -105.1]))
+    assert not g.has_velocity
+    io.write_gnss(tmp_path / "g2.csv", g)
+    assert np.allclose(io.read_gnss(tmp_path / "g2.csv").lla, g.lla)
+
+
+def test_gnss_bad_sigma_latitude_and_partial_velocity(tmp_path):
+    p = write(tmp_path, "g.csv", GNSS_HDR + "0,40.1,-105.1,1600,0.01,0,0.02\n")
+    with pytest.raises(InputError, match=r"g\.csv: line 2: column 'sigma_e_m' is 0\.0; sigmas must be > 0"):
+        io.read_gnss(p)
+    p = write(tmp_path, "g.csv", GNSS_HDR + "0,40.1,-105.1,1600,-1,0.1,0.02\n")
+    with pytest.raises(InputError, match="sigmas must be > 0"):
+        io.read_gnss(p)
+    p = write(tmp_path, "g.csv", GNSS_HDR + "0,140.1,-105.1,1600,0.01,0.01,0.02\n")
+    with pytest.raises(InputError, match=r"line 2: lat_deg=140\.1 is outside"):
+        io.read_gnss(p)
+    p = write(tmp_path, "g.csv", GNSS_HDR.strip() + ",vn_m_s\n0,40.1,-105.1,1600,0.01,0.01,0.02,1\n")
+    with pytest.raises(InputError, match="velocity needs all six"):
+        io.read_gnss(p)
+
+
+def test_solution_round_trip_and_no_overwrite(tmp_path):
+    traj = StationaryTrajectory((0.7, 0.1, 10.0), (0.1, 0.2, 0.3))
+    sol = truth_solution(traj, np.arange(0, 1, 0.1))
+    io.write_solution(tmp_path / "s.csv", sol)
+    back = io.read_solution(tmp_path / "s.csv")
+    assert np.allclose(back.lla, sol.lla, atol=1e-14)
+    assert np.allclose(back.euler, sol.euler, atol=1e-13)
+    with pytest.raises(InputError, match="already exists"):
+        io.write_solution(tmp_path / "s.csv", sol)
+    io.write_solution(tmp_path / "s.csv", sol, overwrite=True)
+
+
+def test_solution_missing_columns(tmp_path):
+    p = write(tmp_path, "s.csv", "time_s,lat_deg,lon_deg\n0,1,2\n")
+    with pytest.raises(InputError, match=r"s\.csv: missing column\(s\) height_m, vn_m_s"):
+        io.read_solution(p)
