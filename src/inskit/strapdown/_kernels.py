@@ -136,19 +136,93 @@ def _remember(dth, dv, dvel, carry, t):
 
 
 @njit(cache=True)
+def ned_step(dth, dv, dt, lla, v_n, q_nb, carry, coning, height_mode, h_ref, h_gains, s3, s4):
+    """One NED mechanization step over an interval of length ``dt``, in place.
+
+    ``s3`` is a (7, 3) and ``s4`` a (2, 4) scratch array.  Returns nothing;
+    ``lla``, ``v_n``, ``q_nb`` and ``carry`` advance to the interval's end.
+    (SYSTEM.md §1.4, source 000 eq. 1-37..42.)
+    """
+    phi, dvc, tmp, zeta, fn, vnew, dvel = s3[0], s3[1], s3[2], s3[3], s3[4], s3[5], s3[6]
+    qa, qb = s4[0], s4[1]
+    _compensate(dth, dv, carry, coning, phi, dvc, tmp)
+    lat, lon, h = lla[0], lla[1], lla[2]
+    # midpoint extrapolation of velocity and position for the rates
+    if carry[1] > 0.0:
+        for i in range(3):
+            tmp[i] = v_n[i] + 0.5 * carry[8 + i]
+    else:
+        for i in range(3):
+            tmp[i] = v_n[i]
+    rn, re = _radii(lat, h)
+    hm = h - 0.5 * dt * tmp[2]
+    latm = lat + 0.5 * dt * tmp[0] / rn
+    rn, re = _radii(latm, hm)
+    sl, cl = math.sin(latm), math.cos(latm)
+    wie_n, wie_d = W_IE * cl, -W_IE * sl
+    wen_n, wen_e, wen_d = tmp[1] / re, -tmp[0] / rn, -tmp[1] * sl / cl / re
+    zeta[0] = (wie_n + wen_n) * dt
+    zeta[1] = wen_e * dt
+    zeta[2] = (wie_d + wen_d) * dt
+    # specific-force velocity increment in n: (I - [zeta x]/2) C_nb dvc
+    _qrot(q_nb, dvc, fn)
+    _cross(zeta, fn, dvel)
+    gd = _gravity_down(latm, hm)
+    gn = _gravity_north(latm, hm)
+    # Coriolis and centripetal: (2 w_ie + w_en) x v_mid
+    cx = 2.0 * wie_n + wen_n
+    cy = wen_e
+    cz = 2.0 * wie_d + wen_d
+    cor0 = cy * tmp[2] - cz * tmp[1]
+    cor1 = cz * tmp[0] - cx * tmp[2]
+    cor2 = cx * tmp[1] - cy * tmp[0]
+    dvel[0] = fn[0] - 0.5 * dvel[0] + (gn - cor0) * dt
+    dvel[1] = fn[1] - 0.5 * dvel[1] + (0.0 - cor1) * dt
+    dvel[2] = fn[2] - 0.5 * dvel[2] + (gd - cor2) * dt
+    for i in range(3):
+        vnew[i] = v_n[i] + dvel[i]
+    # height channel
+    if height_mode == HEIGHT_HOLD:
+        vnew[2] = -(h_ref - h) / dt
+        hnew = h_ref
+    else:
+        hnew = h - 0.5 * (v_n[2] + vnew[2]) * dt
+        if height_mode == HEIGHT_AID:
+            err = hnew - h_ref
+            hnew -= h_gains[0] * err * dt
+            vnew[2] += h_gains[1] * err * dt
+    hm = 0.5 * (h + hnew)
+    rn, re = _radii(latm, hm)
+    latnew = lat + 0.5 * (v_n[0] + vnew[0]) * dt / rn
+    latm = 0.5 * (lat + latnew)
+    rn, re = _radii(latm, hm)
+    sl, cl = math.sin(latm), math.cos(latm)
+    lonnew = lon + 0.5 * (v_n[1] + vnew[1]) * dt / (re * cl)
+    # attitude: q_nb <- q(-zeta) * q_nb * q(phi), zeta at the true midpoint
+    vme = 0.5 * (v_n[1] + vnew[1])
+    vmn = 0.5 * (v_n[0] + vnew[0])
+    zeta[0] = (W_IE * cl + vme / re) * dt
+    zeta[1] = -vmn / rn * dt
+    zeta[2] = (-W_IE * sl - vme * sl / cl / re) * dt
+    _q_from_rv(phi[0], phi[1], phi[2], qa)
+    _qmul(q_nb, qa, qb)
+    _q_from_rv(-zeta[0], -zeta[1], -zeta[2], qa)
+    _qmul(qa, qb, q_nb)
+    _qnormalize(q_nb)
+    for i in range(3):
+        dvel[i] = vnew[i] - v_n[i]
+        v_n[i] = vnew[i]
+    lla[0], lla[1], lla[2] = latnew, lonnew, hnew
+    _remember(dth, dv, dvel, carry, carry[0] + dt)
+
+
+@njit(cache=True)
 def ned_kernel(t, dth_all, dv_all, start, lla, v_n, q_nb, carry, coning,
                height_mode, h_ref, h_gains, lla_out, v_out, q_out):
     """Local-level NED mechanization (SYSTEM.md §1.4, source 000 eq. 1-37..42)."""
     n = t.shape[0]
-    phi = np.empty(3)
-    dvc = np.empty(3)
-    tmp = np.empty(3)
-    zeta = np.empty(3)
-    fn = np.empty(3)
-    vnew = np.empty(3)
-    dvel = np.empty(3)
-    qa = np.empty(4)
-    qb = np.empty(4)
+    s3 = np.empty((7, 3))
+    s4 = np.empty((2, 4))
     if start == 1:
         for i in range(3):
             lla_out[0, i] = lla[i]
@@ -159,78 +233,9 @@ def ned_kernel(t, dth_all, dv_all, start, lla, v_n, q_nb, carry, coning,
         carry[1] = 0.0
     for k in range(start, n):
         dt = t[k] - carry[0]
-        dth = dth_all[k]
-        dv = dv_all[k]
-        _compensate(dth, dv, carry, coning, phi, dvc, tmp)
-        lat, lon, h = lla[0], lla[1], lla[2]
-        # midpoint extrapolation of velocity and position for the rates
-        if carry[1] > 0.0:
-            for i in range(3):
-                tmp[i] = v_n[i] + 0.5 * carry[8 + i]
-        else:
-            for i in range(3):
-                tmp[i] = v_n[i]
-        rn, re = _radii(lat, h)
-        hm = h - 0.5 * dt * tmp[2]
-        latm = lat + 0.5 * dt * tmp[0] / rn
-        rn, re = _radii(latm, hm)
-        sl, cl = math.sin(latm), math.cos(latm)
-        wie_n, wie_d = W_IE * cl, -W_IE * sl
-        wen_n, wen_e, wen_d = tmp[1] / re, -tmp[0] / rn, -tmp[1] * sl / cl / re
-        zeta[0] = (wie_n + wen_n) * dt
-        zeta[1] = wen_e * dt
-        zeta[2] = (wie_d + wen_d) * dt
-        # specific-force velocity increment in n: (I - [zeta x]/2) C_nb dvc
-        _qrot(q_nb, dvc, fn)
-        _cross(zeta, fn, dvel)
-        gd = _gravity_down(latm, hm)
-        gn = _gravity_north(latm, hm)
-        # Coriolis and centripetal: (2 w_ie + w_en) x v_mid
-        cx = 2.0 * wie_n + wen_n
-        cy = wen_e
-        cz = 2.0 * wie_d + wen_d
-        cor0 = cy * tmp[2] - cz * tmp[1]
-        cor1 = cz * tmp[0] - cx * tmp[2]
-        cor2 = cx * tmp[1] - cy * tmp[0]
-        dvel[0] = fn[0] - 0.5 * dvel[0] + (gn - cor0) * dt
-        dvel[1] = fn[1] - 0.5 * dvel[1] + (0.0 - cor1) * dt
-        dvel[2] = fn[2] - 0.5 * dvel[2] + (gd - cor2) * dt
-        for i in range(3):
-            vnew[i] = v_n[i] + dvel[i]
-        # height channel
-        if height_mode == HEIGHT_HOLD:
-            vnew[2] = -(h_ref[k] - h) / dt
-            hnew = h_ref[k]
-        else:
-            hnew = h - 0.5 * (v_n[2] + vnew[2]) * dt
-            if height_mode == HEIGHT_AID:
-                err = hnew - h_ref[k]
-                hnew -= h_gains[0] * err * dt
-                vnew[2] += h_gains[1] * err * dt
-        hm = 0.5 * (h + hnew)
-        rn, re = _radii(latm, hm)
-        latnew = lat + 0.5 * (v_n[0] + vnew[0]) * dt / rn
-        latm = 0.5 * (lat + latnew)
-        rn, re = _radii(latm, hm)
-        sl, cl = math.sin(latm), math.cos(latm)
-        lonnew = lon + 0.5 * (v_n[1] + vnew[1]) * dt / (re * cl)
-        # attitude: q_nb <- q(-zeta) * q_nb * q(phi), zeta at the true midpoint
-        vme = 0.5 * (v_n[1] + vnew[1])
-        vmn = 0.5 * (v_n[0] + vnew[0])
-        zeta[0] = (W_IE * cl + vme / re) * dt
-        zeta[1] = -vmn / rn * dt
-        zeta[2] = (-W_IE * sl - vme * sl / cl / re) * dt
-        _q_from_rv(phi[0], phi[1], phi[2], qa)
-        _qmul(q_nb, qa, qb)
-        _q_from_rv(-zeta[0], -zeta[1], -zeta[2], qa)
-        _qmul(qa, qb, q_nb)
-        _qnormalize(q_nb)
-        # commit
-        for i in range(3):
-            dvel[i] = vnew[i] - v_n[i]
-            v_n[i] = vnew[i]
-        lla[0], lla[1], lla[2] = latnew, lonnew, hnew
-        _remember(dth, dv, dvel, carry, t[k])
+        href = h_ref[k] if height_mode != HEIGHT_FREE else 0.0
+        ned_step(dth_all[k], dv_all[k], dt, lla, v_n, q_nb, carry, coning, height_mode, href, h_gains, s3, s4)
+        carry[0] = t[k]
         for i in range(3):
             lla_out[k, i] = lla[i]
             v_out[k, i] = v_n[i]

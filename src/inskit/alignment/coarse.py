@@ -1,0 +1,145 @@
+"""Coarse start-up: levelling on a static start, heading from the GNSS track.
+
+Levelling: at rest ``f_b = -C_bn g_n``, so ``roll = atan2(-f_y, -f_z)`` and
+``pitch = atan2(f_x, sqrt(f_y^2 + f_z^2))`` (Groves 2013 eq. 5.101).
+Heading: a land vehicle moves along its forward axis, so once it moves its
+yaw equals the GNSS course; the gyros carry that yaw back to the start.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .. import earth
+from .. import rotations as rot
+from ..errors import InputError
+from ..types import GnssData, ImuData, NavState
+
+
+def level(f_b_mean):
+    """Roll and pitch [rad] from a mean specific force at rest, ``(3,)``."""
+    f = np.asarray(f_b_mean, float)
+    return np.arctan2(-f[1], -f[2]), np.arctan2(f[0], np.hypot(f[1], f[2]))
+
+
+def gnss_speed(gnss: GnssData, span_s=1.0):
+    """Horizontal speed [m/s] and course [rad] from position differences over
+    about ``span_s`` (independent of the receiver's velocity output)."""
+    t = gnss.time
+    ref = gnss.lla[0]
+    p = earth.lla_to_ned(gnss.lla, ref)
+    h = max(1, int(round(span_s / max(np.median(np.diff(t)), 1e-3) / 2)))
+    i0 = np.clip(np.arange(len(t)) - h, 0, len(t) - 1)
+    i1 = np.clip(np.arange(len(t)) + h, 0, len(t) - 1)
+    dt = np.maximum(t[i1] - t[i0], 1e-9)
+    v = (p[i1] - p[i0]) / dt[:, None]
+    return np.hypot(v[:, 0], v[:, 1]), np.arctan2(v[:, 1], v[:, 0])
+
+
+def detect_motion_start(gnss: GnssData, threshold_m_s=0.3):
+    """Time of the first GNSS epoch whose speed exceeds ``threshold_m_s``."""
+    speed, _ = gnss_speed(gnss)
+    moving = speed > threshold_m_s
+    if not moving.any():
+        raise InputError("the GNSS track never moves: heading cannot be found from it")
+    return float(gnss.time[int(np.argmax(moving))])
+
+
+def static_intervals(gnss: GnssData, threshold_m_s=0.05, min_length_s=2.0, margin_s=0.5):
+    """Intervals where the GNSS speed stays below ``threshold_m_s``."""
+    speed, _ = gnss_speed(gnss, span_s=2.0)
+    still = speed < threshold_m_s
+    out = []
+    i = 0
+    n = len(still)
+    while i < n:
+        if still[i]:
+            j = i
+            while j + 1 < n and still[j + 1]:
+                j += 1
+            a, b = gnss.time[i] + margin_s, gnss.time[j] - margin_s
+            if b - a >= min_length_s:
+                out.append((a, b))
+            i = j + 1
+        else:
+            i += 1
+    return out
+
+
+def heading_from_track(gnss: GnssData, t_from, min_speed_m_s=3.0):
+    """First epoch after ``t_from`` with speed above ``min_speed_m_s``, and the
+    course [rad] there."""
+    speed, course = gnss_speed(gnss)
+    ok = (gnss.time >= t_from) & (speed > min_speed_m_s)
+    if not ok.any():
+        raise InputError(f"the GNSS track never exceeds {min_speed_m_s} m/s: no heading from the track")
+    i = int(np.argmax(ok))
+    return float(gnss.time[i]), float(course[i])
+
+
+@dataclass(frozen=True)
+class Startup:
+    """Result of the start-up.
+
+    Attributes
+    ----------
+    state : NavState
+        At the first IMU sample.
+    gyro_bias, accel_bias : (3,) ndarray
+        Initial sensor bias estimates [rad/s], [m/s^2].
+    static_end : float
+        End of the static interval used for levelling [s].
+    heading_time : float
+        When the heading was taken from the track [s].
+    """
+
+    state: NavState
+    gyro_bias: np.ndarray
+    accel_bias: np.ndarray
+    static_end: float
+    heading_time: float
+
+
+def startup_state(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), *, min_static_s=5.0,
+                  motion_threshold_m_s=0.3, heading_speed_m_s=3.0) -> Startup:
+    """Initial state from data: level on the static start, heading from the track.
+
+    The IMU must start at rest (at least ``min_static_s``).  The gyro bias is
+    the static mean less the Earth rate; the accelerometer bias along the
+    vertical is the static norm less normal gravity (the horizontal part cannot
+    be told from tilt and is left to the filter).
+    """
+    t_move = detect_motion_start(gnss, motion_threshold_m_s)
+    static_end = t_move - 1.0
+    w, f = imu.rates()
+    static = (imu.time > imu.time[0]) & (imu.time <= static_end)
+    if imu.time[0] < gnss.time[0] - 1.0 or static_end - imu.time[0] < min_static_s:
+        raise InputError(
+            f"start-up needs the IMU at rest for {min_static_s:.0f} s at its start with GNSS from the start; "
+            f"found {max(0.0, static_end - imu.time[0]):.1f} s: give the initial state instead"
+        )
+    f_mean = f[static].mean(axis=0)
+    roll, pitch = level(f_mean)
+    lla0 = gnss.lla[0]
+    g = earth.gravity_down(lla0[0], lla0[2])
+    accel_bias = (np.linalg.norm(f_mean) - g) * f_mean / np.linalg.norm(f_mean)
+    w_mean = w[static].mean(axis=0)
+    # yaw: integrate the bias-corrected gyros from the start with yaw 0 up to
+    # the moment the course is known, then rotate about down to match it
+    t_head, course = heading_from_track(gnss, t_move, heading_speed_m_s)
+    k_head = int(np.searchsorted(imu.time, t_head))
+    q = rot.quat_from_euler([roll, pitch, 0.0])
+    dth = imu.dtheta_b[1:k_head + 1] - w_mean * np.diff(imu.time[:k_head + 1])[:, None]
+    for d in rot.quat_from_rotvec(dth):  # short (tens of seconds): attitude only, in Python
+        q = rot.quat_multiply(q, d)
+    yaw_at_head = rot.euler_from_quat(q)[2]
+    yaw0 = rot.wrap_angle(course - yaw_at_head)
+    rpy0 = np.array([roll, pitch, yaw0])
+    C_nb = rot.dcm_from_euler(rpy0)
+    gyro_bias = w_mean - C_nb.T @ earth.rate_ie_n(lla0[0])
+    # IMU position = antenna fix minus the lever arm
+    p_imu = earth.ned_to_lla(-(C_nb @ np.asarray(lever_arm_b, float)), lla0)
+    state = NavState.from_euler(imu.time[0], p_imu, np.zeros(3), rpy0)
+    return Startup(state, gyro_bias, accel_bias, static_end, t_head)

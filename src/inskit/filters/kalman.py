@@ -1,0 +1,103 @@
+"""Kalman update, gating and consistency statistics."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+
+import numpy as np
+from scipy import stats
+
+from ..errors import InskitError
+
+
+class FilterDivergence(InskitError):
+    """The covariance lost symmetry or positiveness: the filter cannot go on."""
+
+
+@lru_cache(maxsize=64)
+def chi2_threshold(dof: int, probability: float) -> float:
+    """Chi-square quantile: NIS above it is rejected at ``1 - probability``."""
+    return float(stats.chi2.ppf(probability, dof))
+
+
+@dataclass(frozen=True)
+class UpdateResult:
+    """Outcome of one measurement update.
+
+    Attributes
+    ----------
+    accepted : bool
+    dx : (n,) ndarray
+        State correction ``K nu`` (zero if rejected).
+    P : (n, n) ndarray
+        Posterior covariance (the prior if rejected).
+    innovation : (m,) ndarray
+    S : (m, m) ndarray
+        Innovation covariance.
+    nis : float
+        ``nu^T S^-1 nu``.
+    """
+
+    accepted: bool
+    dx: np.ndarray
+    P: np.ndarray
+    innovation: np.ndarray
+    S: np.ndarray
+    nis: float
+
+
+def joseph_update(P, innovation, H, R, *, gate_probability=None):
+    """Kalman update of an error state whose prior estimate is zero.
+
+    Parameters
+    ----------
+    P : (n, n) ndarray
+        Prior covariance.
+    innovation : (m,) array_like
+        ``z - H x_prior``.
+    H : (m, n) array_like
+    R : (m, m) array_like
+    gate_probability : float, optional
+        Reject the measurement when its NIS exceeds the chi-square quantile
+        of this probability (e.g. 0.9999).
+
+    Returns
+    -------
+    UpdateResult
+    """
+    nu = np.asarray(innovation, dtype=float)
+    H = np.asarray(H, dtype=float)
+    R = np.asarray(R, dtype=float)
+    PHt = P @ H.T
+    S = H @ PHt + R
+    try:
+        L = np.linalg.cholesky(S)
+    except np.linalg.LinAlgError:
+        raise FilterDivergence("innovation covariance is not positive definite: the filter diverged") from None
+    w = np.linalg.solve(L, nu)
+    nis = float(w @ w)
+    if gate_probability is not None and nis > chi2_threshold(len(nu), gate_probability):
+        return UpdateResult(False, np.zeros(P.shape[0]), P, nu, S, nis)
+    K = np.linalg.solve(L.T, np.linalg.solve(L, PHt.T)).T
+    IKH = np.eye(P.shape[0]) - K @ H
+    Pn = IKH @ P @ IKH.T + K @ R @ K.T
+    Pn = 0.5 * (Pn + Pn.T)
+    return UpdateResult(True, K @ nu, Pn, nu, S, nis)
+
+
+def check_covariance(P, where=""):
+    """Raise FilterDivergence unless P is finite with a positive diagonal."""
+    d = np.diag(P)
+    if not np.isfinite(P).all() or (d <= 0).any():
+        raise FilterDivergence(f"covariance lost positiveness{(' ' + where) if where else ''}: "
+                               "the filter diverged (check sensor noise settings and the initial state)")
+
+
+def nees(error, P):
+    """Normalised estimation error squared ``e^T P^-1 e`` (per row for batches)."""
+    e = np.asarray(error, dtype=float)
+    P = np.asarray(P, dtype=float)
+    if e.ndim == 1:
+        return float(e @ np.linalg.solve(P, e))
+    return np.einsum("ni,ni->n", e, np.linalg.solve(P, e[..., None])[..., 0])

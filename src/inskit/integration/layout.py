@@ -1,0 +1,105 @@
+"""The error-state layout: one object owns every index.
+
+Error states are ``estimate - truth`` (SYSTEM.md §2; Groves 2013 §14.2):
+
+======  ====  ==========================================================
+block   size  meaning
+======  ====  ==========================================================
+pos     3     position error north, east, down [m]
+vel     3     velocity error in NED [m/s]
+att     3     attitude error phi [rad]: ``C_nb_est = (I - [phi x]) C_nb``
+bg      3     gyro bias error [rad/s]
+ba      3     accelerometer bias error [m/s^2]
+sg      3     gyro scale-factor error [-] (optional)
+sa      3     accelerometer scale-factor error [-] (optional)
+lever   3     IMU-to-antenna lever arm error, body axes [m] (optional)
+======  ====  ==========================================================
+
+Nothing else in the package hard-codes a state index.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+BLOCKS = ("pos", "vel", "att", "bg", "ba", "sg", "sa", "lever")
+
+
+@dataclass(frozen=True)
+class StateLayout:
+    """Which optional blocks are in the filter, and where each block lives.
+
+    Parameters
+    ----------
+    scale_factors : bool
+        Add gyro and accelerometer scale-factor errors (15 -> 21 states).
+    lever_arm : bool
+        Estimate the IMU-to-antenna lever arm.
+    """
+
+    scale_factors: bool = False
+    lever_arm: bool = False
+
+    @property
+    def blocks(self):
+        out = ["pos", "vel", "att", "bg", "ba"]
+        if self.scale_factors:
+            out += ["sg", "sa"]
+        if self.lever_arm:
+            out += ["lever"]
+        return tuple(out)
+
+    @property
+    def size(self):
+        return 3 * len(self.blocks)
+
+    def slice(self, block):
+        """``slice`` of a block in the state vector; ``None`` if absent."""
+        if block not in self.blocks:
+            return None
+        i = 3 * self.blocks.index(block)
+        return slice(i, i + 3)
+
+    def start(self, block):
+        """First index of a block, or -1 if absent (for the compiled kernel)."""
+        s = self.slice(block)
+        return -1 if s is None else s.start
+
+    def kernel_index(self):
+        """int64 array ``[pos, vel, att, bg, ba, sg, sa, lever, size]`` of starts."""
+        return np.array([self.start(b) for b in BLOCKS] + [self.size], dtype=np.int64)
+
+    def names(self):
+        """Human-readable names of every state, in order."""
+        axes = {"pos": "NED", "vel": "NED", "att": "NED", "bg": "xyz", "ba": "xyz", "sg": "xyz", "sa": "xyz",
+                "lever": "xyz"}
+        return [f"{b}_{a}" for b in self.blocks for a in axes[b]]
+
+    def transition_pattern(self):
+        """``(rows, cols)`` of the entries of F that can be non-zero.
+
+        The compiled kernel multiplies only these, so the cost of the
+        covariance propagation grows with them, not with ``size**2``.
+        """
+        n = self.size
+        mask = np.zeros((n, n), dtype=bool)
+        p, v, a = self.slice("pos"), self.slice("vel"), self.slice("att")
+        mask[p, v] = np.eye(3, dtype=bool)
+        mask[v, p] = True  # gravity gradient (down only is used, kept general)
+        mask[v, v] = True
+        mask[v, a] = True
+        mask[a, v] = True
+        mask[a, a] = True
+        mask[v, self.slice("ba")] = True
+        mask[a, self.slice("bg")] = True
+        for b in ("bg", "ba", "sg", "sa"):
+            s = self.slice(b)
+            if s is not None:
+                mask[s, s] = np.eye(3, dtype=bool)
+        if self.scale_factors:
+            mask[v, self.slice("sa")] = True
+            mask[a, self.slice("sg")] = True
+        rows, cols = np.nonzero(mask)
+        return rows.astype(np.int64), cols.astype(np.int64)
