@@ -17,7 +17,7 @@ install: $(STAMP)
 
 ## run: install, then the main job on the bundled default data
 run: install
-	$(BIN)/inskit run
+	$(BIN)/inskit navigate examples/drive_0708.toml --force
 
 ## test: install, then the whole default test suite
 test: install

@@ -189,11 +189,84 @@ def bench(quick, as_json):
     _emit(res, as_json, table)
 
 
-# --- run (the main job) ------------------------------------------------------------------
+# --- navigate (the main job) ----------------------------------------------------------
+@cli.command()
+@click.argument("config_file", required=False, type=click.Path(dir_okay=False))
+@click.option("--imu", "imu_file", type=click.Path(dir_okay=False), help="IMU file (overrides the config).")
+@click.option("--imu-format", type=click.Choice(["inskit", "rtklibexplorer"]), help="IMU file format.")
+@click.option("--gnss", "gnss_file", type=click.Path(dir_okay=False), help="GNSS file (overrides the config).")
+@click.option("--gnss-format", type=click.Choice(["inskit", "rtklib-pos"]), help="GNSS file format.")
+@click.option("--lever-arm", help="IMU-to-antenna lever arm in body axes [m]: x,y,z.")
+@click.option("--imu-time-offset", type=float, help="Seconds added to the IMU time tags.")
+@click.option("--scheme", type=click.Choice(["closed", "open", "uncoupled"]), help="Integration scheme.")
+@click.option("--outages", type=click.Choice(["none", "rtklibexplorer"]), help="Outage protocol.")
+@click.option("--smooth", is_flag=True, help="Add the RTS smoother; the summary keys then describe it.")
+@click.option("--calibrate-time-offset", is_flag=True,
+              help="First find the IMU time offset that minimises the GNSS innovations, then run with it.")
+@click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Output folder (default from config).")
+@click.option("--force", is_flag=True, help="Overwrite an output folder that already holds results.")
+@click.option("--no-plots", is_flag=True, help="Skip the PNG plots.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
+def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_arm, imu_time_offset, scheme, outages,
+             smooth, calibrate_time_offset, out_dir, force, no_plots, as_json):
+    """INS/GNSS integration from a TOML config file or flags."""
+    from .integration import config as C
+    from .integration import navigate as N
+
+    over = {}
+    if imu_file:
+        over.setdefault("imu", {})["file"] = str(Path(imu_file).resolve())
+    if imu_format:
+        over.setdefault("imu", {})["format"] = imu_format
+    if imu_time_offset is not None:
+        over.setdefault("imu", {})["time_offset_s"] = imu_time_offset
+    if gnss_file:
+        over.setdefault("gnss", {})["file"] = str(Path(gnss_file).resolve())
+    if gnss_format:
+        over.setdefault("gnss", {})["format"] = gnss_format
+    if lever_arm:
+        try:
+            la = [float(x) for x in lever_arm.split(",")]
+        except ValueError:
+            raise InputError(f"--lever-arm: expected three numbers x,y,z, got {lever_arm!r}") from None
+        if len(la) != 3:
+            raise InputError(f"--lever-arm: expected three numbers x,y,z, got {lever_arm!r}")
+        over.setdefault("gnss", {})["lever_arm_b_m"] = la
+    if scheme:
+        over.setdefault("filter", {})["scheme"] = scheme
+    if outages:
+        over.setdefault("outages", {})["protocol"] = outages
+    if no_plots:
+        over.setdefault("output", {})["plots"] = False
+    if config_file:
+        cfg = C.load_config(config_file, over)
+    else:
+        if not (imu_file and gnss_file):
+            raise InputError("give a config file, or at least --imu and --gnss")
+        cfg = C.config_from_dict({}, base_dir=Path.cwd(), source="flags", overrides=over)
+    target = Path(out_dir) if out_dir else (Path(cfg.output.dir) if cfg.output.dir else Path("out") / cfg.name)
+    if target.exists() and any(target.iterdir()) and not force:
+        raise InputError(f"{target}: already holds results; refusing to overwrite them (use --force or --out)")
+    extra = {}
+    if calibrate_time_offset:
+        best, evals = N.calibrate_time_offset(cfg, log=_log)
+        _log(f"calibrate: best IMU time offset {best:+.4f} s")
+        cfg = cfg.model_copy(update={"imu": cfg.imu.model_copy(update={"time_offset_s": best})})
+        extra["time_offset_calibration"] = {"best_s": best, "evaluations": [list(e) for e in evals]}
+    with _progress(None, "navigate") as bar:
+        res = N.navigate(cfg, smooth=smooth, progress=bar.update)
+    s = N.summary(res)
+    s.update(extra)
+    files = N.write_outputs(res, target, s)
+    s["files"] = [str(f) for f in files]
+    _log(f"wrote {len(files)} files to {target}/")
+    _emit(s, as_json, N.outage_table_text(s))
+
+
 @cli.command()
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def run(as_json):
-    """The main job on the bundled default."""
+def demo(as_json):
+    """Closed-form demonstration: ideal IMU, all four mechanizations."""
     from .demo import demo_run
 
     res, table = demo_run(log=_log)

@@ -49,7 +49,9 @@ class OutageScore:
         epoch), ``horizontal_m``, ``vertical_m``.
     summary : dict
         ``outage_end_horizontal_rms_m``, ``..._median_m``, ``..._max_m``,
-        ``outage_end_vertical_rms_m``, ``gnss_on_horizontal_rms_m``,
+        ``outage_end_vertical_rms_m``, ``outage_worst_horizontal_rms_m`` and
+        ``..._max_m`` (the largest error at any withheld fix of each outage:
+        for a smoother, whose error peaks mid-outage, the meaningful figure), ``gnss_on_horizontal_rms_m``,
         ``gnss_on_vertical_rms_m``, ``outages``.
     """
 
@@ -61,19 +63,24 @@ def score_outages(sol: NavSolution, gnss: GnssData, windows, lever_arm_b, t0=Non
     """Score a solution against withheld fixes and against the used fixes."""
     t0 = gnss.time[0] if t0 is None else t0
     rows = []
-    hs, vs = [], []
+    hs, vs, worst = [], [], []
     for k, (a, b) in enumerate(windows):
         inside = np.nonzero((gnss.time >= a - 1e-6) & (gnss.time <= b + 1e-6))[0]
         inside = inside[(gnss.time[inside] >= sol.time[0]) & (gnss.time[inside] <= sol.time[-1])]
         if len(inside) == 0:
             continue
         i = inside[-1]
-        ant = antenna_positions(sol, gnss.time[i:i + 1], lever_arm_b)[0]
-        d = earth.lla_to_ned(ant, gnss.lla[i])
+        ant = antenna_positions(sol, gnss.time[inside], lever_arm_b)
+        d_all = earth.lla_to_ned(ant, gnss.lla[inside])
+        h_all = np.hypot(d_all[:, 0], d_all[:, 1])
+        d = d_all[-1]
         rows.append({"k": k, "start_s": a - t0, "end_s": b - t0, "fix_time_s": gnss.time[i] - t0,
-                     "horizontal_m": float(np.hypot(d[0], d[1])), "vertical_m": float(abs(d[2]))})
+                     "horizontal_m": float(np.hypot(d[0], d[1])), "vertical_m": float(abs(d[2])),
+                     "worst_horizontal_m": float(h_all.max()),
+                     "worst_time_s": float(gnss.time[inside][int(np.argmax(h_all))] - t0)})
         hs.append(np.hypot(d[0], d[1]))
         vs.append(abs(d[2]))
+        worst.append(h_all.max())
     used = ~withheld_mask(gnss.time, windows)
     used &= (gnss.time >= sol.time[0]) & (gnss.time <= sol.time[-1])
     ant = antenna_positions(sol, gnss.time[used], lever_arm_b)
@@ -85,6 +92,8 @@ def score_outages(sol: NavSolution, gnss: GnssData, windows, lever_arm_b, t0=Non
         "outage_end_horizontal_median_m": float(np.median(hs)) if len(hs) else None,
         "outage_end_horizontal_max_m": float(hs.max()) if len(hs) else None,
         "outage_end_vertical_rms_m": float(np.sqrt(np.mean(vs**2))) if len(vs) else None,
+        "outage_worst_horizontal_rms_m": float(np.sqrt(np.mean(np.square(worst)))) if worst else None,
+        "outage_worst_horizontal_max_m": float(np.max(worst)) if worst else None,
         "gnss_on_horizontal_rms_m": float(np.sqrt(np.mean(d[:, 0] ** 2 + d[:, 1] ** 2))),
         "gnss_on_vertical_rms_m": float(np.sqrt(np.mean(d[:, 2] ** 2))),
         "gnss_on_fixes": int(used.sum()),

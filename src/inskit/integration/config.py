@@ -1,0 +1,174 @@
+"""The ``inskit navigate`` configuration: a validated TOML file.
+
+Units follow datasheets at this edge (deg/sqrt(h), micro-g, degrees) and are
+converted to SI when the filter settings are built.  Relative paths are taken
+relative to the config file.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+from typing import Literal
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+
+from ..errors import ConfigError
+
+
+class _Strict(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class ImuSection(_Strict):
+    file: Path
+    format: Literal["inskit", "rtklibexplorer"] = "inskit"
+    time_offset_s: float = 0.0
+    mount_rpy_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    check_units: bool = True
+    start_s: float | None = Field(None, description="ignore IMU data before this time")
+
+
+class GnssSection(_Strict):
+    file: Path
+    format: Literal["inskit", "rtklib-pos"] = "inskit"
+    time_offset_s: float = 0.0
+    quality: list[int] = [1, 2]
+    lever_arm_b_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    use_velocity: bool = False
+    velocity_delay_s: float = 0.0
+    velocity_sigma_scale: float = Field(1.0, gt=0)
+    sigma_floor_m: float = Field(0.0, ge=0)
+
+
+class NoiseSection(_Strict):
+    gyro_arw_deg_sqrt_h: float = Field(0.3, gt=0)
+    accel_vrw_m_s_sqrt_h: float = Field(0.1, gt=0)
+    gyro_bias_sigma_deg_h: float = Field(50.0, gt=0)
+    accel_bias_sigma_ug: float = Field(1000.0, gt=0)
+    bias_tau_s: float = Field(300.0, gt=0)
+    scale_factor_rw_ppm_sqrt_s: float = Field(1.0, gt=0)
+    from_static: bool = Field(
+        True, description="raise ARW/VRW to the white-noise density measured on the static start"
+    )
+
+
+class InitSection(_Strict):
+    mode: Literal["static-then-track", "given"] = "static-then-track"
+    lat_deg: float | None = None
+    lon_deg: float | None = None
+    height_m: float | None = None
+    v_ned_m_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    rpy_deg: tuple[float, float, float] | None = None
+    sigma_pos_m: float = Field(0.05, gt=0)
+    sigma_vel_m_s: float = Field(0.05, gt=0)
+    sigma_roll_pitch_deg: float = Field(1.0, gt=0)
+    sigma_yaw_deg: float = Field(3.0, gt=0)
+    sigma_gyro_bias_deg_s: float = Field(0.05, gt=0)
+    sigma_accel_bias_m_s2: float = Field(0.05, gt=0)
+    sigma_scale_factor: float = Field(0.02, gt=0)
+    sigma_lever_arm_m: float = Field(0.1, gt=0)
+
+    @model_validator(mode="after")
+    def _given_complete(self):
+        if self.mode == "given":
+            missing = [k for k in ("lat_deg", "lon_deg", "height_m", "rpy_deg") if getattr(self, k) is None]
+            if missing:
+                raise ValueError(f"mode 'given' needs {', '.join(missing)}")
+            if abs(self.lat_deg) > 90:
+                raise ValueError(f"lat_deg {self.lat_deg} is outside [-90, 90]")
+        return self
+
+
+class ConstraintsSection(_Strict):
+    zupt: bool = True
+    zupt_sigma_m_s: float = Field(0.02, gt=0)
+    nhc: bool = True
+    nhc_sigma_m_s: float = Field(0.1, gt=0)
+    rate_hz: float = Field(10.0, gt=0, le=1000)
+
+
+class FilterSection(_Strict):
+    scheme: Literal["closed", "open", "uncoupled"] = "closed"
+    scale_factors: bool = True
+    lever_arm: bool = False
+    gate_probability: float | None = Field(0.9999, gt=0.5, lt=1.0)
+    gate_max_consecutive: int | None = Field(3, ge=1)
+    smoother_node_s: float = Field(0.25, gt=0)
+
+
+class OutagesSection(_Strict):
+    protocol: Literal["none", "rtklibexplorer", "windows"] = "none"
+    windows_s: list[tuple[float, float]] = Field(
+        default_factory=list, description="[start, end] seconds after the first GNSS epoch"
+    )
+
+    @field_validator("windows_s")
+    @classmethod
+    def _ordered(cls, v):
+        for a, b in v:
+            if not b > a:
+                raise ValueError(f"outage window [{a}, {b}] must end after it starts")
+        return v
+
+
+class OutputSection(_Strict):
+    dir: Path | None = None
+    plots: bool = True
+
+
+class NavigateConfig(_Strict):
+    """The whole ``inskit navigate`` configuration."""
+
+    name: str = "run"
+    imu: ImuSection
+    gnss: GnssSection
+    noise: NoiseSection = NoiseSection()
+    init: InitSection = InitSection()
+    constraints: ConstraintsSection = ConstraintsSection()
+    filter: FilterSection = FilterSection()
+    outages: OutagesSection = OutagesSection()
+    output: OutputSection = OutputSection()
+    base_dir: Path = Path(".")
+
+    def resolve(self, p: Path) -> Path:
+        p = Path(p)
+        return p if p.is_absolute() else (self.base_dir / p)
+
+
+def _format_errors(path, exc: ValidationError):
+    e = exc.errors()[0]
+    where = ".".join(str(x) for x in e["loc"]) or "(top level)"
+    more = f" (and {len(exc.errors()) - 1} more)" if len(exc.errors()) > 1 else ""
+    return f"{path}: field '{where}': {e['msg']}{more}"
+
+
+def load_config(path, overrides=None) -> NavigateConfig:
+    """Read and validate a navigate config; ``overrides`` is a nested dict
+    applied on top (the CLI flags)."""
+    path = Path(path)
+    if not path.is_file():
+        raise ConfigError(f"{path}: no such config file")
+    try:
+        data = tomllib.loads(path.read_text())
+    except tomllib.TOMLDecodeError as exc:
+        raise ConfigError(f"{path}: not valid TOML ({exc})") from None
+    return config_from_dict(data, base_dir=path.parent, source=str(path), overrides=overrides)
+
+
+def config_from_dict(data, *, base_dir=Path("."), source="config", overrides=None) -> NavigateConfig:
+    data = dict(data)
+    for sect, vals in (overrides or {}).items():
+        if isinstance(vals, dict):
+            data[sect] = {**data.get(sect, {}), **vals}
+        else:
+            data[sect] = vals
+    data["base_dir"] = base_dir
+    try:
+        cfg = NavigateConfig.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(_format_errors(source, exc)) from None
+    if cfg.noise.bias_tau_s == math.inf:
+        raise ConfigError(f"{source}: noise.bias_tau_s must be finite (use a long time constant for a random walk)")
+    return cfg

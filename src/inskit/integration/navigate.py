@@ -1,0 +1,265 @@
+"""The main job: IMU log + GNSS fixes -> navigation solution, and how good it is."""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .. import io
+from ..alignment.coarse import Startup, startup_state, static_intervals
+from ..errors import InputError
+from ..io.rtklib import read_pos, read_rtklibexplorer_imu
+from ..types import GnssData, ImuData, NavState
+from ..units import DEG, DEG_PER_HOUR, MICRO_G
+from .config import NavigateConfig
+from .engine import FilterOutput, FilterSettings, InitialUncertainty, SensorNoise, run_filter
+from .layout import StateLayout
+from .measurements import GnssPosition, GnssVelocity, NonHolonomic, ZeroVelocity
+from .outages import OutageScore, rtklibexplorer_outages, score_outages, withheld_mask
+from .smoother import rts_smooth
+
+
+@dataclass
+class NavigateResult:
+    config: NavigateConfig
+    imu: ImuData
+    gnss: GnssData
+    windows: list
+    used: np.ndarray
+    startup: Startup | None
+    settings: FilterSettings
+    forward: FilterOutput
+    smoothed: object | None
+    score_forward: OutageScore
+    score_smoothed: OutageScore | None
+    elapsed_s: float
+    measured_noise: dict
+
+
+def load_inputs(cfg: NavigateConfig, time_offset_s=None):
+    """Read the IMU and GNSS files on one time base; check they overlap."""
+    imu_off = cfg.imu.time_offset_s if time_offset_s is None else time_offset_s
+    gpath, ipath = cfg.resolve(cfg.gnss.file), cfg.resolve(cfg.imu.file)
+    week0 = None
+    if cfg.gnss.format == "rtklib-pos":
+        gnss, week0 = read_pos(gpath, quality=cfg.gnss.quality, time_offset_s=cfg.gnss.time_offset_s)
+    else:
+        g = io.read_gnss(gpath)
+        gnss = GnssData(g.time + cfg.gnss.time_offset_s, g.lla, g.sigma_ned, g.v_n, g.sigma_v_ned)
+    if cfg.imu.format == "rtklibexplorer":
+        imu, _ = read_rtklibexplorer_imu(ipath, week0=week0, time_offset_s=imu_off,
+                                         mount_rpy=np.radians(cfg.imu.mount_rpy_deg),
+                                         check_units=cfg.imu.check_units)
+    else:
+        raw = io.read_imu(ipath, check_units=cfg.imu.check_units)
+        from ..io.rtklib import mount_dcm
+
+        C_bs = mount_dcm(np.radians(cfg.imu.mount_rpy_deg))
+        imu = ImuData(raw.time + imu_off, raw.dtheta_b @ C_bs.T, raw.dv_b @ C_bs.T)
+    if gnss.time[-1] < imu.time[0] or gnss.time[0] > imu.time[-1]:
+        raise InputError(
+            f"GNSS ({gpath.name}: {gnss.time[0]:.3f}..{gnss.time[-1]:.3f} s) and IMU ({ipath.name}: "
+            f"{imu.time[0]:.3f}..{imu.time[-1]:.3f} s) do not overlap: mismatched time bases?"
+        )
+    start = max(gnss.time[0], cfg.imu.start_s if cfg.imu.start_s is not None else -np.inf)
+    k0 = int(np.searchsorted(imu.time, start))
+    if len(imu) - k0 < 10:
+        raise InputError(f"{ipath.name}: fewer than 10 IMU samples after the start time {start:.3f} s")
+    return imu.slice(k0), gnss
+
+
+def outage_windows(cfg: NavigateConfig, gnss: GnssData):
+    t0 = gnss.time[0]
+    if cfg.outages.protocol == "rtklibexplorer":
+        return rtklibexplorer_outages(t0)
+    if cfg.outages.protocol == "windows":
+        return [(t0 + a, t0 + b) for a, b in cfg.outages.windows_s]
+    return []
+
+
+def static_noise_density(imu: ImuData, t_end):
+    """White-noise densities [rad/s/sqrt(Hz), m/s^2/sqrt(Hz)] measured on the
+    static start (sample std times sqrt(dt), quadratic mean over the axes)."""
+    w, f = imu.rates()
+    m = (imu.time > imu.time[0]) & (imu.time <= t_end)
+    dt = float(np.median(np.diff(imu.time[m])))
+    arw = float(np.sqrt(np.mean(w[m].var(axis=0))) * np.sqrt(dt))
+    vrw = float(np.sqrt(np.mean(f[m].var(axis=0))) * np.sqrt(dt))
+    return arw, vrw
+
+
+def build_settings(cfg: NavigateConfig, startup: Startup | None, measured=None) -> FilterSettings:
+    n = cfg.noise
+    arw = n.gyro_arw_deg_sqrt_h * DEG / 60.0
+    vrw = n.accel_vrw_m_s_sqrt_h / 60.0
+    if measured:
+        arw = max(arw, measured["gyro_arw_rad_sqrt_s"])
+        vrw = max(vrw, measured["accel_vrw_m_s_sqrt_s"])
+    noise = SensorNoise(arw, vrw, n.gyro_bias_sigma_deg_h * DEG_PER_HOUR, n.accel_bias_sigma_ug * MICRO_G,
+                        n.bias_tau_s, n.scale_factor_rw_ppm_sqrt_s * 1e-6)
+    i = cfg.init
+    unc = InitialUncertainty((i.sigma_pos_m,) * 3, i.sigma_vel_m_s, i.sigma_roll_pitch_deg * DEG,
+                             i.sigma_yaw_deg * DEG, i.sigma_gyro_bias_deg_s * DEG, i.sigma_accel_bias_m_s2,
+                             i.sigma_scale_factor, i.sigma_lever_arm_m)
+    f = cfg.filter
+    return FilterSettings(
+        layout=StateLayout(scale_factors=f.scale_factors, lever_arm=f.lever_arm),
+        noise=noise, initial=unc, scheme=f.scheme, gate_probability=f.gate_probability,
+        gate_max_consecutive=f.gate_max_consecutive, lever_arm_b=tuple(cfg.gnss.lever_arm_b_m),
+        gyro_bias0=tuple(startup.gyro_bias) if startup else (0.0, 0.0, 0.0),
+        accel_bias0=tuple(startup.accel_bias) if startup else (0.0, 0.0, 0.0),
+        smoother_node_s=f.smoother_node_s,
+    )
+
+
+def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=None, log=None) -> NavigateResult:
+    """Run the whole job described by ``cfg``."""
+    t_start = time.perf_counter()
+    imu, gnss = load_inputs(cfg, time_offset_s)
+    windows = outage_windows(cfg, gnss)
+    used = ~withheld_mask(gnss.time, windows)
+    if used.sum() < 2:
+        raise InputError("fewer than two GNSS fixes are left to use")
+    gnss_used = gnss.select(used)
+    lever = np.asarray(cfg.gnss.lever_arm_b_m, float)
+    startup = None
+    measured = {}
+    if cfg.init.mode == "static-then-track":
+        startup = startup_state(imu, gnss_used, lever)
+        initial = startup.state
+        if cfg.noise.from_static:
+            arw, vrw = static_noise_density(imu, startup.static_end)
+            measured = {"gyro_arw_rad_sqrt_s": arw, "accel_vrw_m_s_sqrt_s": vrw}
+    else:
+        i = cfg.init
+        initial = NavState.from_euler(imu.time[0], [i.lat_deg * DEG, i.lon_deg * DEG, i.height_m], i.v_ned_m_s,
+                                      np.radians(i.rpy_deg))
+    settings = build_settings(cfg, startup, measured)
+    meas = [GnssPosition(gnss, used, cfg.gnss.sigma_floor_m)]
+    if cfg.gnss.use_velocity:
+        if not gnss.has_velocity:
+            raise InputError(f"{cfg.gnss.file}: use_velocity is set but the file has no velocity")
+        meas.append(GnssVelocity(gnss, used, cfg.gnss.velocity_delay_s, cfg.gnss.velocity_sigma_scale))
+    c = cfg.constraints
+    if c.zupt:
+        meas.append(ZeroVelocity(static_intervals(gnss_used), c.rate_hz, c.zupt_sigma_m_s))
+    if c.nhc:
+        meas.append(NonHolonomic([(imu.time[0], imu.time[-1])], c.rate_hz, c.nhc_sigma_m_s))
+    out = run_filter(imu, initial, meas, settings, smoother=smooth, progress=progress)
+    sm = rts_smooth(out) if smooth else None
+    score_f = score_outages(out.solution, gnss, windows, lever)
+    score_s = score_outages(sm, gnss, windows, lever) if sm is not None else None
+    return NavigateResult(cfg, imu, gnss, windows, used, startup, settings, out, sm, score_f, score_s,
+                          time.perf_counter() - t_start, measured)
+
+
+def mean_gnss_nis(cfg: NavigateConfig, time_offset_s):
+    """Mean NIS of the GNSS position updates (used fixes only) for an IMU offset."""
+    cfg2 = cfg.model_copy(update={"outages": cfg.outages})
+    res = navigate(cfg2, time_offset_s=time_offset_s)
+    return float(np.mean(res.forward.innovations["gnss_pos"]["nis"]))
+
+
+def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, log=None):
+    """IMU time offset [s] that minimises the mean NIS of the GNSS position
+    updates, by a bounded scalar search (scipy).  Only the fixes the filter
+    uses enter, never the withheld ones."""
+    from scipy.optimize import minimize_scalar
+
+    evals = []
+
+    def f(off):
+        v = mean_gnss_nis(cfg, off)
+        evals.append((float(off), v))
+        if log:
+            log(f"calibrate: offset {off:+.4f} s -> mean NIS {v:.3f}")
+        return v
+
+    r = minimize_scalar(f, bounds=bounds, method="bounded", options={"xatol": tol})
+    return float(r.x), sorted(evals)
+
+
+def summary(res: NavigateResult) -> dict:
+    """The JSON summary: top-level keys describe the smoothed solution when
+    there is one, else the forward solution; ``forward`` always holds the
+    forward filter's figures."""
+    fwd = dict(res.score_forward.summary)
+    main = dict(res.score_smoothed.summary) if res.score_smoothed else fwd
+    out = {
+        "name": res.config.name,
+        "scheme": res.settings.scheme,
+        "solution": "smoothed" if res.smoothed is not None else "forward",
+        "states": res.settings.layout.size,
+        "epochs": len(res.imu),
+        "duration_s": float(res.imu.time[-1] - res.imu.time[0]),
+        "elapsed_s": res.elapsed_s,
+        "imu_time_offset_s": res.config.imu.time_offset_s,
+        **main,
+        "outage_table": res.score_smoothed.table if res.score_smoothed else res.score_forward.table,
+        "forward": {**fwd, "outage_table": res.score_forward.table},
+        "measurements": res.forward.counts,
+        "noise_used": {
+            "gyro_arw_deg_sqrt_h": res.settings.noise.gyro_arw / DEG * 60.0,
+            "accel_vrw_m_s_sqrt_h": res.settings.noise.accel_vrw * 60.0,
+            "measured_on_static_start": bool(res.measured_noise),
+        },
+    }
+    if res.startup is not None:
+        out["startup"] = {
+            "roll_deg": float(res.startup.state.euler[0] / DEG),
+            "pitch_deg": float(res.startup.state.euler[1] / DEG),
+            "yaw_deg": float(res.startup.state.euler[2] / DEG),
+            "static_s": float(res.startup.static_end - res.imu.time[0]),
+            "heading_from_track_at_s": float(res.startup.heading_time - res.imu.time[0]),
+        }
+    sol = res.forward.solution
+    out["final_bias"] = {
+        "gyro_deg_s": [float(sol.extra[f"bg_{a}_rad_s"][-1] / DEG) for a in "xyz"],
+        "accel_m_s2": [float(sol.extra[f"ba_{a}_m_s2"][-1]) for a in "xyz"],
+    }
+    return out
+
+
+def outage_table_text(s: dict) -> str:
+    rows = s["outage_table"]
+    lines = [f"{'outage':>6} {'window [s after first fix]':>27} {'end horiz [m]':>14} {'end vert [m]':>13} "
+             f"{'worst horiz [m]':>16}"]
+    for r in rows:
+        lines.append(f"{r['k']:>6} {r['start_s']:>12.2f} .. {r['end_s']:>9.2f}   {r['horizontal_m']:>13.3f} "
+                     f"{r['vertical_m']:>13.3f} {r['worst_horizontal_m']:>16.3f}")
+    if rows:
+        lines.append(f"outage-end horizontal: RMS {s['outage_end_horizontal_rms_m']:.3f} m, median "
+                     f"{s['outage_end_horizontal_median_m']:.3f} m, max {s['outage_end_horizontal_max_m']:.3f} m "
+                     f"({s['solution']} solution)")
+    lines.append(f"GNSS on: horizontal RMS {s['gnss_on_horizontal_rms_m'] * 100:.2f} cm, vertical RMS "
+                 f"{s['gnss_on_vertical_rms_m'] * 100:.2f} cm over {s['gnss_on_fixes']} fixes")
+    if s["solution"] == "smoothed" and rows:
+        f = s["forward"]
+        lines.append(f"forward filter for comparison: outage-end RMS {f['outage_end_horizontal_rms_m']:.3f} m, "
+                     f"worst-in-outage RMS {f['outage_worst_horizontal_rms_m']:.3f} m; smoothed worst-in-outage "
+                     f"RMS {s['outage_worst_horizontal_rms_m']:.3f} m")
+    counts = ", ".join(f"{k} {v['used']} used/{v['rejected']} rejected" for k, v in s["measurements"].items())
+    lines.append(f"updates: {counts}")
+    return "\n".join(lines)
+
+
+def write_outputs(res: NavigateResult, out_dir: Path, s: dict) -> list:
+    """Solution CSVs, summary JSON and plots into ``out_dir``."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    files = []
+    io.write_solution(out_dir / "solution_forward.csv", res.forward.solution, overwrite=True)
+    files.append(out_dir / "solution_forward.csv")
+    if res.smoothed is not None:
+        io.write_solution(out_dir / "solution_smoothed.csv", res.smoothed, overwrite=True)
+        files.append(out_dir / "solution_smoothed.csv")
+    (out_dir / "summary.json").write_text(json.dumps(s, indent=2, default=float))
+    files.append(out_dir / "summary.json")
+    if res.config.output.plots:
+        from .plots import plot_all
+
+        files += plot_all(res, out_dir)
+    return files

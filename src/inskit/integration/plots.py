@@ -1,0 +1,128 @@
+"""Plots of an integration run: track, errors with 3-sigma envelopes,
+innovations, sensor-error estimates.  PNG files, no display needed."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .. import earth
+from ..units import DEG
+from .outages import antenna_positions
+
+
+def _plt():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    return plt
+
+
+def _shade(ax, windows, t0):
+    for a, b in windows:
+        ax.axvspan(a - t0, b - t0, color="0.85", zorder=0)
+
+
+def plot_all(res, out_dir):
+    plt = _plt()
+    files = []
+    sol = res.smoothed if res.smoothed is not None else res.forward.solution
+    fwd = res.forward.solution
+    g = res.gnss
+    t0 = g.time[0]
+    ref = g.lla[0]
+    lever = np.asarray(res.config.gnss.lever_arm_b_m, float)
+    inside = (g.time >= fwd.time[0]) & (g.time <= fwd.time[-1])
+
+    # track
+    fig, ax = plt.subplots(figsize=(8, 7))
+    pg = earth.lla_to_ned(g.lla, ref)
+    ax.plot(pg[res.used, 1], pg[res.used, 0], ".", ms=2, color="0.6", label="GNSS fixes used")
+    if (~res.used).any():
+        ax.plot(pg[~res.used, 1], pg[~res.used, 0], ".", ms=3, color="tab:red", label="GNSS withheld (outages)")
+    pf = earth.lla_to_ned(fwd.lla[::10], ref)
+    ax.plot(pf[:, 1], pf[:, 0], lw=0.8, color="tab:blue", label="forward filter")
+    if res.smoothed is not None:
+        ps = earth.lla_to_ned(res.smoothed.lla[::10], ref)
+        ax.plot(ps[:, 1], ps[:, 0], lw=0.8, color="tab:green", label="RTS smoother")
+    ax.set_xlabel("east [m]")
+    ax.set_ylabel("north [m]")
+    ax.set_aspect("equal")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(f"{res.config.name}: track")
+    fig.tight_layout()
+    files.append(out_dir / "track.png")
+    fig.savefig(files[-1], dpi=110)
+    plt.close(fig)
+
+    # errors against every GNSS fix, with the filter's 3-sigma envelope
+    tg = g.time[inside]
+    fig, axes = plt.subplots(3, 1, figsize=(10, 8), sharex=True)
+    for s, label, color in ((fwd, "forward", "tab:blue"),) + (
+            ((res.smoothed, "smoothed", "tab:green"),) if res.smoothed is not None else ()):
+        ant = antenna_positions(s, tg, lever)
+        d = earth.lla_to_ned(ant, g.lla[inside])
+        si = s.interpolate(tg)
+        for j, name in enumerate(("north", "east", "down")):
+            ax = axes[j]
+            ax.plot(tg - t0, d[:, j], lw=0.7, color=color, label=f"{label} - GNSS")
+            sig = si.extra[("sigma_n_m", "sigma_e_m", "sigma_d_m")[j]]
+            ax.plot(tg - t0, 3 * sig, lw=0.5, ls="--", color=color)
+            ax.plot(tg - t0, -3 * sig, lw=0.5, ls="--", color=color)
+            ax.set_ylabel(f"{name} [m]")
+    for ax in axes:
+        _shade(ax, res.windows, t0)
+        ax.grid(alpha=0.3)
+        ax.set_ylim(-6, 6)
+    axes[0].legend(fontsize=8, loc="upper left")
+    axes[0].set_title("antenna position minus GNSS fix (grey: outages; dashed: +-3 sigma)")
+    axes[-1].set_xlabel("time after first GNSS fix [s]")
+    fig.tight_layout()
+    files.append(out_dir / "errors.png")
+    fig.savefig(files[-1], dpi=110)
+    plt.close(fig)
+
+    # innovations
+    inn = res.forward.innovations
+    names = [k for k, v in inn.items() if len(v["t"])]
+    fig, axes = plt.subplots(len(names), 1, figsize=(10, 2.6 * len(names)), sharex=True, squeeze=False)
+    for ax, k in zip(axes[:, 0], names):
+        v = inn[k]
+        nu = np.asarray(v["nu"])
+        sg = np.asarray(v["sigma"])
+        for j in range(nu.shape[1]):
+            ax.plot(v["t"] - t0, nu[:, j] / sg[:, j], ".", ms=1.5, label=f"component {j}")
+        ax.axhline(3, color="k", lw=0.5, ls="--")
+        ax.axhline(-3, color="k", lw=0.5, ls="--")
+        ax.set_ylabel(f"{k}\nnu / sigma")
+        ax.set_ylim(-8, 8)
+        ax.grid(alpha=0.3)
+        _shade(ax, res.windows, t0)
+    axes[0, 0].set_title("normalised innovations (dashed: +-3)")
+    axes[-1, 0].set_xlabel("time after first GNSS fix [s]")
+    fig.tight_layout()
+    files.append(out_dir / "innovations.png")
+    fig.savefig(files[-1], dpi=110)
+    plt.close(fig)
+
+    # sensor-error estimates
+    fig, axes = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
+    tt = fwd.time - t0
+    for a in "xyz":
+        axes[0].plot(tt, fwd.extra[f"bg_{a}_rad_s"] / DEG, lw=0.8, label=a)
+        axes[1].plot(tt, fwd.extra[f"ba_{a}_m_s2"], lw=0.8, label=a)
+    axes[0].set_ylabel("gyro bias [deg/s]")
+    axes[1].set_ylabel("accel bias [m/s^2]")
+    for ax in axes:
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=8)
+        _shade(ax, res.windows, t0)
+    axes[-1].set_xlabel("time after first GNSS fix [s]")
+    axes[0].set_title("sensor bias estimates (forward filter)")
+    fig.tight_layout()
+    files.append(out_dir / "biases.png")
+    fig.savefig(files[-1], dpi=110)
+    plt.close(fig)
+    return files
