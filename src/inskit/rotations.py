@@ -30,6 +30,9 @@ def skew(v):
     (3, 3) or (n, 3, 3) ndarray
     """
     v = np.asarray(v, dtype=float)
+    if v.shape == (3,):
+        x, y, w = v
+        return np.array([[0.0, -w, y], [w, 0.0, -x], [-y, x, 0.0]])
     z = np.zeros_like(v[..., 0])
     x, y, w = v[..., 0], v[..., 1], v[..., 2]
     return np.stack(
@@ -114,6 +117,14 @@ def dcm_from_quat(q):
     """DCM ``C_ab`` from the unit quaternion ``q_ab``."""
     q = np.asarray(q, dtype=float)
     q0, q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    if q.shape == (4,):
+        return np.array(
+            [
+                [q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2 * (q1 * q2 - q0 * q3), 2 * (q1 * q3 + q0 * q2)],
+                [2 * (q1 * q2 + q0 * q3), q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3, 2 * (q2 * q3 - q0 * q1)],
+                [2 * (q1 * q3 - q0 * q2), 2 * (q2 * q3 + q0 * q1), q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3],
+            ]
+        )
     return np.stack(
         [
             np.stack([q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2 * (q1 * q2 - q0 * q3), 2 * (q1 * q3 + q0 * q2)], -1),

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
+from numba import njit
 from scipy import stats
 
 from ..errors import InskitError
@@ -47,6 +48,23 @@ class UpdateResult:
     nis: float
 
 
+@njit(cache=True)
+def _update(P, nu, H, R):
+    """Innovation covariance, NIS, gain, correction and Joseph-form covariance
+    in one compiled call (called once per update: numpy's per-call overhead
+    would otherwise dominate the filter's time)."""
+    n = P.shape[0]
+    PHt = P @ H.T
+    S = H @ PHt + R
+    L = np.linalg.cholesky(S)
+    w = np.linalg.solve(L, nu)
+    nis = np.dot(w, w)
+    K = np.linalg.solve(L.T, np.linalg.solve(L, PHt.T)).T
+    IKH = np.eye(n) - K @ H
+    Pn = IKH @ P @ IKH.T + K @ R @ K.T
+    return K @ nu, 0.5 * (Pn + Pn.T), S, nis
+
+
 def joseph_update(P, innovation, H, R, *, gate_probability=None):
     """Kalman update of an error state whose prior estimate is zero.
 
@@ -66,24 +84,20 @@ def joseph_update(P, innovation, H, R, *, gate_probability=None):
     -------
     UpdateResult
     """
-    nu = np.asarray(innovation, dtype=float)
-    H = np.asarray(H, dtype=float)
-    R = np.asarray(R, dtype=float)
-    PHt = P @ H.T
-    S = H @ PHt + R
+    nu = np.ascontiguousarray(innovation, dtype=float)
+    H = np.ascontiguousarray(H, dtype=float)
+    R = np.ascontiguousarray(R, dtype=float)
+    P = np.ascontiguousarray(P, dtype=float)
+    if not (np.isfinite(nu).all() and np.isfinite(P).all()):
+        raise FilterDivergence("the state or the innovation is not finite: the filter diverged")
     try:
-        L = np.linalg.cholesky(S)
+        dx, Pn, S, nis = _update(P, nu, H, R)
     except np.linalg.LinAlgError:
         raise FilterDivergence("innovation covariance is not positive definite: the filter diverged") from None
-    w = np.linalg.solve(L, nu)
-    nis = float(w @ w)
+    nis = float(nis)
     if gate_probability is not None and nis > chi2_threshold(len(nu), gate_probability):
         return UpdateResult(False, np.zeros(P.shape[0]), P, nu, S, nis)
-    K = np.linalg.solve(L.T, np.linalg.solve(L, PHt.T)).T
-    IKH = np.eye(P.shape[0]) - K @ H
-    Pn = IKH @ P @ IKH.T + K @ R @ K.T
-    Pn = 0.5 * (Pn + Pn.T)
-    return UpdateResult(True, K @ nu, Pn, nu, S, nis)
+    return UpdateResult(True, dx, Pn, nu, S, nis)
 
 
 def check_covariance(P, where=""):

@@ -178,8 +178,6 @@ def propagate(t, dth_all, dv_all, k0, k1, lla, v_n, q_nb, carry, coning, corr, x
     xt = np.empty((n, 1))
     xtmp = np.empty((n, 1))
     C = np.empty((3, 3))
-    s3 = np.empty((7, 3))
-    s4 = np.empty((2, 4))
     dth = np.empty(3)
     dv = np.empty(3)
     f_b = np.empty(3)
@@ -199,7 +197,7 @@ def propagate(t, dth_all, dv_all, k0, k1, lla, v_n, q_nb, carry, coning, corr, x
             w_b[i] = dth[i] / dt
             f_b[i] = dv[i] / dt
         _dcm(q_nb, C)
-        ned_step(dth, dv, dt, lla, v_n, q_nb, carry, coning, 0, 0.0, no_gains, s3, s4)
+        ned_step(dth, dv, dt, lla, v_n, q_nb, carry, coning, 0, 0.0, no_gains)
         carry[0] = t[k]
         fill_transition(F, idx, lla, v_n, C, f_b, w_b, tau_inv)
         propagate_covariance(P, F, rows, cols, dt, q_psd, A, second_order)

@@ -291,7 +291,8 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             store.Phi.append(Phi.copy())
             Phi[:] = np.eye(n)
         dx_total = np.zeros(n)
-        C_nb = rot.dcm_from_quat(q_nb)
+        C_nb = np.empty((3, 3))
+        K._dcm(q_nb, C_nb)
         for _, tm, meas, row in items[i:j]:
             if meas is None:
                 continue
@@ -336,7 +337,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             else:
                 _feedback(res.dx, lay, idx, lla, v_n, q_nb, corr, lever)
                 dx_total += res.dx
-                C_nb = rot.dcm_from_quat(q_nb)
+                K._dcm(q_nb, C_nb)
         try:
             check_covariance(P, f"at t = {imu.time[k_end]:.3f} s")
         except FilterDivergence:

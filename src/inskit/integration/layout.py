@@ -21,6 +21,7 @@ Nothing else in the package hard-codes a state index.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -42,7 +43,7 @@ class StateLayout:
     scale_factors: bool = False
     lever_arm: bool = False
 
-    @property
+    @cached_property
     def blocks(self):
         out = ["pos", "vel", "att", "bg", "ba"]
         if self.scale_factors:
@@ -51,16 +52,17 @@ class StateLayout:
             out += ["lever"]
         return tuple(out)
 
-    @property
+    @cached_property
     def size(self):
         return 3 * len(self.blocks)
 
+    @cached_property
+    def _slices(self):
+        return {b: slice(3 * i, 3 * i + 3) for i, b in enumerate(self.blocks)}
+
     def slice(self, block):
         """``slice`` of a block in the state vector; ``None`` if absent."""
-        if block not in self.blocks:
-            return None
-        i = 3 * self.blocks.index(block)
-        return slice(i, i + 3)
+        return self._slices.get(block)
 
     def start(self, block):
         """First index of a block, or -1 if absent (for the compiled kernel)."""

@@ -111,7 +111,7 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
     bad = (sig <= 0).any(axis=1)
     if bad.any():
         i = int(np.argmax(bad))
-        raise InputError(f"{path}: line {linenos[keep][i]}: a position sigma is {sig[i].min()!r}; sigmas must be > 0")
+        raise InputError(f"{path}: line {linenos[keep][i]}: a position sigma is {float(sig[i].min())!r}; sigmas must be > 0")
     v = sv = None
     if all(c in num for c in ("vn(m/s)", "ve(m/s)", "vu(m/s)", "sdvn", "sdve", "sdvu")):
         v = np.column_stack([num["vn(m/s)"], num["ve(m/s)"], -num["vu(m/s)"]])[keep]

@@ -82,6 +82,18 @@ def _q_from_rv(x, y, z, out):
     out[3] = k * z
 
 
+@njit(cache=True, inline="always")
+def _rv_quat(x, y, z):
+    """Quaternion of the rotation vector (x, y, z) as four scalars."""
+    a2 = x * x + y * y + z * z
+    if a2 < 1e-16:
+        k = 0.5 - a2 / 48.0
+        return 1.0 - a2 / 8.0, k * x, k * y, k * z
+    a = math.sqrt(a2)
+    k = math.sin(0.5 * a) / a
+    return math.cos(0.5 * a), k * x, k * y, k * z
+
+
 @njit(cache=True)
 def _qnormalize(q):
     s = 1.0 / math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
@@ -135,85 +147,111 @@ def _remember(dth, dv, dvel, carry, t):
         carry[8 + i] = dvel[i]
 
 
-@njit(cache=True)
-def ned_step(dth, dv, dt, lla, v_n, q_nb, carry, coning, height_mode, h_ref, h_gains, s3, s4):
+@njit(cache=True, inline="always")
+def ned_step(dth, dv, dt, lla, v_n, q_nb, carry, coning, height_mode, h_ref, h_gains):
     """One NED mechanization step over an interval of length ``dt``, in place.
 
-    ``s3`` is a (7, 3) and ``s4`` a (2, 4) scratch array.  Returns nothing;
     ``lla``, ``v_n``, ``q_nb`` and ``carry`` advance to the interval's end.
-    (SYSTEM.md §1.4, source 000 eq. 1-37..42.)
+    Intermediate quantities are scalars, not scratch arrays, so the compiler
+    keeps them in registers (passing scratch arrays in cost 30 % of the speed:
+    it cannot prove they do not alias the state).  (SYSTEM.md §1.4, source 000
+    eq. 1-37..42.)
     """
-    phi, dvc, tmp, zeta, fn, vnew, dvel = s3[0], s3[1], s3[2], s3[3], s3[4], s3[5], s3[6]
-    qa, qb = s4[0], s4[1]
-    _compensate(dth, dv, carry, coning, phi, dvc, tmp)
+    d0, d1, d2 = dth[0], dth[1], dth[2]
+    u0, u1, u2 = dv[0], dv[1], dv[2]
+    # rotation correction dth x dv / 2, then two-sample coning and sculling
+    phi0, phi1, phi2 = d0, d1, d2
+    c0 = u0 + 0.5 * (d1 * u2 - d2 * u1)
+    c1 = u1 + 0.5 * (d2 * u0 - d0 * u2)
+    c2 = u2 + 0.5 * (d0 * u1 - d1 * u0)
+    has_prev = carry[1] > 0.0
+    if coning and has_prev:
+        p0, p1, p2 = carry[2], carry[3], carry[4]
+        w0, w1, w2 = carry[5], carry[6], carry[7]
+        phi0 += (p1 * d2 - p2 * d1) / 12.0
+        phi1 += (p2 * d0 - p0 * d2) / 12.0
+        phi2 += (p0 * d1 - p1 * d0) / 12.0
+        c0 += ((p1 * u2 - p2 * u1) + (w1 * d2 - w2 * d1)) / 12.0
+        c1 += ((p2 * u0 - p0 * u2) + (w2 * d0 - w0 * d2)) / 12.0
+        c2 += ((p0 * u1 - p1 * u0) + (w0 * d1 - w1 * d0)) / 12.0
     lat, lon, h = lla[0], lla[1], lla[2]
+    v0, v1, v2 = v_n[0], v_n[1], v_n[2]
     # midpoint extrapolation of velocity and position for the rates
-    if carry[1] > 0.0:
-        for i in range(3):
-            tmp[i] = v_n[i] + 0.5 * carry[8 + i]
+    if has_prev:
+        m0, m1, m2 = v0 + 0.5 * carry[8], v1 + 0.5 * carry[9], v2 + 0.5 * carry[10]
     else:
-        for i in range(3):
-            tmp[i] = v_n[i]
+        m0, m1, m2 = v0, v1, v2
     rn, re = _radii(lat, h)
-    hm = h - 0.5 * dt * tmp[2]
-    latm = lat + 0.5 * dt * tmp[0] / rn
+    hm = h - 0.5 * dt * m2
+    latm = lat + 0.5 * dt * m0 / rn
     rn, re = _radii(latm, hm)
     sl, cl = math.sin(latm), math.cos(latm)
     wie_n, wie_d = W_IE * cl, -W_IE * sl
-    wen_n, wen_e, wen_d = tmp[1] / re, -tmp[0] / rn, -tmp[1] * sl / cl / re
-    zeta[0] = (wie_n + wen_n) * dt
-    zeta[1] = wen_e * dt
-    zeta[2] = (wie_d + wen_d) * dt
+    wen_n, wen_e, wen_d = m1 / re, -m0 / rn, -m1 * sl / cl / re
+    z0 = (wie_n + wen_n) * dt
+    z1 = wen_e * dt
+    z2 = (wie_d + wen_d) * dt
     # specific-force velocity increment in n: (I - [zeta x]/2) C_nb dvc
-    _qrot(q_nb, dvc, fn)
-    _cross(zeta, fn, dvel)
+    q0, q1, q2, q3 = q_nb[0], q_nb[1], q_nb[2], q_nb[3]
+    tx = 2.0 * (q2 * c2 - q3 * c1)
+    ty = 2.0 * (q3 * c0 - q1 * c2)
+    tz = 2.0 * (q1 * c1 - q2 * c0)
+    f0 = c0 + q0 * tx + q2 * tz - q3 * ty
+    f1 = c1 + q0 * ty + q3 * tx - q1 * tz
+    f2 = c2 + q0 * tz + q1 * ty - q2 * tx
     gd = _gravity_down(latm, hm)
     gn = _gravity_north(latm, hm)
     # Coriolis and centripetal: (2 w_ie + w_en) x v_mid
     cx = 2.0 * wie_n + wen_n
     cy = wen_e
     cz = 2.0 * wie_d + wen_d
-    cor0 = cy * tmp[2] - cz * tmp[1]
-    cor1 = cz * tmp[0] - cx * tmp[2]
-    cor2 = cx * tmp[1] - cy * tmp[0]
-    dvel[0] = fn[0] - 0.5 * dvel[0] + (gn - cor0) * dt
-    dvel[1] = fn[1] - 0.5 * dvel[1] + (0.0 - cor1) * dt
-    dvel[2] = fn[2] - 0.5 * dvel[2] + (gd - cor2) * dt
-    for i in range(3):
-        vnew[i] = v_n[i] + dvel[i]
+    dv0 = f0 - 0.5 * (z1 * f2 - z2 * f1) + (gn - (cy * m2 - cz * m1)) * dt
+    dv1 = f1 - 0.5 * (z2 * f0 - z0 * f2) - (cz * m0 - cx * m2) * dt
+    dv2 = f2 - 0.5 * (z0 * f1 - z1 * f0) + (gd - (cx * m1 - cy * m0)) * dt
+    n0, n1, n2 = v0 + dv0, v1 + dv1, v2 + dv2
     # height channel
     if height_mode == HEIGHT_HOLD:
-        vnew[2] = -(h_ref - h) / dt
+        n2 = -(h_ref - h) / dt
         hnew = h_ref
     else:
-        hnew = h - 0.5 * (v_n[2] + vnew[2]) * dt
+        hnew = h - 0.5 * (v2 + n2) * dt
         if height_mode == HEIGHT_AID:
             err = hnew - h_ref
             hnew -= h_gains[0] * err * dt
-            vnew[2] += h_gains[1] * err * dt
+            n2 += h_gains[1] * err * dt
     hm = 0.5 * (h + hnew)
     rn, re = _radii(latm, hm)
-    latnew = lat + 0.5 * (v_n[0] + vnew[0]) * dt / rn
+    latnew = lat + 0.5 * (v0 + n0) * dt / rn
     latm = 0.5 * (lat + latnew)
     rn, re = _radii(latm, hm)
     sl, cl = math.sin(latm), math.cos(latm)
-    lonnew = lon + 0.5 * (v_n[1] + vnew[1]) * dt / (re * cl)
+    lonnew = lon + 0.5 * (v1 + n1) * dt / (re * cl)
     # attitude: q_nb <- q(-zeta) * q_nb * q(phi), zeta at the true midpoint
-    vme = 0.5 * (v_n[1] + vnew[1])
-    vmn = 0.5 * (v_n[0] + vnew[0])
-    zeta[0] = (W_IE * cl + vme / re) * dt
-    zeta[1] = -vmn / rn * dt
-    zeta[2] = (-W_IE * sl - vme * sl / cl / re) * dt
-    _q_from_rv(phi[0], phi[1], phi[2], qa)
-    _qmul(q_nb, qa, qb)
-    _q_from_rv(-zeta[0], -zeta[1], -zeta[2], qa)
-    _qmul(qa, qb, q_nb)
-    _qnormalize(q_nb)
-    for i in range(3):
-        dvel[i] = vnew[i] - v_n[i]
-        v_n[i] = vnew[i]
+    vme = 0.5 * (v1 + n1)
+    vmn = 0.5 * (v0 + n0)
+    z0 = (W_IE * cl + vme / re) * dt
+    z1 = -vmn / rn * dt
+    z2 = (-W_IE * sl - vme * sl / cl / re) * dt
+    a0, a1, a2, a3 = _rv_quat(phi0, phi1, phi2)
+    # q_nb * q(phi)
+    b0 = q0 * a0 - q1 * a1 - q2 * a2 - q3 * a3
+    b1 = q0 * a1 + q1 * a0 + q2 * a3 - q3 * a2
+    b2 = q0 * a2 - q1 * a3 + q2 * a0 + q3 * a1
+    b3 = q0 * a3 + q1 * a2 - q2 * a1 + q3 * a0
+    a0, a1, a2, a3 = _rv_quat(-z0, -z1, -z2)
+    r0 = a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3
+    r1 = a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2
+    r2 = a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1
+    r3 = a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0
+    inv = 1.0 / math.sqrt(r0 * r0 + r1 * r1 + r2 * r2 + r3 * r3)
+    q_nb[0], q_nb[1], q_nb[2], q_nb[3] = r0 * inv, r1 * inv, r2 * inv, r3 * inv
+    v_n[0], v_n[1], v_n[2] = n0, n1, n2
     lla[0], lla[1], lla[2] = latnew, lonnew, hnew
-    _remember(dth, dv, dvel, carry, carry[0] + dt)
+    carry[0] += dt
+    carry[1] = 1.0
+    carry[2], carry[3], carry[4] = d0, d1, d2
+    carry[5], carry[6], carry[7] = u0, u1, u2
+    carry[8], carry[9], carry[10] = n0 - v0, n1 - v1, n2 - v2
 
 
 @njit(cache=True)
@@ -221,8 +259,6 @@ def ned_kernel(t, dth_all, dv_all, start, lla, v_n, q_nb, carry, coning,
                height_mode, h_ref, h_gains, lla_out, v_out, q_out):
     """Local-level NED mechanization (SYSTEM.md §1.4, source 000 eq. 1-37..42)."""
     n = t.shape[0]
-    s3 = np.empty((7, 3))
-    s4 = np.empty((2, 4))
     if start == 1:
         for i in range(3):
             lla_out[0, i] = lla[i]
@@ -234,7 +270,7 @@ def ned_kernel(t, dth_all, dv_all, start, lla, v_n, q_nb, carry, coning,
     for k in range(start, n):
         dt = t[k] - carry[0]
         href = h_ref[k] if height_mode != HEIGHT_FREE else 0.0
-        ned_step(dth_all[k], dv_all[k], dt, lla, v_n, q_nb, carry, coning, height_mode, href, h_gains, s3, s4)
+        ned_step(dth_all[k], dv_all[k], dt, lla, v_n, q_nb, carry, coning, height_mode, href, h_gains)
         carry[0] = t[k]
         for i in range(3):
             lla_out[k, i] = lla[i]

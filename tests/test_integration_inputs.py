@@ -1,0 +1,126 @@
+"""Bad input to the integration job: clear messages, never NaN in a solution."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from inskit.errors import ConfigError, InputError
+from inskit.filters.kalman import FilterDivergence, check_covariance, joseph_update
+from inskit.integration import FilterSettings, GnssPosition, SensorNoise, run_filter
+from inskit.integration.config import load_config
+from inskit.integration.navigate import navigate
+from inskit.io.rtklib import read_pos
+from inskit.simulation import StationaryTrajectory, ideal_imu, truth_solution
+from inskit.types import GnssData, ImuData
+
+ROOT = Path(__file__).resolve().parents[1]
+POS = ROOT / "data" / "drive_0708" / "gnss_1934_sf.pos.gz"
+
+
+def pos_lines():
+    import gzip
+
+    return gzip.open(POS, "rt").read().splitlines(True)
+
+
+def test_pos_zero_sigma_names_line(tmp_path):
+    lines = pos_lines()
+    i = next(k for k, l in enumerate(lines) if not l.startswith("%")) + 5
+    f = lines[i].split()
+    f[7] = "0.0000000"  # sdn
+    lines[i] = " ".join(f) + "\n"
+    p = tmp_path / "bad.pos"
+    p.write_text("".join(lines))
+    with pytest.raises(InputError, match=rf"bad\.pos: line {i + 1}: a position sigma is 0\.0"):
+        read_pos(p)
+
+
+def test_pos_nan_row_names_line(tmp_path):
+    lines = pos_lines()
+    i = next(k for k, l in enumerate(lines) if not l.startswith("%")) + 3
+    f = lines[i].split()
+    f[2] = "nan"
+    lines[i] = " ".join(f) + "\n"
+    p = tmp_path / "bad.pos"
+    p.write_text("".join(lines))
+    with pytest.raises(InputError, match=rf"line {i + 1}: column 'latitude\(deg\)'"):
+        read_pos(p)
+
+
+def test_gnss_data_refuses_zero_and_negative_sigma():
+    with pytest.raises(InputError, match="sigma_ned"):
+        GnssData([0.0, 1.0], np.zeros((2, 3)), [[0.1, 0.1, 0.1], [0.1, 0.0, 0.1]])
+    with pytest.raises(InputError, match="sigma_ned"):
+        GnssData([0.0, 1.0], np.zeros((2, 3)), [[0.1, -0.1, 0.1], [0.1, 0.1, 0.1]])
+
+
+def test_mismatched_time_bases(tmp_path):
+    cfg = load_config(ROOT / "examples" / "drive_0708.toml",
+                      {"imu": {"time_offset_s": 1e6}, "output": {"plots": False}})
+    with pytest.raises(InputError, match="do not overlap: mismatched time bases"):
+        navigate(cfg)
+
+
+def test_config_errors_name_the_field(tmp_path):
+    p = tmp_path / "c.toml"
+    p.write_text('[imu]\nfile = "a.csv"\n[gnss]\nfile = "b.csv"\n[noise]\ngyro_arw_deg_sqrt_h = -1\n')
+    with pytest.raises(ConfigError, match=r"c\.toml: field 'noise\.gyro_arw_deg_sqrt_h': Input should be greater"):
+        load_config(p)
+    p.write_text('[imu]\nfile = "a.csv"\n[gnss]\nfile = "b.csv"\nbogus = 1\n')
+    with pytest.raises(ConfigError, match=r"field 'gnss\.bogus'"):
+        load_config(p)
+    p.write_text('[imu\n')
+    with pytest.raises(ConfigError, match="not valid TOML"):
+        load_config(p)
+
+
+def _static_setup(n=500):
+    traj = StationaryTrajectory((0.7, 0.1, 10.0))
+    t = np.arange(n) * 0.01
+    imu = ideal_imu(traj, t, nodes=1)
+    truth = truth_solution(traj, t)
+    g = GnssData(t[::25], truth.lla[::25], np.full((len(t[::25]), 3), 0.05))
+    return imu, truth, g
+
+
+def test_diverging_filter_stops_with_a_message():
+    imu, truth, g = _static_setup()
+    dv = imu.dv_b.copy()
+    dv[200] = 1e200  # a corrupt sample that survives the readers
+    bad = ImuData(imu.time, imu.dtheta_b, dv)
+    with pytest.raises(FilterDivergence, match="diverged"):
+        run_filter(bad, truth.state(0), [GnssPosition(g)], FilterSettings())
+
+
+def test_covariance_checks():
+    with pytest.raises(FilterDivergence, match="positiveness"):
+        check_covariance(np.diag([1.0, -1.0]))
+    with pytest.raises(FilterDivergence, match="not positive definite"):
+        joseph_update(np.diag([1.0, 1.0]), [1.0], [[1.0, 0.0]], [[-5.0]])
+
+
+def test_gnss_outside_imu_span_is_skipped_and_counted():
+    imu, truth, g = _static_setup()
+    late = GnssData(g.time + 100.0, g.lla, g.sigma_ned)
+    out = run_filter(imu, truth.state(0), [GnssPosition(late)], FilterSettings())
+    assert out.counts["gnss_pos"]["skipped"] == len(late)
+    assert np.isfinite(out.solution.lla).all()
+
+
+def test_settings_refuse_impossible_values():
+    with pytest.raises(InputError, match="scheme"):
+        FilterSettings(scheme="tight")
+    with pytest.raises(InputError, match="gyro_arw"):
+        FilterSettings(noise=SensorNoise(0.0, 1e-3, 1e-5, 1e-4))
+
+
+def test_cli_navigate_bad_config_one_line(tmp_path):
+    p = tmp_path / "c.toml"
+    p.write_text('[imu]\nfile = "missing.csv"\n[gnss]\nfile = "missing.pos"\nformat = "rtklib-pos"\n')
+    r = subprocess.run([sys.executable, "-m", "inskit.cli", "navigate", str(p), "--out", str(tmp_path / "o")],
+                       capture_output=True, text=True)
+    assert r.returncode == 2
+    assert r.stderr.strip().count("\n") == 0 and "missing.pos: no such file" in r.stderr
