@@ -94,3 +94,21 @@ def test_evaluate_mismatched_time_bases(files, tmp_path):
     io.write_solution(tmp_path / "late.csv", shifted)
     r = inskit("evaluate", tmp_path / "late.csv", files / "truth.csv")
     assert r.returncode == 2 and "do not overlap" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_simulate_and_allan_json(tmp_path):
+    scen = tmp_path / "s.toml"
+    scen.write_text('name = "still"\n[start]\nlat_deg = 45\nlon_deg = 7\n[imu]\nrate_hz = 100\ngrade = "tactical"\n'
+                    '[[segment]]\ntype = "static"\nduration_s = 120\n')
+    r = inskit("simulate", scen, "--out", tmp_path / "o", "--seed", 3, "--json", "--no-plot")
+    assert r.returncode == 0, r.stderr
+    s = json.loads(r.stdout)
+    assert s["imu_epochs"] == 12001 and s["seed"] == 3
+    r = inskit("simulate", scen, "--out", tmp_path / "o")
+    assert r.returncode == 2 and "refusing to overwrite" in r.stderr
+    r = inskit("allan", tmp_path / "o" / "imu.csv", "--json", "--plot", tmp_path / "a.png")
+    assert r.returncode == 0, r.stderr
+    a = json.loads(r.stdout)
+    # tactical preset: ARW 0.125 deg/sqrt(h); two minutes of data pin the white noise within 15 %
+    assert abs(a["navigate_noise_section"]["gyro_arw_deg_sqrt_h"] / 0.125 - 1) < 0.15
+    assert (tmp_path / "a.png").exists()

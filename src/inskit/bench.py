@@ -58,12 +58,39 @@ def run_benchmarks(quick=False, progress=None):
         out[f"{frame}_epochs_per_s"] = round(_best_rate(lambda f=frame: mechanize(imu, init, frame=f), n, repeats))
         if progress:
             progress(frame)
+    out["simulate_epochs_per_s"], out["simulate_scenario"] = _simulate_rate(quick)
+    if progress:
+        progress("simulate")
     out["lc_epochs_per_s"] = round(_best_rate(_lc_job(imu, init), n, max(1, repeats - 2)))
     out["lc_states"] = 21
     out["lc_gnss_rate_hz"] = 1.0
     if progress:
         progress("lc")
     return out
+
+
+def _simulate_rate(quick):
+    """IMU epochs per second of the car scenario (ideal IMU by quadrature plus
+    the full industrial-MEMS error model; GNSS and files excluded)."""
+    from pathlib import Path
+
+    from .simulation.imu import ideal_imu
+    from .simulation.scenario import build_trajectory, imu_errors, load_scenario
+    from .simulation.sensors import apply_imu_errors
+
+    path = Path(__file__).resolve().parents[2] / "examples" / "car.toml"
+    if not path.is_file():
+        return None, "examples/car.toml not found (run from a source checkout)"
+    sc = load_scenario(path)
+    tr = build_trajectory(sc, np.random.default_rng(0))
+    t = np.arange(0.0, min(tr.duration, 300.0 if quick else tr.duration), 1.0 / sc.imu.rate_hz)
+    err = imu_errors(sc)
+    tr.kinematics(t[:10])  # position integration happens once per trajectory
+
+    def job():
+        apply_imu_errors(ideal_imu(tr, t, nodes=sc.imu.quadrature_nodes), err, np.random.default_rng(1))
+
+    return round(_best_rate(job, len(t), 2)), "car"
 
 
 def _lc_job(imu, init):

@@ -264,6 +264,87 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
 
 
 @cli.command()
+@click.argument("scenario_file", type=click.Path(dir_okay=False))
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Output folder.")
+@click.option("--seed", type=int, default=0, show_default=True, help="Seed of every random draw.")
+@click.option("--force", is_flag=True, help="Overwrite files in --out.")
+@click.option("--no-plot", is_flag=True, help="Skip the scenario plot.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
+def simulate(scenario_file, out_dir, seed, force, no_plot, as_json):
+    """Simulate a scenario: IMU, GNSS and truth files plus a plot."""
+    from .simulation.scenario import load_scenario, simulate as run_sim, write_simulation
+
+    sc = load_scenario(scenario_file)
+    t0 = time.perf_counter()
+    steps = ["ideal IMU", "errors and GNSS", "files"]
+    from tqdm import tqdm
+
+    with tqdm(total=len(steps), desc=f"simulate {sc.name}", file=sys.stderr, disable=not sys.stderr.isatty(),
+              leave=False) as bar:
+        sim = run_sim(sc, seed, progress=lambda _: bar.update(1))
+        bar.update(1)
+        files = write_simulation(sim, Path(out_dir), overwrite=force, plot=not no_plot)
+        bar.update(1)
+    res = {
+        "scenario": sc.name, "seed": seed, "duration_s": float(sim.truth.time[-1]), "imu_epochs": len(sim.imu),
+        "imu_rate_hz": sc.imu.rate_hz, "imu_grade": sc.imu.grade, "gnss_fixes": len(sim.gnss),
+        "elapsed_s": time.perf_counter() - t0, "files": [str(f) for f in files],
+        "segments": sim.trajectory.segments,
+    }
+    _emit(res, as_json, f"{sc.name}: {res['duration_s']:.0f} s, {len(sim.imu)} IMU epochs, {len(sim.gnss)} GNSS "
+                        f"fixes -> {out_dir}/ ({res['elapsed_s']:.1f} s)")
+
+
+@cli.command()
+@click.argument("imu_file", type=click.Path(dir_okay=False))
+@click.option("--plot", "plot_file", type=click.Path(dir_okay=False), help="Write the Allan plot (PNG).")
+@click.option("--force", is_flag=True, help="Overwrite --plot.")
+@click.option("--no-unit-check", is_flag=True, help="Skip the unit-plausibility checks of the IMU reader.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
+def allan(imu_file, plot_file, force, no_unit_check, as_json):
+    """Allan deviation of a static IMU log and the filter noise parameters it implies."""
+    from . import io
+    from .analysis.allan import allan_imu, plot_allan
+    from .units import DEG_PER_HOUR, MICRO_G
+
+    if plot_file and Path(plot_file).exists() and not force:
+        raise InputError(f"{plot_file}: already exists; refusing to overwrite it (use --force)")
+    imu = io.read_imu(imu_file, check_units=not no_unit_check)
+    r = allan_imu(imu)
+    gyro = [{"axis": a, "arw_deg_sqrt_h": f.white / DEG * 60, "bias_instability_deg_h": f.bias_instability / DEG_PER_HOUR,
+             "gm_sigma_deg_h": f.gm_sigma / DEG_PER_HOUR, "gm_tau_s": f.gm_tau,
+             "rrw_deg_h_sqrt_h": None if f.rate_random_walk is None else f.rate_random_walk / DEG_PER_HOUR * 60}
+            for a, f in zip("xyz", r["gyro_fit"])]
+    acc = [{"axis": a, "vrw_ug_sqrt_hz": f.white / MICRO_G, "vrw_m_s_sqrt_h": f.white * 60,
+            "bias_instability_ug": f.bias_instability / MICRO_G, "gm_sigma_ug": f.gm_sigma / MICRO_G,
+            "gm_tau_s": f.gm_tau,
+            "rrw_ug_sqrt_h": None if f.rate_random_walk is None else f.rate_random_walk / MICRO_G * 60}
+           for a, f in zip("xyz", r["accel_fit"])]
+
+    def rms(rows, k):
+        return float(np.sqrt(np.mean([x[k] ** 2 for x in rows])))
+
+    noise = {  # the [noise] section of an `inskit navigate` config
+        "gyro_arw_deg_sqrt_h": rms(gyro, "arw_deg_sqrt_h"),
+        "accel_vrw_m_s_sqrt_h": rms(acc, "vrw_m_s_sqrt_h"),
+        "gyro_bias_sigma_deg_h": rms(gyro, "gm_sigma_deg_h"),
+        "accel_bias_sigma_ug": rms(acc, "gm_sigma_ug"),
+        "bias_tau_s": float(np.exp(np.mean(np.log([x["gm_tau_s"] for x in gyro + acc])))),
+    }
+    res = {"file": imu_file, "duration_s": float(imu.time[-1] - imu.time[0]), "gyro": gyro, "accel": acc,
+           "navigate_noise_section": noise}
+    if plot_file:
+        plot_allan(r, plot_file, title=Path(imu_file).name)
+        res["plot"] = plot_file
+    lines = [f"{'axis':<6}{'ARW deg/rt(h)':>15}{'BI deg/h':>10}{'tau s':>8}   {'VRW ug/rt(Hz)':>14}{'BI ug':>9}{'tau s':>8}"]
+    for g, a in zip(gyro, acc):
+        lines.append(f"{g['axis']:<6}{g['arw_deg_sqrt_h']:>15.4f}{g['bias_instability_deg_h']:>10.3f}{g['gm_tau_s']:>8.0f}   "
+                     f"{a['vrw_ug_sqrt_hz']:>14.2f}{a['bias_instability_ug']:>9.2f}{a['gm_tau_s']:>8.0f}")
+    lines.append("[noise] for inskit navigate: " + ", ".join(f"{k} = {v:.4g}" for k, v in noise.items()))
+    _emit(res, as_json, "\n".join(lines))
+
+
+@cli.command()
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def demo(as_json):
     """Closed-form demonstration: ideal IMU, all four mechanizations."""

@@ -11,11 +11,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import earth
-from . import rotations as rot
-from .errors import InputError
-from .types import NavSolution
-from .units import ARCMIN
+from .. import earth
+from .. import rotations as rot
+from ..errors import InputError
+from ..types import NavSolution
+from ..units import ARCMIN
 
 
 @dataclass(frozen=True)

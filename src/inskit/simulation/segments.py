@@ -1,0 +1,355 @@
+"""Trajectories built from manoeuvre segments.
+
+A trajectory is a list of segments (static, accelerate, cruise, turn, banked
+turn, climb, pitch and roll manoeuvres, coning, figure eight) with vibration on
+top.  Each kinematic channel (speed, heading rate, flight-path angle, roll,
+pitch) is a constant plus a sum of quintic smooth steps
+``S(x) = 10 x^3 - 15 x^4 + 6 x^5``: acceleration is continuous and jerk
+finite, and every derivative and integral is in closed form.  Heading is the
+integral of the heading rate; the velocity follows the heading and the
+flight-path angle; position is integrated on the ellipsoid (RK4 on a fine
+grid, cubic Hermite in between: millimetre-exact at any time).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.interpolate import CubicHermiteSpline
+
+from .. import earth
+from ..errors import ConfigError
+from .trajectory import Kinematics, kinematics_from_curvilinear
+
+G_COORD = 9.80665  # gravity used only to set the bank angle of coordinated turns
+
+
+def smoothstep(x):
+    """Quintic smooth step and its first two derivatives and its integral."""
+    x = np.clip(x, 0.0, 1.0)
+    s = x**3 * (10 - 15 * x + 6 * x * x)
+    ds = 30 * x * x * (1 - x) ** 2
+    dds = 60 * x * (1 - x) * (1 - 2 * x)
+    return s, ds, dds
+
+
+def smoothstep_integral(x):
+    """``int_0^x S(u) du`` for any x (0 before the step, x - 1/2 after it)."""
+    xc = np.clip(x, 0.0, 1.0)
+    inner = xc**6 - 3 * xc**5 + 2.5 * xc**4
+    return np.where(x > 1.0, x - 0.5, np.where(x < 0.0, 0.0, inner))
+
+
+@dataclass
+class Channel:
+    """``c0 + sum_i A_i S((t - t_i) / T_i)`` with closed-form calculus."""
+
+    c0: float = 0.0
+    steps: list = field(default_factory=list)  # (t_i, T_i, A_i)
+
+    def add_step(self, t0, T, A):
+        if A != 0.0:
+            self.steps.append((float(t0), float(max(T, 1e-9)), float(A)))
+
+    def add_pulse(self, t0, ramp, hold, A):
+        """Rise by A over ``ramp``, hold ``hold``, fall back over ``ramp``."""
+        self.add_step(t0, ramp, A)
+        self.add_step(t0 + ramp + hold, ramp, -A)
+
+    def value_at_end(self, t):
+        return self.c0 + sum(A for t0, T, A in self.steps if t0 + T <= t + 1e-9)
+
+    def eval(self, t):
+        """Value and first two derivatives at (sorted or unsorted) times ``t``.
+
+        Each step is evaluated only inside its window; after it the step adds
+        a constant, accumulated with one cumulative sum (cost O(n + steps)
+        instead of O(n * steps) on sorted times).
+        """
+        order = None
+        if len(t) > 1 and np.any(t[1:] < t[:-1]):
+            order = np.argsort(t, kind="stable")
+            t = t[order]
+        v = np.zeros_like(t)
+        d = np.zeros_like(t)
+        dd = np.zeros_like(t)
+        after = np.zeros(len(t) + 1)
+        for t0, T, A in self.steps:
+            i0, i1 = np.searchsorted(t, (t0, t0 + T))
+            if i1 > i0:
+                s, ds, dds = smoothstep((t[i0:i1] - t0) / T)
+                v[i0:i1] += A * s
+                d[i0:i1] += A * ds / T
+                dd[i0:i1] += A * dds / T**2
+            after[i1] += A
+        v += self.c0 + np.cumsum(after)[:-1]
+        if order is not None:
+            out = [np.empty_like(v) for _ in range(3)]
+            for o, x in zip(out, (v, d, dd)):
+                o[order] = x
+            return tuple(out)
+        return v, d, dd
+
+    def integral(self, t, t_start):
+        """``int_{t_start}^t`` of the channel (``t_start`` before every step)."""
+        order = None
+        if len(t) > 1 and np.any(t[1:] < t[:-1]):
+            order = np.argsort(t, kind="stable")
+            t = t[order]
+        out = self.c0 * (t - t_start)
+        slope = np.zeros(len(t) + 1)
+        icpt = np.zeros(len(t) + 1)
+        for t0, T, A in self.steps:
+            i0, i1 = np.searchsorted(t, (t0, t0 + T))
+            if i1 > i0:
+                out[i0:i1] += A * T * smoothstep_integral((t[i0:i1] - t0) / T)
+            # after the step: A T ((t - t0)/T - 1/2) = A t - A (t0 + T/2)
+            slope[i1] += A
+            icpt[i1] -= A * (t0 + 0.5 * T)
+        out += np.cumsum(slope)[:-1] * t + np.cumsum(icpt)[:-1]
+        if order is not None:
+            res = np.empty_like(out)
+            res[order] = out
+            return res
+        return out
+
+
+@dataclass
+class Window:
+    """Smooth on/off window of an oscillation (for coning and vibration)."""
+
+    t0: float
+    t1: float
+    ramp: float
+
+    def eval(self, t):
+        a, da, dda = smoothstep((t - self.t0) / self.ramp)
+        b, db, ddb = smoothstep((t - self.t1 + self.ramp) / self.ramp)
+        return a - b, (da - db) / self.ramp, (dda - ddb) / self.ramp**2
+
+
+@dataclass
+class Oscillation:
+    """``w(t) A sin(2 pi f t + p)`` added to a channel (attitude or down position)."""
+
+    target: str  # "roll", "pitch", "yaw", "down"
+    amplitude: float
+    frequency: float
+    phase: float
+    window: Window | None = None
+
+    def eval(self, t):
+        w = 2 * np.pi * self.frequency
+        s, c = np.sin(w * t + self.phase), np.cos(w * t + self.phase)
+        x, dx, ddx = self.amplitude * s, self.amplitude * w * c, -self.amplitude * w * w * s
+        if self.window is None:
+            return x, dx, ddx
+        g, dg, ddg = self.window.eval(t)
+        return g * x, dg * x + g * dx, ddg * x + 2 * dg * dx + g * ddx
+
+
+class SegmentTrajectory:
+    """A trajectory assembled segment by segment (see module docstring).
+
+    Parameters
+    ----------
+    lla0 : (3,) latitude, longitude [rad], height [m]
+    yaw0 : float
+        Initial heading [rad].
+    speed0 : float
+        Initial speed [m/s].
+    transition_s : float
+        Default length of the smooth transitions [s].
+    """
+
+    def __init__(self, lla0, yaw0=0.0, speed0=0.0, transition_s=2.0):
+        self.lla0 = np.asarray(lla0, float)
+        self.yaw0 = float(yaw0)
+        self.transition = float(transition_s)
+        self.speed = Channel(float(speed0))
+        self.rate_flat = Channel()   # heading rate of flat (unbanked) turns
+        self.rate_bank = Channel()   # heading rate of coordinated banked turns
+        self.gamma = Channel()       # flight-path angle
+        self.roll = Channel()
+        self.pitch = Channel()
+        self.osc: list[Oscillation] = []
+        self.t = 0.0
+        self.segments: list[dict] = []
+        self._pos = None
+
+    # --- segments -------------------------------------------------------------
+    def _v(self):
+        return self.speed.value_at_end(self.t)
+
+    def static(self, duration):
+        if abs(self._v()) > 1e-9:
+            raise ConfigError(f"segment {len(self.segments) + 1} (static): the vehicle still moves at "
+                              f"{self._v():.2f} m/s; decelerate to 0 first")
+        return self._advance("static", duration)
+
+    def accelerate(self, to_speed, duration):
+        if to_speed < 0:
+            raise ConfigError(f"segment {len(self.segments) + 1} (accelerate): speed must be >= 0, got {to_speed}")
+        self.speed.add_step(self.t, duration, to_speed - self._v())
+        return self._advance("accelerate", duration)
+
+    def cruise(self, duration):
+        return self._advance("cruise", duration)
+
+    def turn(self, angle, rate=None, radius=None, banked=False, transition=None):
+        """Turn by ``angle`` [rad] at ``rate`` [rad/s] or on ``radius`` [m]."""
+        tr = self.transition if transition is None else transition
+        v = self._v()
+        if radius is not None:
+            if v <= 0:
+                raise ConfigError(f"segment {len(self.segments) + 1} (turn): a turn by radius needs speed > 0")
+            rate = v / radius
+        if rate is None or rate <= 0:
+            raise ConfigError(f"segment {len(self.segments) + 1} (turn): give rate_deg_s > 0 or radius_m > 0")
+        hold = abs(angle) / rate - tr
+        if hold < 0:
+            raise ConfigError(f"segment {len(self.segments) + 1} (turn): {np.degrees(abs(angle)):.1f} deg at "
+                              f"{np.degrees(rate):.2f} deg/s is shorter than the {tr} s transitions")
+        ch = self.rate_bank if banked else self.rate_flat
+        ch.add_pulse(self.t, tr, hold, np.sign(angle) * rate)
+        return self._advance("banked-turn" if banked else "turn", 2 * tr + hold)
+
+    def climb(self, angle, duration, transition=None):
+        """Climb (or descend, angle < 0) at flight-path ``angle`` [rad]."""
+        tr = self.transition if transition is None else transition
+        hold = duration - 2 * tr
+        if hold < 0:
+            raise ConfigError(f"segment {len(self.segments) + 1} (climb): duration must exceed two transitions")
+        self.gamma.add_pulse(self.t, tr, hold, angle)
+        return self._advance("climb", duration)
+
+    def attitude_pulse(self, axis, amplitude, duration):
+        """Roll or pitch away by ``amplitude`` and back over ``duration``."""
+        ramp = duration / 3.0
+        getattr(self, axis).add_pulse(self.t, ramp, duration - 2 * ramp, amplitude)
+        return self._advance(f"{axis}-manoeuvre", duration)
+
+    def coning(self, half_angle, frequency, duration):
+        win = Window(self.t, self.t + duration, min(self.transition, duration / 4))
+        self.osc.append(Oscillation("roll", half_angle, frequency, np.pi / 2, win))
+        self.osc.append(Oscillation("pitch", half_angle, frequency, 0.0, win))
+        return self._advance("coning", duration)
+
+    def figure_eight(self, radius):
+        self.turn(2 * np.pi, radius=radius)
+        self.turn(-2 * np.pi, radius=radius)
+        return self
+
+    def vibration(self, target, amplitude, frequency, phase=0.0):
+        """Sinusoidal vibration over the whole run (attitude [rad] or down [m])."""
+        self.osc.append(Oscillation(target, amplitude, frequency, phase, None))
+        return self
+
+    def random_vibration(self, target, rms, band_hz, rng, components=24):
+        """Band-limited random vibration: a seeded sum of sinusoids whose
+        amplitudes give the requested RMS (an analytic, differentiable signal)."""
+        f = rng.uniform(band_hz[0], band_hz[1], components)
+        ph = rng.uniform(0, 2 * np.pi, components)
+        amp = rms * np.sqrt(2.0 / components)
+        for fi, pi in zip(f, ph):
+            self.osc.append(Oscillation(target, amp, fi, pi, None))
+        return self
+
+    def _advance(self, kind, duration):
+        if duration <= 0:
+            raise ConfigError(f"segment {len(self.segments) + 1} ({kind}): duration must be > 0")
+        self.segments.append({"type": kind, "start_s": self.t, "end_s": self.t + duration})
+        self.t += duration
+        self._pos = None
+        return self
+
+    @property
+    def duration(self):
+        return self.t
+
+    # --- evaluation --------------------------------------------------------------
+    def _heading(self, t):
+        return self.yaw0 + self.rate_flat.integral(t, 0.0) + self.rate_bank.integral(t, 0.0)
+
+    def _velocity(self, t):
+        v, dv, _ = self.speed.eval(t)
+        rf, drf, _ = self.rate_flat.eval(t)
+        rb, drb, _ = self.rate_bank.eval(t)
+        g, dg, _ = self.gamma.eval(t)
+        psi = self._heading(t)
+        r = rf + rb
+        cg, sg, cp, sp = np.cos(g), np.sin(g), np.cos(psi), np.sin(psi)
+        v_n = np.column_stack([v * cg * cp, v * cg * sp, -v * sg])
+        a_n = np.column_stack([
+            dv * cg * cp - v * sg * dg * cp - v * cg * sp * r,
+            dv * cg * sp - v * sg * dg * sp + v * cg * cp * r,
+            -dv * sg - v * cg * dg,
+        ])
+        return v_n, a_n, (v, dv, rb, drb, psi, r, g, dg)
+
+    def _integrate_position(self):
+        """RK4 of (lat, lon, h) on a 0.05 s grid, kept as Hermite splines."""
+        h = 0.05
+        n = int(np.ceil(self.t / h)) + 2
+        tg = np.arange(n) * h
+        y = np.empty((n, 3))
+        y[0] = self.lla0
+
+        def rhs(t, yy):
+            v_n, _, _ = self._velocity(np.atleast_1d(t))
+            rn, re = earth.principal_radii(yy[:, 0], yy[:, 2])
+            return np.column_stack([v_n[:, 0] / rn, v_n[:, 1] / (re * np.cos(yy[:, 0])), -v_n[:, 2]])
+
+        # the velocity does not depend on position: evaluate it for all stages at once
+        t_all = np.concatenate([tg, tg + h / 2])
+        v_all, _, _ = self._velocity(t_all)
+        v_grid, v_half = v_all[:n], v_all[n:]
+
+        def f(yy, v):
+            rn, re = earth.principal_radii(yy[0], yy[2])
+            return np.array([v[0] / rn, v[1] / (re * np.cos(yy[0])), -v[2]])
+
+        for k in range(n - 1):
+            k1 = f(y[k], v_grid[k])
+            k2 = f(y[k] + h / 2 * k1, v_half[k])
+            k3 = f(y[k] + h / 2 * k2, v_half[k])
+            k4 = f(y[k] + h * k3, v_grid[k + 1])
+            y[k + 1] = y[k] + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        dy = rhs(tg, y)
+        self._pos = CubicHermiteSpline(tg, y, dy, axis=0)
+
+    def kinematics(self, t):
+        """:class:`Kinematics` at times ``t`` (any rate, any order)."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        if self._pos is None:
+            self._integrate_position()
+        v_n, a_n, (v, dv, rb, drb, psi, r, g, dg) = self._velocity(t)
+        lla = self._pos(t)
+        # attitude: yaw = heading, pitch = flight path + pitch channel,
+        # roll = roll channel + coordinated bank angle atan(v r_bank / g)
+        rl, drl, _ = self.roll.eval(t)
+        pt, dpt, _ = self.pitch.eval(t)
+        bank = np.arctan(v * rb / G_COORD)
+        dbank = (dv * rb + v * drb) / G_COORD / (1 + (v * rb / G_COORD) ** 2)
+        rpy = np.column_stack([rl + bank, g + pt, psi])
+        drpy = np.column_stack([drl + dbank, dg + dpt, r])
+        for o in self.osc:
+            x, dx, ddx = o.eval(t)
+            if o.target == "down":
+                lla[:, 2] -= x
+                v_n = v_n.copy()
+                v_n[:, 2] += dx
+                a_n[:, 2] += ddx
+            else:
+                j = ("roll", "pitch", "yaw").index(o.target)
+                rpy[:, j] += x
+                drpy[:, j] += dx
+        return _kinematics_from_ned(t, lla, v_n, a_n, rpy, drpy)
+
+
+def _kinematics_from_ned(t, lla, v_n, a_n, rpy, drpy):
+    """Kinematics from position, NED velocity/acceleration and Euler angles."""
+    z = np.zeros(len(t))
+    kin = kinematics_from_curvilinear(t, lla[:, 0], lla[:, 1], lla[:, 2], z, z, z, z, z, z, rpy, drpy)
+    return Kinematics(t, lla, v_n, a_n, kin.C_nb, kin.omega_nb_b)

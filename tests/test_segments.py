@@ -1,0 +1,97 @@
+"""Segment trajectories: closed-form calculus and ideal sensors that close."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from inskit import earth
+from inskit.errors import ConfigError
+from inskit.simulation import ideal_imu, truth_solution
+from inskit.simulation.scenario import build_trajectory, load_scenario
+from inskit.simulation.segments import Channel, SegmentTrajectory, smoothstep, smoothstep_integral
+from inskit.strapdown import mechanize
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def test_smoothstep_calculus():
+    x = np.linspace(-0.5, 1.5, 20001)
+    s, ds, dds = smoothstep(x)
+    h = x[1] - x[0]
+    assert np.allclose(np.gradient(s, h), ds, atol=1e-6)
+    # the third derivative jumps by 60 at x = 0 and 1 (finite jerk, by design), so a
+    # central difference of the first derivative is off by up to h * 60 / 2 there
+    assert np.allclose(np.gradient(ds, h), dds, atol=h * 60 / 2 * 1.01)
+    assert abs(ds).max() == pytest.approx(1.875, rel=1e-3)  # finite jerk, continuous acceleration
+    assert np.allclose(np.cumsum(s) * h - s[0] * h, smoothstep_integral(x) - smoothstep_integral(x[0]), atol=2e-4)
+
+
+def test_channel_matches_numerical_calculus_sorted_and_unsorted():
+    ch = Channel(1.0)
+    ch.add_pulse(2.0, 1.5, 3.0, 0.7)
+    ch.add_step(4.0, 2.0, -0.3)
+    t = np.linspace(0.0, 12.0, 12001)
+    v, d, dd = ch.eval(t)
+    assert np.allclose(np.gradient(v, t), d, atol=1e-5)
+    # jerk jumps of 60 A / T^3 at the ends of each step: central-difference bound
+    jump = max(60 * abs(A) / T**3 for _, T, A in ch.steps)
+    assert np.allclose(np.gradient(d, t), dd, atol=(t[1] - t[0]) * jump / 2 * 1.01)
+    num = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))])
+    assert np.allclose(ch.integral(t, 0.0), num, atol=1e-6)
+    perm = np.random.default_rng(0).permutation(len(t))
+    assert np.allclose(ch.eval(t[perm])[0], v[perm])
+    assert np.allclose(ch.integral(t[perm], 0.0), ch.integral(t, 0.0)[perm])
+
+
+def test_segments_do_what_they_say():
+    tr = SegmentTrajectory((0.7, 0.2, 100.0), yaw0=0.0, transition_s=2.0)
+    tr.static(10).accelerate(10.0, 10).turn(np.radians(90), rate=np.radians(10)).climb(np.radians(5), 20)
+    kin = tr.kinematics(np.array([5.0, 20.0, tr.duration - 1e-6]))
+    assert np.allclose(kin.v_n[0], 0.0)  # static
+    assert np.linalg.norm(kin.v_n[1]) == pytest.approx(10.0)
+    yaw_end = np.degrees(np.arctan2(kin.C_nb[2, 1, 0], kin.C_nb[2, 0, 0]))
+    assert yaw_end == pytest.approx(90.0, abs=1e-6)
+    # climb at 5 deg for 20 s with 2 s ramps: height gain 10 m/s * sin(5 deg) * (20 - 2) s
+    assert kin.lla[2, 2] - 100.0 == pytest.approx(10 * np.sin(np.radians(5)) * 18.0, rel=1e-3)
+    with pytest.raises(ConfigError, match="still moves"):
+        SegmentTrajectory((0.7, 0.2, 0.0)).accelerate(5, 5).static(3)
+
+
+def _ideal_error(tr, rate):
+    t = np.arange(0.0, tr.duration, 1.0 / rate)
+    imu = ideal_imu(tr, t, nodes=3)
+    truth = truth_solution(tr, t)
+    sol = mechanize(imu, truth.state(0))
+    d = earth.lla_to_ned(sol.lla, truth.lla[0]) - earth.lla_to_ned(truth.lla, truth.lla[0])
+    return np.hypot(d[:, 0], d[:, 1]).max()
+
+
+def test_car_scenario_ideal_sensors_close_and_converge():
+    sc = load_scenario(EXAMPLES / "car.toml")
+    tr = build_trajectory(sc, np.random.default_rng(0))
+    assert tr.duration >= 1800.0
+    e100 = _ideal_error(tr, 100.0)
+    e200 = _ideal_error(tr, 200.0)
+    assert e100 < 0.5
+    assert e100 / e200 > 3.5
+
+
+@pytest.mark.parametrize("name", ["aircraft", "ship", "static"])
+def test_other_scenarios_ideal_sensors(name):
+    sc = load_scenario(EXAMPLES / f"{name}.toml")
+    tr = build_trajectory(sc, np.random.default_rng(0))
+    e1 = _ideal_error(tr, sc.imu.rate_hz)
+    assert e1 < 0.5
+    if e1 > 1e-6:  # above the numerical floor, the error is second order in the step
+        assert e1 / _ideal_error(tr, 2 * sc.imu.rate_hz) > 3.5
+
+
+def test_scenario_validation(tmp_path):
+    p = tmp_path / "s.toml"
+    p.write_text('name = "x"\n[start]\nlat_deg = 95\nlon_deg = 0\n[[segment]]\ntype = "static"\nduration_s = 1\n')
+    with pytest.raises(ConfigError, match=r"field 'start\.lat_deg'"):
+        load_scenario(p)
+    p.write_text('name = "x"\n[start]\nlat_deg = 45\nlon_deg = 0\n[[segment]]\ntype = "turn"\nangle_deg = 90\n')
+    with pytest.raises(ConfigError, match="needs rate_deg_s or radius_m"):
+        build_trajectory(load_scenario(p))
