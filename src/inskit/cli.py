@@ -345,6 +345,34 @@ def allan(imu_file, plot_file, force, no_unit_check, as_json):
 
 
 @cli.command()
+@click.argument("scenario_file", type=click.Path(dir_okay=False))
+@click.option("--outage", required=True, help="GNSS outage START,END in seconds of the scenario.")
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
+def schemes(scenario_file, outage, seed, as_json):
+    """Uncoupled, open-loop and closed-loop integration on one simulated run."""
+    from .integration.montecarlo import compare_schemes
+    from .simulation.scenario import load_scenario
+
+    try:
+        a, b = (float(x) for x in outage.split(","))
+    except ValueError:
+        raise InputError(f"--outage: expected START,END in seconds, got {outage!r}") from None
+    if not b > a:
+        raise InputError(f"--outage: the end ({b}) must come after the start ({a})")
+    sc = load_scenario(scenario_file)
+    rows = compare_schemes(sc, (a, b), seed)
+    res = {"scenario": sc.name, "imu_grade": sc.imu.grade, "outage_s": [a, b], "seed": seed, "schemes": rows}
+    lines = [f"{sc.name} ({sc.imu.grade}), GNSS outage {a:.0f}..{b:.0f} s, seed {seed}: errors at the outage end",
+             f"{'scheme':<11}{'horiz m':>10}{'vert m':>9}{'vel m/s':>9}{'att deg':>9}{'GNSS-on horiz RMS m':>21}"]
+    for r in rows:
+        lines.append(f"{r['scheme']:<11}{r['outage_end_horizontal_m']:>10.2f}{r['outage_end_vertical_m']:>9.2f}"
+                     f"{r['outage_end_velocity_m_s']:>9.3f}{r['outage_end_attitude_deg']:>9.3f}"
+                     f"{r['gnss_on_horizontal_rms_m']:>21.3f}")
+    _emit(res, as_json, "\n".join(lines))
+
+
+@cli.command()
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def demo(as_json):
     """Closed-form demonstration: ideal IMU, all four mechanizations."""

@@ -79,26 +79,33 @@ class StateLayout:
                 "lever": "xyz"}
         return [f"{b}_{a}" for b in self.blocks for a in axes[b]]
 
-    def transition_pattern(self):
+    def transition_pattern(self, gauss_markov_biases=True):
         """``(rows, cols)`` of the entries of F that can be non-zero.
 
         The compiled kernel multiplies only these, so the cost of the
-        covariance propagation grows with them, not with ``size**2``.
+        covariance propagation grows with them, not with ``size**2``.  Skew
+        blocks have zero diagonals; of the gravity-gradient block only
+        ``(vD, pD)`` is used; bias diagonals (``-1/tau``) exist only for
+        Gauss-Markov biases (``gauss_markov_biases``); scale factors are random
+        walks.
         """
         n = self.size
         mask = np.zeros((n, n), dtype=bool)
         p, v, a = self.slice("pos"), self.slice("vel"), self.slice("att")
+        off = ~np.eye(3, dtype=bool)
         mask[p, v] = np.eye(3, dtype=bool)
-        mask[v, p] = True  # gravity gradient (down only is used, kept general)
-        mask[v, v] = True
-        mask[v, a] = True
-        mask[a, v] = True
-        mask[a, a] = True
+        mask[v.start + 2, p.start + 2] = True  # gravity gradient, down channel
+        mask[v, v] = off
+        mask[v, a] = off
+        mask[a, a] = off
+        mask[a.start + 0, v.start + 1] = True  # transport-rate error
+        mask[a.start + 1, v.start + 0] = True
+        mask[a.start + 2, v.start + 1] = True
         mask[v, self.slice("ba")] = True
         mask[a, self.slice("bg")] = True
-        for b in ("bg", "ba", "sg", "sa"):
-            s = self.slice(b)
-            if s is not None:
+        if gauss_markov_biases:
+            for b in ("bg", "ba"):
+                s = self.slice(b)
                 mask[s, s] = np.eye(3, dtype=bool)
         if self.scale_factors:
             mask[v, self.slice("sa")] = True

@@ -191,19 +191,20 @@ def _triad(x, dt, t, e: TriadErrors, rng, f=None):
     M = np.eye(3) + np.diag(e.scale_factor) + np.asarray(e.misalignment, float) * (1 - np.eye(3))
     y = x @ M.T
     bias = np.asarray(e.fixed_bias, float) + rng.standard_normal(3) * e.turn_on_bias_sigma
-    y += bias
+    series = np.tile(bias, (n, 1))
     if e.bias_instability > 0:
         dtm = float(np.median(dt))
-        y += _gauss_markov(n, dtm, e.gm_sigma, e.bias_instability_tau_s, rng)
+        series += _gauss_markov(n, dtm, e.gm_sigma, e.bias_instability_tau_s, rng)
     if e.rate_random_walk > 0:
-        y += np.cumsum(rng.standard_normal((n, 3)) * e.rate_random_walk * np.sqrt(dt)[:, None], axis=0)
+        series += np.cumsum(rng.standard_normal((n, 3)) * e.rate_random_walk * np.sqrt(dt)[:, None], axis=0)
+    y += series
     if f is not None and e.g_sensitivity:
         y += e.g_sensitivity * f
     if e.white_noise > 0:
         y += rng.standard_normal((n, 3)) * (e.white_noise / np.sqrt(dt))[:, None]
     if np.isfinite(e.saturation):
         y = np.clip(y, -e.saturation, e.saturation)
-    return y, bias
+    return y, bias, series
 
 
 def apply_imu_errors(imu: ImuData, errors: ImuErrors, rng) -> tuple[ImuData, dict]:
@@ -214,21 +215,24 @@ def apply_imu_errors(imu: ImuData, errors: ImuErrors, rng) -> tuple[ImuData, dic
     imu : ImuData
         Measured increments (row 0 stays zero: the initial epoch).
     draws : dict
-        The per-run random draws (``gyro_turn_on_bias``, ``accel_turn_on_bias``)
-        for tests and reports.
+        The per-run random draws for tests and reports: ``gyro_turn_on_bias``,
+        ``accel_turn_on_bias`` (3,) and the true additive bias over time,
+        ``gyro_bias``, ``accel_bias`` (n, 3) (fixed + turn-on + Gauss-Markov +
+        rate random walk, applied over the interval ending at each row).
     """
     t = imu.time
     dt = np.empty_like(t)
     dt[1:] = np.diff(t)
     dt[0] = dt[1] if len(t) > 1 else 1.0
     w, f = imu.dtheta_b / dt[:, None], imu.dv_b / dt[:, None]
-    wm, bg = _triad(w, dt, t, errors.gyro, rng, f=f)
-    fm, ba = _triad(f, dt, t, errors.accel, rng)
+    wm, bg, bg_series = _triad(w, dt, t, errors.gyro, rng, f=f)
+    fm, ba, ba_series = _triad(f, dt, t, errors.accel, rng)
     dth = _quantize(wm * dt[:, None], errors.gyro.quantization)
     dv = _quantize(fm * dt[:, None], errors.accel.quantization)
     dth[0] = 0.0
     dv[0] = 0.0
-    return ImuData(t, dth, dv), {"gyro_turn_on_bias": bg, "accel_turn_on_bias": ba}
+    return ImuData(t, dth, dv), {"gyro_turn_on_bias": bg, "accel_turn_on_bias": ba,
+                                 "gyro_bias": bg_series, "accel_bias": ba_series}
 
 
 def with_noise_only(errors: ImuErrors) -> ImuErrors:

@@ -1,0 +1,76 @@
+"""Filter consistency on seeded Monte Carlo runs (issue 4 acceptance):
+average NEES of position, velocity and attitude inside the 95 % chi-square
+band, sensor-bias errors inside 3 sigma, for tactical and MEMS grades."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from inskit.integration.engine import InitialUncertainty
+from inskit.integration.montecarlo import compare_schemes, consistency_errors, monte_carlo
+from inskit.simulation.gnss import GnssErrors
+from inskit.simulation.scenario import build_trajectory, load_scenario
+from inskit.simulation.segments import SegmentTrajectory
+from inskit.simulation.sensors import preset
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+
+
+def drive():
+    """3.5 min: static start, accelerations, turns both ways, a climb."""
+    tr = SegmentTrajectory((np.radians(45), np.radians(7), 300.0), yaw0=0.3)
+    tr.static(30).accelerate(15, 10).cruise(20).turn(np.radians(90), rate=np.radians(9)).accelerate(8, 5)
+    tr.turn(np.radians(-135), rate=np.radians(12)).climb(np.radians(3), 20).accelerate(20, 8)
+    tr.turn(np.radians(60), rate=np.radians(6)).cruise(30).turn(np.radians(-90), rate=np.radians(9)).cruise(40)
+    return tr
+
+
+GNSS = GnssErrors(rate_hz=1.0, white_h_m=1.0, white_v_m=2.0, velocity_sigma_m_s=0.0)
+INIT = {
+    "tactical": InitialUncertainty(pos_m=(1.0, 1.0, 2.0), vel_m_s=0.1, roll_pitch_rad=np.radians(0.2),
+                                   yaw_rad=np.radians(1.0)),
+    "industrial-mems": InitialUncertainty(pos_m=(1.0, 1.0, 2.0), vel_m_s=0.1, roll_pitch_rad=np.radians(1.0),
+                                          yaw_rad=np.radians(3.0)),
+}
+
+
+def check(res):
+    for block in ("pos", "vel", "att"):
+        lo, hi = res["band"][block]
+        anees = res["anees"][block]
+        assert lo <= anees.mean() <= hi, (block, anees.mean(), (lo, hi))
+        # and at most epochs, not only on average
+        assert ((anees >= lo) & (anees <= hi)).mean() > 0.6, block
+    z = res["bias_normalized"]
+    assert (np.abs(z) < 3).mean() >= 0.97
+    assert 0.6 < np.sqrt(np.mean(z**2)) < 1.3
+
+
+@pytest.mark.parametrize("grade", ["tactical", "industrial-mems"])
+def test_nees_consistency_50_runs(grade):
+    res = monte_carlo(drive(), 100.0, consistency_errors(preset(grade)), GNSS, INIT[grade], runs=50, seed=0,
+                      gate_probability=None)
+    assert res["runs"] == 50
+    check(res)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("grade", ["tactical", "industrial-mems"])
+def test_nees_consistency_car_scenario(grade):
+    sc = load_scenario(EXAMPLES / "car.toml")
+    tr = build_trajectory(sc, np.random.default_rng(0))
+    res = monte_carlo(tr, 100.0, consistency_errors(preset(grade)), GNSS, INIT[grade], runs=50, seed=0,
+                      duration=600.0, gate_probability=None)
+    check(res)
+
+
+def test_closed_loop_beats_open_loop_and_uncoupled_through_an_outage():
+    sc = load_scenario(EXAMPLES / "car.toml")
+    rows = {r["scheme"]: r for r in compare_schemes(sc, (1200.0, 1260.0), seed=1)}
+    c, o, u = rows["closed"], rows["open"], rows["uncoupled"]
+    # source 004: the closed loop keeps its corrections through an outage
+    assert c["outage_end_horizontal_m"] < 20.0
+    assert c["outage_end_horizontal_m"] < 0.1 * o["outage_end_horizontal_m"]
+    assert o["outage_end_horizontal_m"] < u["outage_end_horizontal_m"]
+    assert c["gnss_on_horizontal_rms_m"] < 1.0
