@@ -373,6 +373,82 @@ def schemes(scenario_file, outage, seed, as_json):
 
 
 @cli.command()
+@click.argument("imu_file", type=click.Path(dir_okay=False))
+@click.option("--lat", "lat_deg", type=float, required=True, help="Latitude [deg].")
+@click.option("--method", type=click.Choice(["accel", "gyro", "blend", "fine"]), default="blend", show_default=True)
+@click.option("--m", "m_gain", type=float, help="Blending gain for --method blend (default: chosen for the IMU's "
+              "own static noise by the GA).")
+@click.option("--start", "t_start", type=float, help="Start of the static interval [s] (default: the log start).")
+@click.option("--end", "t_end", type=float, help="End of the static interval [s] (default: detected).")
+@click.option("--imu-format", type=click.Choice(["inskit", "rtklibexplorer"]), default="inskit", show_default=True)
+@click.option("--mount-rpy", help="Sensor mounting roll,pitch,yaw [deg] (see docs/formats.md).")
+@click.option("--accel-bias-ug", type=float, help="Accelerometer bias class (1 sigma) [micro-g] for the sigmas and m.")
+@click.option("--gyro-bias-deg-h", type=float, help="Gyro bias class (1 sigma) [deg/h] for the sigmas and m.")
+@click.option("--no-unit-check", is_flag=True, help="Skip the unit-plausibility checks of the IMU reader.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
+def align(imu_file, lat_deg, method, m_gain, t_start, t_end, imu_format, mount_rpy, accel_bias_ug, gyro_bias_deg_h,
+          no_unit_check, as_json):
+    """Initial alignment of a static IMU log: roll, pitch, yaw and their sigmas."""
+    from .alignment import align_static
+
+    if not -90.0 <= lat_deg <= 90.0:
+        raise InputError(f"--lat must be within [-90, 90] deg, got {lat_deg}")
+    mount = (0.0, 0.0, 0.0)
+    if mount_rpy:
+        try:
+            mount = tuple(float(x) for x in mount_rpy.split(","))
+        except ValueError:
+            raise InputError(f"--mount-rpy: expected roll,pitch,yaw in degrees, got {mount_rpy!r}") from None
+        if len(mount) != 3:
+            raise InputError(f"--mount-rpy: expected three numbers, got {mount_rpy!r}")
+    if m_gain is not None and not 0.0 <= m_gain <= 1.0:
+        raise InputError(f"--m must be within [0, 1], got {m_gain}")
+    from .units import DEG_PER_HOUR, MICRO_G
+
+    for name, v in (("--accel-bias-ug", accel_bias_ug), ("--gyro-bias-deg-h", gyro_bias_deg_h)):
+        if v is not None and not v > 0:
+            raise InputError(f"{name} must be > 0, got {v}")
+    res = align_static(imu_file, np.radians(lat_deg), method=method, m=m_gain, t_start=t_start, t_end=t_end,
+                       imu_format=imu_format, mount_rpy=np.radians(mount), check_units=not no_unit_check,
+                       accel_bias_sigma=None if accel_bias_ug is None else accel_bias_ug * MICRO_G,
+                       gyro_bias_sigma=None if gyro_bias_deg_h is None else gyro_bias_deg_h * DEG_PER_HOUR)
+    lines = [f"{method} alignment over {res['static_s']:.1f} s of static data at {lat_deg:.4f} deg",
+             f"roll  {res['roll_deg']:9.4f} deg  +- {res['roll_sigma_deg']:.4f}",
+             f"pitch {res['pitch_deg']:9.4f} deg  +- {res['pitch_sigma_deg']:.4f}",
+             f"yaw   {res['yaw_deg']:9.4f} deg  +- {res['yaw_sigma_deg']:.4f}"]
+    if "m" in res:
+        lines.append(f"blending gain m = {res['m']:.4f}")
+    if "converge_time_s" in res:
+        lines.append("converged after (roll, pitch, yaw): " + ", ".join(
+            "n/a" if v is None else f"{v:.1f} s" for v in res["converge_time_s"]))
+    lines.append(f"heading from gyros usable: {'yes' if res['heading_usable'] else 'no'}: {res['heading_reason']}")
+    _emit(res, as_json, "\n".join(lines))
+
+
+@cli.group()
+def reproduce():
+    """Reproduce the source documents' published experiments."""
+
+
+@reproduce.command("alignment-ga")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Folder for the figures.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
+def reproduce_alignment(out_dir, as_json):
+    """Source 002: one-step alignment blended by a GA (figures 6-9, headline case)."""
+    from .alignment.reproduce import run
+
+    res = run(out_dir, log=_log)
+    lines = [f"{'item':<72} {'published':<28} ours"]
+    for e in res["entries"]:
+        lines.append(f"{e['item']:<72} {str(e['published']):<28} {e['ours']}")
+        if e["note"]:
+            lines.append(f"{'':<4}note: {e['note']}")
+    lines.append(f"figures: {', '.join(res['figures'])}")
+    _emit({"experiment": "alignment-ga", "source": "002", "entries": res["entries"], "headline": res["headline"],
+           "ga_checks": res["ga_checks"], "figures": res["figures"]}, as_json, "\n".join(lines))
+
+
+@cli.command()
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def demo(as_json):
     """Closed-form demonstration: ideal IMU, all four mechanizations."""

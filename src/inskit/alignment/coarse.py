@@ -143,3 +143,40 @@ def startup_state(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), *, 
     p_imu = earth.ned_to_lla(-(C_nb @ np.asarray(lever_arm_b, float)), lla0)
     state = NavState.from_euler(imu.time[0], p_imu, np.zeros(3), rpy0)
     return Startup(state, gyro_bias, accel_bias, static_end, t_head)
+
+
+def detect_static_start(imu: ImuData, window_s=1.0, factor=3.0, min_static_s=5.0):
+    """End time of the static interval at the start of an IMU log.
+
+    Per window of ``window_s``: the standard deviations of the specific-force
+    and rate magnitudes, and the mean specific-force vector.  The log must
+    start at rest; the interval ends one window before the first window whose
+    deviations exceed ``factor`` times those of the first window, or whose
+    mean vector has moved by more than ``factor`` standard errors (0.02 m/s^2
+    at least: a gentle start of motion tilts the mean before it adds
+    vibration).  Floors of 0.02 m/s^2 and 0.002 rad/s keep an ideal log from
+    tripping on rounding.
+    """
+    w, f = imu.rates()
+    dt = float(np.median(np.diff(imu.time)))
+    k = max(3, int(round(window_s / dt)))
+    n = (len(imu) - 1) // k
+    if n < 2:
+        raise InputError(f"the IMU log is shorter than two {window_s} s windows")
+    fw = f[1:n * k + 1].reshape(n, k, 3)
+    ww = w[1:n * k + 1].reshape(n, k, 3)
+    fn, wn = np.linalg.norm(fw, axis=2), np.linalg.norm(ww, axis=2)
+    sf, sw = fn.std(axis=1), wn.std(axis=1)
+    ref_f, ref_w = max(sf[0], 0.02), max(sw[0], 0.002)
+    mean_f = fw.mean(axis=1)
+    # the reference mean from the first few windows (less noisy than one)
+    ref_mean = mean_f[: max(1, min(3, n // 4))].mean(axis=0)
+    drift = np.linalg.norm(mean_f - ref_mean, axis=1)
+    tol = max(factor * ref_f / np.sqrt(k), 0.02)
+    moving = (sf > factor * ref_f) | (sw > factor * ref_w) | (drift > tol)
+    i = int(np.argmax(moving)) if moving.any() else n + 1
+    t_end = imu.time[min(max(i - 1, 0) * k, len(imu) - 1)]
+    if t_end - imu.time[0] < min_static_s:
+        raise InputError(f"the log is static for only {t_end - imu.time[0]:.1f} s at its start (at least "
+                         f"{min_static_s:.0f} s needed); give the interval with --start/--end")
+    return float(t_end)
