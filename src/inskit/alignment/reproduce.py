@@ -232,13 +232,19 @@ def _plots(out_dir, s6, s7, surf):
         fig.savefig(paths[-1], dpi=110)
         plt.close(fig)
     B, D = np.meshgrid(surf["accel_mg"], surf["gyro_pct"], indexing="ij")
-    for Z, name, title in ((surf["m"], "fig8_optimal_m.png", "fig. 8: optimal m"),
-                           (surf["J_arcmin"], "fig9_criterion.png", "fig. 9: J at the optimal m [arcmin]")):
-        fig = plt.figure(figsize=(7, 5.5))
-        ax = fig.add_subplot(111, projection="3d")
-        ax.plot_surface(B, D, np.nan_to_num(Z), cmap="viridis", linewidth=0)
-        ax.set_xlabel("accelerometer error [mg]")
-        ax.set_ylabel("gyro error [% Earth rate]")
+    for Z, name, title, label in ((surf["m"], "fig8_optimal_m.png", "fig. 8: optimal m", "m"),
+                                  (surf["J_arcmin"], "fig9_criterion.png", "fig. 9: J at the optimal m",
+                                   "J [arcmin]")):
+        fig, ax = plt.subplots(figsize=(7.5, 5.5))
+        pc = ax.pcolormesh(B, D, np.ma.masked_invalid(Z), shading="nearest", cmap="viridis")
+        fig.colorbar(pc, ax=ax, label=label)
+        if surf["crease"]:
+            cb, cd = np.array(surf["crease"]).T
+            ax.plot(cb, cd, "w--", lw=1.5, label="crease: m leaves 1")
+            ax.legend(loc="upper left", fontsize=8)
+        ax.set_yscale("symlog", linthresh=0.01)
+        ax.set_xlabel("accelerometer error [mg] (all axes)")
+        ax.set_ylabel("gyro error [% of Earth rate] (all axes, symlog)")
         ax.set_title(title)
         fig.tight_layout()
         paths.append(out / name)
