@@ -5,8 +5,9 @@ import pytest
 
 from inskit import earth
 from inskit import rotations as rot
+from inskit.demo import DEMO_TRAJECTORY
 from inskit.errors import InputError
-from inskit.simulation import ConingTrajectory, HarmonicTrajectory, StationaryTrajectory, ideal_imu, truth_solution
+from inskit.simulation import ConingTrajectory, StationaryTrajectory, ideal_imu, truth_solution
 from inskit.strapdown import NedIntegrator, mechanize
 from inskit.types import ImuData
 from inskit.units import ARCSEC, MICRO_G
@@ -88,15 +89,8 @@ def test_coning_increments_closed_form():
     assert np.allclose(quad, cone.coning_increment(a, b), atol=1e-16)
 
 
-DYNAMIC = HarmonicTrajectory(
-    (np.radians(40.0), np.radians(-105.0), 1500.0),
-    north=(0.0, 8.0, [(300.0, 0.02, 0.0), (40.0, 0.11, 1.0)]),
-    east=(0.0, 5.0, [(500.0, 0.015, 0.5), (30.0, 0.09, 0.2)]),
-    up=(0.0, 0.0, [(30.0, 0.01, 0.0), (5.0, 0.05, 0.3)]),
-    roll=(0.0, 0.0, [(0.2, 0.1, 0.0)]),
-    pitch=(0.02, 0.0, [(0.1, 0.07, 0.4)]),
-    yaw=(0.5, 0.01, [(0.8, 0.03, 0.0)]),
-)
+# the closed-form drive of the demo: turns, speed changes, climbs (sinusoids in closed form)
+DYNAMIC = DEMO_TRAJECTORY
 
 
 @pytest.fixture(scope="module")

@@ -19,9 +19,9 @@ from __future__ import annotations
 import numpy as np
 
 from .. import rotations as rot
-from ..units import ARCMIN, DEG, DEG_PER_HOUR, MILLI_G
+from ..units import ARCMIN, DEG_PER_HOUR, MILLI_G
 from ..earth import OMEGA_IE
-from .analytic import accel_basis, angle_errors, blend, criterion, eq29, eq29_rms, ideal_static
+from .analytic import accel_basis, angle_errors, blend, eq29, eq29_rms, ideal_static
 from .optimize import ga_best_m, realization_J, scalar_best_m
 
 LAT = np.radians(45.0)

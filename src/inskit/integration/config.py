@@ -8,12 +8,12 @@ relative to the config file.
 from __future__ import annotations
 
 import math
-import tomllib
 from pathlib import Path
 from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
+from ..config_files import read_toml, validation_message
 from ..errors import ConfigError
 
 
@@ -137,24 +137,11 @@ class NavigateConfig(_Strict):
         return p if p.is_absolute() else (self.base_dir / p)
 
 
-def _format_errors(path, exc: ValidationError):
-    e = exc.errors()[0]
-    where = ".".join(str(x) for x in e["loc"]) or "(top level)"
-    more = f" (and {len(exc.errors()) - 1} more)" if len(exc.errors()) > 1 else ""
-    return f"{path}: field '{where}': {e['msg']}{more}"
-
-
 def load_config(path, overrides=None) -> NavigateConfig:
     """Read and validate a navigate config; ``overrides`` is a nested dict
     applied on top (the CLI flags)."""
-    path = Path(path)
-    if not path.is_file():
-        raise ConfigError(f"{path}: no such config file")
-    try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path}: not valid TOML ({exc})") from None
-    return config_from_dict(data, base_dir=path.parent, source=str(path), overrides=overrides)
+    data = read_toml(path, "config")
+    return config_from_dict(data, base_dir=Path(path).parent, source=str(path), overrides=overrides)
 
 
 def config_from_dict(data, *, base_dir=Path("."), source="config", overrides=None) -> NavigateConfig:
@@ -168,7 +155,7 @@ def config_from_dict(data, *, base_dir=Path("."), source="config", overrides=Non
     try:
         cfg = NavigateConfig.model_validate(data)
     except ValidationError as exc:
-        raise ConfigError(_format_errors(source, exc)) from None
+        raise ConfigError(validation_message(source, exc)) from None
     if cfg.noise.bias_tau_s == math.inf:
         raise ConfigError(f"{source}: noise.bias_tau_s must be finite (use a long time constant for a random walk)")
     return cfg

@@ -27,7 +27,6 @@ def _shade(ax, windows, t0):
 def plot_all(res, out_dir):
     plt = _plt()
     files = []
-    sol = res.smoothed if res.smoothed is not None else res.forward.solution
     fwd = res.forward.solution
     g = res.gnss
     t0 = g.time[0]

@@ -8,7 +8,6 @@ like; everything is converted to SI here.
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Literal
@@ -17,6 +16,7 @@ import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from .. import io
+from ..config_files import read_toml, validation_message
 from ..errors import ConfigError, InputError
 from ..types import GnssData, ImuData, NavSolution
 from ..units import DEG
@@ -95,19 +95,12 @@ class Scenario(_S):
 
 
 def load_scenario(path) -> Scenario:
-    path = Path(path)
-    if not path.is_file():
-        raise ConfigError(f"{path}: no such scenario file")
-    try:
-        data = tomllib.loads(path.read_text())
-    except tomllib.TOMLDecodeError as exc:
-        raise ConfigError(f"{path}: not valid TOML ({exc})") from None
+    """Read and validate a scenario file."""
+    data = read_toml(path, "scenario")
     try:
         return Scenario.model_validate(data)
     except ValidationError as exc:
-        e = exc.errors()[0]
-        where = ".".join(str(x) for x in e["loc"])
-        raise ConfigError(f"{path}: field '{where}': {e['msg']}") from None
+        raise ConfigError(validation_message(path, exc)) from None
 
 
 def _need(seg, i, *names):
