@@ -101,9 +101,10 @@ def joseph_update(P, innovation, H, R, *, gate_probability=None):
 
 
 def check_covariance(P, where=""):
-    """Raise FilterDivergence unless P is finite with a positive diagonal."""
-    d = np.diag(P)
-    if not np.isfinite(P).all() or (d <= 0).any():
+    """Raise FilterDivergence unless P's diagonal is finite and positive (a NaN
+    anywhere in P reaches the diagonal within one propagation step)."""
+    d = P.diagonal()
+    if not (d > 0).all() or not np.isfinite(d).all():
         raise FilterDivergence(f"covariance lost positiveness{(' ' + where) if where else ''}: "
                                "the filter diverged (check sensor noise settings and the initial state)")
 

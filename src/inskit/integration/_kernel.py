@@ -103,7 +103,7 @@ def fill_transition(F, idx, lla, v_n, C, f_b, w_b, tau_inv):
             F[i, i] = -tau_inv[i]
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath={"contract"})
 def propagate_covariance(P, F, rows, cols, dt, q_psd, A, B, second_order):
     """``P <- (I + F dt) P (I + F dt)^T + diag(q_psd) dt`` over F's pattern.
 
@@ -137,7 +137,7 @@ def propagate_covariance(P, F, rows, cols, dt, q_psd, A, B, second_order):
         P[i, i] += q_psd[i] * dt
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath={"contract"})
 def _sparse_step(M, F, rows, cols, dt, tmp):
     """``M <- (I + F dt) M`` for a square or vector M over F's pattern."""
     tmp[:] = 0.0
@@ -228,7 +228,7 @@ def propagate(t, dth_all, dv_all, k0, k1, lla, v_n, q_nb, carry, coning, corr, x
             for i in range(4):
                 out_q[k, i] = q_nb[i]
         for i in range(9):
-            out_sig[k, i] = math.sqrt(max(P[i, i], 0.0))
+            out_sig[k, i] = P[i, i]  # variances; the caller takes the square roots in one pass
         for i in range(corr.shape[0]):
             out_corr[k, i] = corr[i]
     for i in range(3):

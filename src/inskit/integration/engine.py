@@ -264,7 +264,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             K.apply_correction(lla, v_n, q_nb, x, idx, 1.0, out_lla[k], out_v[k], out_q[k])
         else:
             out_lla[k], out_v[k], out_q[k] = lla, v_n, q_nb
-        out_sig[k] = np.sqrt(np.maximum(np.diag(P)[:9], 0.0))
+        out_sig[k] = P.diagonal()[:9]  # variances until the end of the run
         out_corr[k] = corr
 
     write_row(0)
@@ -358,6 +358,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     check_covariance(P, "at the end of the run")
     if not (np.isfinite(out_lla).all() and np.isfinite(out_v).all() and np.isfinite(out_q).all()):
         raise FilterDivergence("the navigation solution became NaN: the filter diverged")
+    np.sqrt(np.maximum(out_sig, 0.0, out=out_sig), out=out_sig)
     sol = NavSolution._trusted(imu.time, out_lla, out_v, out_q, _extra_columns(out_sig, out_corr, lay))
     innovations = {k: {kk: np.asarray(vv) for kk, vv in v.items()} for k, v in innov.items()}
     return FilterOutput(sol, counts, innovations, settings, store)

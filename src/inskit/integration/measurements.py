@@ -17,6 +17,7 @@ loosely coupled ``z = P_INS - P_GPS`` with ``H = [I 0 0]`` in this sign).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -59,10 +60,27 @@ class UpdateContext:
 
 def ned_difference(lla_a, lla_b):
     """NED vector from ``lla_b`` to ``lla_a`` [m], small-offset form (exact to
-    millimetres over kilometres), for one point."""
-    rn, re = earth.principal_radii(lla_b[0], lla_b[2])
-    return np.array([(lla_a[0] - lla_b[0]) * rn, (lla_a[1] - lla_b[1]) * re * np.cos(lla_b[0]),
-                     -(lla_a[2] - lla_b[2])])
+    millimetres over kilometres), for one point (scalar math: called per update)."""
+    lat, h = float(lla_b[0]), float(lla_b[2])
+    s = math.sin(lat)
+    w = math.sqrt(1.0 - earth.E2 * s * s)
+    rn = earth.A * (1.0 - earth.E2) / (w * w * w) + h
+    re = earth.A / w + h
+    return np.array([(lla_a[0] - lat) * rn, (lla_a[1] - lla_b[1]) * re * math.cos(lat), -(lla_a[2] - h)])
+
+
+def _template(layout, rows, block):
+    """H with an identity on ``block`` (cached per layout and size)."""
+    key = (layout, rows, block)
+    H = _TEMPLATES.get(key)
+    if H is None:
+        H = np.zeros((rows, layout.size))
+        H[:, layout.slice(block)] = np.eye(rows, 3)
+        _TEMPLATES[key] = H
+    return H.copy()
+
+
+_TEMPLATES: dict = {}
 
 
 class GnssPosition:
@@ -101,8 +119,7 @@ class GnssPosition:
         lay = ctx.layout
         cl = self.antenna_offset(ctx)
         nu = ned_difference(ctx.lla, self.gnss.lla[row]) + cl + ctx.v_n * ctx.dt
-        H = np.zeros((3, lay.size))
-        H[:, lay.slice("pos")] = np.eye(3)
+        H = _template(lay, 3, "pos")
         H[:, lay.slice("att")] = skew(cl)
         if lay.lever_arm:
             H[:, lay.slice("lever")] = ctx.C_nb
@@ -142,8 +159,7 @@ class GnssVelocity:
         lay = ctx.layout
         lever_v = ctx.C_nb @ np.cross(ctx.omega_ib_b, ctx.lever_arm_b)
         nu = ctx.v_n + lever_v - self.gnss.v_n[row]
-        H = np.zeros((3, lay.size))
-        H[:, lay.slice("vel")] = np.eye(3)
+        H = _template(lay, 3, "vel")
         H[:, lay.slice("att")] = skew(lever_v)
         return nu, H, np.diag(self.sigma[row] ** 2)
 
@@ -169,10 +185,7 @@ class ZeroVelocity(_GridMeasurement):
     name = "zupt"
 
     def linearize(self, ctx: UpdateContext, row):
-        lay = ctx.layout
-        H = np.zeros((3, lay.size))
-        H[:, lay.slice("vel")] = np.eye(3)
-        return ctx.v_n.copy(), H, np.eye(3) * self.sigma**2
+        return ctx.v_n.copy(), _template(ctx.layout, 3, "vel"), np.eye(3) * self.sigma**2
 
 
 class NonHolonomic(_GridMeasurement):
