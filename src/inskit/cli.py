@@ -449,12 +449,25 @@ def reproduce_alignment(out_dir, as_json):
 
 
 @cli.command()
+@click.option("--checks", is_flag=True, help="Also run the closed-form checks (stationary, Schuler, coning).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def demo(as_json):
+def demo(checks, as_json):
     """Closed-form demonstration: ideal IMU, all four mechanizations."""
-    from .demo import demo_run
+    from .demo import closed_form_checks, demo_run
 
     res, table = demo_run(log=_log)
+    if checks:
+        c = closed_form_checks(log=_log)
+        res["checks"] = c
+        s, sc, co = c["stationary"], c["schuler"], c["coning_attitude_drift"]
+        table += (
+            f"\nstationary 1 h: horizontal max {s['horizontal_max_m']:.2e} m, attitude max "
+            f"{s['attitude_max_arcsec']:.2e} arcsec"
+            f"\nSchuler 3 h: period {sc['period_s']:.1f} s (closed form {sc['closed_form_period_s']:.1f}), first peak "
+            f"{sc['first_peak_m']:.1f} m (closed form {sc['closed_form_peak_m']:.1f})"
+            f"\nconing 10 min: single-sample 100 Hz {co['single_sample_100hz_rad']:.3e} rad, two-sample 100 Hz "
+            f"{co['two_sample_100hz_rad']:.3e} rad, two-sample 200 Hz {co['two_sample_200hz_rad']:.3e} rad"
+        )
     _emit(res, as_json, table)
 
 
