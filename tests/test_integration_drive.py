@@ -55,3 +55,16 @@ def test_startup_levels_the_car(result):
     # parked on a street: within a few degrees of level after the mount rotation
     assert abs(rpy[0]) < 5 and abs(rpy[1]) < 5
     assert 30 < result.startup.static_end - result.imu.time[0] < 40  # the ~38 s static start
+
+
+def test_time_offset_state_recovers_a_wrong_offset():
+    """Start 0.06 s off the calibrated offset (-0.26 s): the time-offset state
+    finds the difference and the outage protocol still scores within 3 m."""
+    from inskit.integration.navigate import summary
+
+    cfg = load_config(EXAMPLE, {"output": {"plots": False}, "imu": {"time_offset_s": -0.20},
+                                "filter": {"time_offset": True}})
+    s = summary(navigate(cfg))
+    assert abs(s["estimated_time_offset_s"] - 0.06) < 0.02
+    assert s["outage_end_horizontal_rms_m"] <= 3.0
+    assert s["gnss_on_horizontal_rms_m"] < 0.03

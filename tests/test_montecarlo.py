@@ -74,3 +74,28 @@ def test_closed_loop_beats_open_loop_and_uncoupled_through_an_outage():
     assert c["outage_end_horizontal_m"] < 0.1 * o["outage_end_horizontal_m"]
     assert o["outage_end_horizontal_m"] < u["outage_end_horizontal_m"]
     assert c["gnss_on_horizontal_rms_m"] < 1.0
+
+
+def test_time_offset_state_estimates_gnss_latency():
+    """GNSS fixes stamped 0.2 s late (latency): the state converges to -0.2 s."""
+    from inskit.integration import GnssPosition, StateLayout, run_filter
+    from inskit.integration.montecarlo import matched_settings, perturbed_start
+    from inskit.simulation import ideal_imu, truth_solution
+    from inskit.simulation.gnss import simulate_gnss
+    from inskit.simulation.sensors import apply_imu_errors
+
+    tr = drive()
+    t = np.arange(0.0, tr.duration, 0.01)
+    rng = np.random.default_rng(11)
+    errs = consistency_errors(preset("tactical"))
+    imu, _ = apply_imu_errors(ideal_imu(tr, t, nodes=3), errs, rng)
+    g = GnssErrors(rate_hz=5.0, white_h_m=0.02, white_v_m=0.04, velocity_sigma_m_s=0.0, latency_s=0.2)
+    gnss, _ = simulate_gnss(tr, t[0], t[-1], g, rng)
+    settings = matched_settings(errs, INIT["tactical"], gate_probability=None)
+    from dataclasses import replace
+
+    settings = replace(settings, layout=StateLayout(time_offset=True),
+                       initial=replace(settings.initial, time_offset_s=0.3))
+    start = perturbed_start(truth_solution(tr, t[:1]).state(0), matched_settings(errs, INIT["tactical"]), rng)
+    out = run_filter(imu, start, [GnssPosition(gnss)], settings)
+    assert out.solution.extra["time_offset_s"][-1] == pytest.approx(-0.2, abs=0.01)

@@ -258,6 +258,23 @@ class NavSolution:
             {k: np.concatenate([p.extra[k] for p in parts]) for k in keys},
         )
 
+    def sample(self, t):
+        """``(lla, v_n, q_nb)`` at any times ``t`` inside the span, in any order
+        (linear in position and velocity, normalised linear quaternion blend)."""
+        t = np.asarray(t, dtype=float)
+        if len(t) and (t.min() < self.time[0] or t.max() > self.time[-1]):
+            raise InputError(
+                f"requested times {t.min():.3f}..{t.max():.3f} s fall outside the solution span "
+                f"{self.time[0]:.3f}..{self.time[-1]:.3f} s"
+            )
+        i = np.clip(np.searchsorted(self.time, t, side="right") - 1, 0, len(self.time) - 2)
+        w = ((t - self.time[i]) / (self.time[i + 1] - self.time[i]))[:, None]
+        q0, q1 = self.q_nb[i], self.q_nb[i + 1]
+        q1 = np.where((np.sum(q0 * q1, axis=1) < 0)[:, None], -q1, q1)
+        q = q0 * (1 - w) + q1 * w
+        q /= np.linalg.norm(q, axis=1, keepdims=True)
+        return self.lla[i] * (1 - w) + self.lla[i + 1] * w, self.v_n[i] * (1 - w) + self.v_n[i + 1] * w, q
+
     def interpolate(self, t):
         """Solution at times ``t`` (linear in position/velocity, slerp-free
         normalised linear quaternion blend, adequate at IMU rates)."""

@@ -49,6 +49,7 @@ class NoiseSection(_Strict):
     accel_bias_sigma_ug: float = Field(1000.0, gt=0)
     bias_tau_s: float = Field(300.0, gt=0)
     scale_factor_rw_ppm_sqrt_s: float = Field(1.0, gt=0)
+    time_offset_rw_s_sqrt_s: float = Field(1e-5, gt=0, description="random walk of the estimated time offset")
     from_static: bool = Field(
         True, description="raise ARW/VRW to the white-noise density measured on the static start"
     )
@@ -69,6 +70,7 @@ class InitSection(_Strict):
     sigma_accel_bias_m_s2: float = Field(0.05, gt=0)
     sigma_scale_factor: float = Field(0.02, gt=0)
     sigma_lever_arm_m: float = Field(0.1, gt=0)
+    sigma_time_offset_s: float = Field(0.05, gt=0)
 
     @model_validator(mode="after")
     def _given_complete(self):
@@ -93,6 +95,7 @@ class FilterSection(_Strict):
     scheme: Literal["closed", "open", "uncoupled"] = "closed"
     scale_factors: bool = True
     lever_arm: bool = False
+    time_offset: bool = Field(False, description="estimate the IMU-GNSS time offset as a state")
     gate_probability: float | None = Field(0.9999, gt=0.5, lt=1.0)
     gate_max_consecutive: int | None = Field(3, ge=1)
     smoother_node_s: float = Field(0.25, gt=0)

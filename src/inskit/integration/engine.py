@@ -56,6 +56,7 @@ class SensorNoise:
     accel_bias_sigma: float
     bias_tau_s: float = np.inf
     scale_sigma: float = 1e-6
+    time_offset_rw: float = 1e-6     # random walk of the IMU-GNSS time offset [s/sqrt(s)]
 
 
 @dataclass(frozen=True)
@@ -70,6 +71,7 @@ class InitialUncertainty:
     accel_bias: float = 0.1
     scale: float = 0.01
     lever_m: float = 0.1
+    time_offset_s: float = 0.05
 
 
 @dataclass(frozen=True)
@@ -88,6 +90,7 @@ class FilterSettings:
     lever_arm_b: tuple = (0.0, 0.0, 0.0)
     gyro_bias0: tuple = (0.0, 0.0, 0.0)
     accel_bias0: tuple = (0.0, 0.0, 0.0)
+    time_offset0: float = 0.0
     coning: bool = True
     smoother_node_s: float = 0.25
     #: keep the F P F^T dt^2 term of Phi P Phi^T.  Dropping it (Euler steps)
@@ -129,6 +132,8 @@ class FilterSettings:
         for b in ("sg", "sa"):
             if lay.slice(b) is not None:
                 q[lay.slice(b)] = n.scale_sigma**2
+        if lay.time_offset:
+            q[lay.slice("dt")] = n.time_offset_rw**2
         return q, tau_inv
 
     def initial_covariance(self):
@@ -145,6 +150,8 @@ class FilterSettings:
                 d[lay.slice(b)] = i.scale**2
         if lay.lever_arm:
             d[lay.slice("lever")] = i.lever_m**2
+        if lay.time_offset:
+            d[lay.slice("dt")] = i.time_offset_s**2
         return np.diag(d)
 
 
@@ -243,6 +250,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     corr[0:3] = settings.gyro_bias0
     corr[3:6] = settings.accel_bias0
     lever = np.asarray(settings.lever_arm_b, float).copy()
+    offset = np.array([float(settings.time_offset0)])  # IMU-GNSS time offset estimate [s]
     lla, v_n, q_nb = initial.lla.copy(), initial.v_n.copy(), initial.q_nb.copy()
     carry = np.zeros(11)
     carry[0] = imu.time[0]
@@ -267,7 +275,10 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         out_sig[k] = P.diagonal()[:9]  # variances until the end of the run
         out_corr[k] = corr
 
+    out_offset = np.full(N, np.nan) if lay.time_offset else None
     write_row(0)
+    if out_offset is not None:
+        out_offset[0] = offset[0]
     items, skipped = _nodes(imu, measurements, settings.smoother_node_s, want_store)
     counts = {m.name: {"used": 0, "rejected": 0, "skipped": skipped[m.name]} for m in measurements}
     innov = {m.name: {"t": [], "nu": [], "sigma": [], "nis": [], "accepted": []} for m in measurements}
@@ -309,9 +320,10 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             if open_loop:
                 o_lla, o_v, o_q = np.empty(3), np.empty(3), np.empty(4)
                 K.apply_correction(lla, v_n, q_nb, x, idx, 1.0, o_lla, o_v, o_q)
-                ctx = UpdateContext(tm, tm - imu.time[k_end], o_lla, o_v, rot.dcm_from_quat(o_q), w_last, lay, lev)
+                ctx = UpdateContext(tm, tm - imu.time[k_end], o_lla, o_v, rot.dcm_from_quat(o_q), w_last, lay, lev,
+                                    offset[0])
             else:
-                ctx = UpdateContext(tm, tm - imu.time[k_end], lla, v_n, C_nb, w_last, lay, lev)
+                ctx = UpdateContext(tm, tm - imu.time[k_end], lla, v_n, C_nb, w_last, lay, lev, offset[0])
             lin = meas.linearize(ctx, row)
             if lin is None:
                 counts[meas.name]["skipped"] += 1
@@ -337,7 +349,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             if open_loop:
                 x += res.dx
             else:
-                _feedback(res.dx, lay, idx, lla, v_n, q_nb, corr, lever)
+                _feedback(res.dx, lay, idx, lla, v_n, q_nb, corr, lever, offset)
                 dx_total += res.dx
                 K._dcm(q_nb, C_nb)
         try:
@@ -348,6 +360,8 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             store.P_plus.append(P.copy())
             store.dx.append(dx_total)
         write_row(k_end)
+        if out_offset is not None:
+            out_offset[k_end] = offset[0]
         i = j
     if k_done < N:
         K.propagate(imu.time, imu.dtheta_b, imu.dv_b, k_done, N, lla, v_n, q_nb, carry, settings.coning,
@@ -359,7 +373,11 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     if not (np.isfinite(out_lla).all() and np.isfinite(out_v).all() and np.isfinite(out_q).all()):
         raise FilterDivergence("the navigation solution became NaN: the filter diverged")
     np.sqrt(np.maximum(out_sig, 0.0, out=out_sig), out=out_sig)
-    sol = NavSolution._trusted(imu.time, out_lla, out_v, out_q, _extra_columns(out_sig, out_corr, lay))
+    extra = _extra_columns(out_sig, out_corr, lay)
+    if out_offset is not None:  # held between updates
+        idx_valid = np.maximum.accumulate(np.where(np.isfinite(out_offset), np.arange(N), 0))
+        extra["time_offset_s"] = out_offset[idx_valid]
+    sol = NavSolution._trusted(imu.time, out_lla, out_v, out_q, extra)
     innovations = {k: {kk: np.asarray(vv) for kk, vv in v.items()} for k, v in innov.items()}
     return FilterOutput(sol, counts, innovations, settings, store)
 
@@ -377,7 +395,7 @@ def _extra_columns(sig, corr, lay):
     return extra
 
 
-def _feedback(dx, lay, idx, lla, v_n, q_nb, corr, lever):
+def _feedback(dx, lay, idx, lla, v_n, q_nb, corr, lever, offset):
     """Closed loop: remove the estimated errors from the navigation state and
     the sensor corrections (in place)."""
     o_lla, o_v, o_q = np.empty(3), np.empty(3), np.empty(4)
@@ -390,6 +408,8 @@ def _feedback(dx, lay, idx, lla, v_n, q_nb, corr, lever):
         corr[9:12] -= dx[lay.slice("sa")]
     if lay.lever_arm:
         lever -= dx[lay.slice("lever")]
+    if lay.time_offset:
+        offset -= dx[lay.slice("dt")]
 
 
 def _reset_uncoupled(meas, row, lla, v_n, C_nb, lever, dt, w_b):

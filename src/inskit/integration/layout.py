@@ -13,6 +13,8 @@ ba      3     accelerometer bias error [m/s^2]
 sg      3     gyro scale-factor error [-] (optional)
 sa      3     accelerometer scale-factor error [-] (optional)
 lever   3     IMU-to-antenna lever arm error, body axes [m] (optional)
+dt      1     IMU-GNSS time offset error [s] (optional): a GNSS time tag
+              ``t`` matches the INS at ``t + offset``
 ======  ====  ==========================================================
 
 Nothing else in the package hard-codes a state index.
@@ -25,7 +27,8 @@ from functools import cached_property
 
 import numpy as np
 
-BLOCKS = ("pos", "vel", "att", "bg", "ba", "sg", "sa", "lever")
+BLOCKS = ("pos", "vel", "att", "bg", "ba", "sg", "sa", "lever")  # the blocks the compiled kernel knows
+SIZES = {"pos": 3, "vel": 3, "att": 3, "bg": 3, "ba": 3, "sg": 3, "sa": 3, "lever": 3, "dt": 1}
 
 
 @dataclass(frozen=True)
@@ -38,10 +41,14 @@ class StateLayout:
         Add gyro and accelerometer scale-factor errors (15 -> 21 states).
     lever_arm : bool
         Estimate the IMU-to-antenna lever arm.
+    time_offset : bool
+        Estimate the IMU-GNSS time offset (one state, a random constant or
+        slow random walk; the measurements carry its Jacobian).
     """
 
     scale_factors: bool = False
     lever_arm: bool = False
+    time_offset: bool = False
 
     @cached_property
     def blocks(self):
@@ -50,15 +57,21 @@ class StateLayout:
             out += ["sg", "sa"]
         if self.lever_arm:
             out += ["lever"]
+        if self.time_offset:
+            out += ["dt"]
         return tuple(out)
 
     @cached_property
     def size(self):
-        return 3 * len(self.blocks)
+        return sum(SIZES[b] for b in self.blocks)
 
     @cached_property
     def _slices(self):
-        return {b: slice(3 * i, 3 * i + 3) for i, b in enumerate(self.blocks)}
+        out, i = {}, 0
+        for b in self.blocks:
+            out[b] = slice(i, i + SIZES[b])
+            i += SIZES[b]
+        return out
 
     def slice(self, block):
         """``slice`` of a block in the state vector; ``None`` if absent."""
@@ -76,7 +89,7 @@ class StateLayout:
     def names(self):
         """Human-readable names of every state, in order."""
         axes = {"pos": "NED", "vel": "NED", "att": "NED", "bg": "xyz", "ba": "xyz", "sg": "xyz", "sa": "xyz",
-                "lever": "xyz"}
+                "lever": "xyz", "dt": ["s"]}
         return [f"{b}_{a}" for b in self.blocks for a in axes[b]]
 
     def transition_pattern(self, gauss_markov_biases=True):

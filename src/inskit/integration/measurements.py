@@ -46,6 +46,9 @@ class UpdateContext:
     layout : StateLayout
     lever_arm_b : (3,) ndarray
         Current IMU-to-antenna lever arm estimate, body axes [m].
+    time_offset : float
+        Current IMU-GNSS time offset estimate [s]: a GNSS time tag ``t``
+        matches the INS at ``t + time_offset``.
     """
 
     t: float
@@ -56,6 +59,7 @@ class UpdateContext:
     omega_ib_b: np.ndarray
     layout: StateLayout
     lever_arm_b: np.ndarray
+    time_offset: float = 0.0
 
 
 def ned_difference(lla_a, lla_b):
@@ -118,11 +122,13 @@ class GnssPosition:
     def linearize(self, ctx: UpdateContext, row):
         lay = ctx.layout
         cl = self.antenna_offset(ctx)
-        nu = ned_difference(ctx.lla, self.gnss.lla[row]) + cl + ctx.v_n * ctx.dt
+        nu = ned_difference(ctx.lla, self.gnss.lla[row]) + cl + ctx.v_n * (ctx.dt + ctx.time_offset)
         H = _template(lay, 3, "pos")
         H[:, lay.slice("att")] = skew(cl)
         if lay.lever_arm:
             H[:, lay.slice("lever")] = ctx.C_nb
+        if lay.time_offset:  # d h / d offset = antenna velocity
+            H[:, lay.slice("dt")] = (ctx.v_n + ctx.C_nb @ np.cross(ctx.omega_ib_b, ctx.lever_arm_b))[:, None]
         return nu, H, np.diag(self.sigma[row] ** 2)
 
 

@@ -100,14 +100,14 @@ def build_settings(cfg: NavigateConfig, startup: Startup | None, measured=None) 
         arw = max(arw, measured["gyro_arw_rad_sqrt_s"])
         vrw = max(vrw, measured["accel_vrw_m_s_sqrt_s"])
     noise = SensorNoise(arw, vrw, n.gyro_bias_sigma_deg_h * DEG_PER_HOUR, n.accel_bias_sigma_ug * MICRO_G,
-                        n.bias_tau_s, n.scale_factor_rw_ppm_sqrt_s * 1e-6)
+                        n.bias_tau_s, n.scale_factor_rw_ppm_sqrt_s * 1e-6, n.time_offset_rw_s_sqrt_s)
     i = cfg.init
     unc = InitialUncertainty((i.sigma_pos_m,) * 3, i.sigma_vel_m_s, i.sigma_roll_pitch_deg * DEG,
                              i.sigma_yaw_deg * DEG, i.sigma_gyro_bias_deg_s * DEG, i.sigma_accel_bias_m_s2,
-                             i.sigma_scale_factor, i.sigma_lever_arm_m)
+                             i.sigma_scale_factor, i.sigma_lever_arm_m, i.sigma_time_offset_s)
     f = cfg.filter
     return FilterSettings(
-        layout=StateLayout(scale_factors=f.scale_factors, lever_arm=f.lever_arm),
+        layout=StateLayout(scale_factors=f.scale_factors, lever_arm=f.lever_arm, time_offset=f.time_offset),
         noise=noise, initial=unc, scheme=f.scheme, gate_probability=f.gate_probability,
         gate_max_consecutive=f.gate_max_consecutive, lever_arm_b=tuple(cfg.gnss.lever_arm_b_m),
         gyro_bias0=tuple(startup.gyro_bias) if startup else (0.0, 0.0, 0.0),
@@ -217,6 +217,8 @@ def summary(res: NavigateResult) -> dict:
             "heading_from_track_at_s": float(res.startup.heading_time - res.imu.time[0]),
         }
     sol = res.forward.solution
+    if "time_offset_s" in sol.extra:
+        out["estimated_time_offset_s"] = float(sol.extra["time_offset_s"][-1])
     out["final_bias"] = {
         "gyro_deg_s": [float(sol.extra[f"bg_{a}_rad_s"][-1] / DEG) for a in "xyz"],
         "accel_m_s2": [float(sol.extra[f"ba_{a}_m_s2"][-1]) for a in "xyz"],

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import earth
+from .. import rotations as rot
 from ..types import GnssData, NavSolution
 
 
@@ -31,10 +32,22 @@ def withheld_mask(t, windows, eps=1e-6):
 
 
 def antenna_positions(sol: NavSolution, t, lever_arm_b):
-    """Antenna lla at times ``t``: the IMU solution interpolated plus ``C_nb l_b``."""
-    s = sol.interpolate(np.asarray(t, float))
-    off = np.einsum("nij,j->ni", s.C_nb, np.asarray(lever_arm_b, float))
-    r = earth.lla_to_ecef(s.lla) + np.einsum("nij,nj->ni", earth.dcm_en(s.lla[:, 0], s.lla[:, 1]), off)
+    """Antenna lla at GNSS times ``t``, predicted as the filter predicts a fix:
+    from the solution row at or before ``t`` (post-update when an update was
+    made there), moved by its velocity over the remaining interval, plus
+    ``C_nb l_b``.  When the solution carries an estimated IMU-GNSS time offset
+    (``extra["time_offset_s"]``), GNSS time ``t`` is INS time ``t + offset``.
+    (Interpolating between rows would mix a pre-update row into the first fix
+    after an outage.)"""
+    t = np.asarray(t, float)
+    i = np.clip(np.searchsorted(sol.time, t, side="right") - 1, 0, len(sol.time) - 1)
+    dt = t - sol.time[i]
+    if "time_offset_s" in sol.extra:
+        dt = dt + sol.extra["time_offset_s"][i]
+    lla = sol.lla[i]
+    C_nb = rot.dcm_from_quat(sol.q_nb[i])
+    d_n = sol.v_n[i] * dt[:, None] + np.einsum("nij,j->ni", C_nb, np.asarray(lever_arm_b, float))
+    r = earth.lla_to_ecef(lla) + np.einsum("nij,nj->ni", earth.dcm_en(lla[:, 0], lla[:, 1]), d_n)
     return earth.ecef_to_lla(r)
 
 
