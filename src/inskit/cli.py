@@ -269,10 +269,11 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of every random draw.")
 @click.option("--force", is_flag=True, help="Overwrite files in --out.")
 @click.option("--no-plot", is_flag=True, help="Skip the scenario plot.")
+@click.option("--verify", is_flag=True, help="Also mechanize the ideal IMU (at the rate and at twice it) against the truth.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def simulate(scenario_file, out_dir, seed, force, no_plot, as_json):
+def simulate(scenario_file, out_dir, seed, force, no_plot, verify, as_json):
     """Simulate a scenario: IMU, GNSS and truth files plus a plot."""
-    from .simulation.scenario import load_scenario, simulate as run_sim, write_simulation
+    from .simulation.scenario import load_scenario, simulate as run_sim, verify_ideal, write_simulation
 
     sc = load_scenario(scenario_file)
     t0 = time.perf_counter()
@@ -291,8 +292,16 @@ def simulate(scenario_file, out_dir, seed, force, no_plot, as_json):
         "elapsed_s": time.perf_counter() - t0, "files": [str(f) for f in files],
         "segments": sim.trajectory.segments,
     }
-    _emit(res, as_json, f"{sc.name}: {res['duration_s']:.0f} s, {len(sim.imu)} IMU epochs, {len(sim.gnss)} GNSS "
-                        f"fixes -> {out_dir}/ ({res['elapsed_s']:.1f} s)")
+    text = (f"{sc.name}: {res['duration_s']:.0f} s, {len(sim.imu)} IMU epochs, {len(sim.gnss)} GNSS "
+            f"fixes -> {out_dir}/ ({res['elapsed_s']:.1f} s)")
+    if verify:
+        v = verify_ideal(sc)
+        res["verify"] = v
+        f = v["frames"]["ned"]
+        text += (f"\nideal IMU mechanized (NED): horizontal max {f['horizontal_max_m']:.4g} m, vertical max "
+                 f"{f['vertical_max_m']:.4g} m at {f['rate_hz']:g} Hz; {f['double_rate_horizontal_max_m']:.4g} m at "
+                 f"twice the rate ({f['improvement_at_double_rate']:.1f}x)")
+    _emit(res, as_json, text)
 
 
 @cli.command()
@@ -446,6 +455,53 @@ def reproduce_alignment(out_dir, as_json):
     lines.append(f"figures: {', '.join(res['figures'])}")
     _emit({"experiment": "alignment-ga", "source": "002", "entries": res["entries"], "headline": res["headline"],
            "ga_checks": res["ga_checks"], "figures": res["figures"]}, as_json, "\n".join(lines))
+
+
+@cli.command()
+@click.argument("scenario_file", type=click.Path(dir_okay=False))
+@click.option("--grade", type=click.Choice(["navigation", "tactical", "industrial-mems", "consumer-mems"]),
+              default="tactical", show_default=True, help="IMU grade of the runs (overrides the scenario's).")
+@click.option("--runs", type=int, default=50, show_default=True)
+@click.option("--duration", type=float, help="Use only the first seconds of the scenario.")
+@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
+def consistency(scenario_file, grade, runs, duration, seed, as_json):
+    """Monte Carlo consistency (NEES) of the closed-loop filter on a scenario."""
+    from .integration.engine import InitialUncertainty
+    from .integration.montecarlo import consistency_errors, monte_carlo
+    from .simulation.gnss import GnssErrors
+    from .simulation.scenario import build_trajectory, load_scenario
+    from .simulation.sensors import preset
+
+    if runs < 2:
+        raise InputError(f"--runs must be at least 2, got {runs}")
+    sc = load_scenario(scenario_file)
+    tr = build_trajectory(sc, np.random.default_rng(seed))
+    if duration is not None and not 0 < duration <= tr.duration:
+        raise InputError(f"--duration must be within (0, {tr.duration:.0f}] s, got {duration}")
+    tilt, yaw = (0.2, 1.0) if grade in ("navigation", "tactical") else (1.0, 3.0)
+    init = InitialUncertainty(pos_m=(1.0, 1.0, 2.0), vel_m_s=0.1, roll_pitch_rad=np.radians(tilt),
+                              yaw_rad=np.radians(yaw))
+    g = GnssErrors(rate_hz=1.0, white_h_m=1.0, white_v_m=2.0, velocity_sigma_m_s=0.0)
+    from tqdm import tqdm
+
+    with tqdm(total=runs, desc="monte carlo", file=sys.stderr, disable=not sys.stderr.isatty(), leave=False) as bar:
+        r = monte_carlo(tr, sc.imu.rate_hz, consistency_errors(preset(grade)), g, init, runs=runs, seed=seed,
+                        duration=duration, progress=bar.update, gate_probability=None)
+    res = {"scenario": sc.name, "grade": grade, "runs": runs, "duration_s": float(r["t"][-1]), "anees": {}}
+    lines = [f"{sc.name}, {grade}, {runs} runs over {r['t'][-1]:.0f} s: average NEES (3 dof each)"]
+    for b in ("pos", "vel", "att"):
+        a = r["anees"][b]
+        lo, hi = r["band"][b]
+        inside = float(((a >= lo) & (a <= hi)).mean())
+        res["anees"][b] = {"mean": float(a.mean()), "band_95": [lo, hi], "fraction_of_epochs_inside": inside}
+        lines.append(f"{b:<4} mean {a.mean():.2f}  95 % band [{lo:.2f}, {hi:.2f}]  epochs inside {inside:.0%}")
+    z = r["bias_normalized"]
+    res["bias_within_3_sigma"] = float((np.abs(z) < 3).mean())
+    res["bias_rms_normalized"] = float(np.sqrt(np.mean(z**2)))
+    lines.append(f"final sensor-bias errors: {res['bias_within_3_sigma']:.1%} within 3 sigma, RMS "
+                 f"{res['bias_rms_normalized']:.2f} sigma")
+    _emit(res, as_json, "\n".join(lines))
 
 
 @cli.command()
