@@ -112,3 +112,27 @@ def test_simulate_and_allan_json(tmp_path):
     # tactical preset: ARW 0.125 deg/sqrt(h); two minutes of data pin the white noise within 15 %
     assert abs(a["navigate_noise_section"]["gyro_arw_deg_sqrt_h"] / 0.125 - 1) < 0.15
     assert (tmp_path / "a.png").exists()
+
+
+def test_simulate_navigate_evaluate_pipeline(tmp_path):
+    """The user path on simulated data: scenario -> files -> navigate (flags only) -> evaluate vs truth."""
+    scen = tmp_path / "drive.toml"
+    scen.write_text(
+        'name = "drive"\n[start]\nlat_deg = 45\nlon_deg = 7\nheight_m = 300\n'
+        '[imu]\nrate_hz = 100\ngrade = "industrial-mems"\n'
+        '[gnss]\nrate_hz = 1\nwhite_h_m = 0.5\nwhite_v_m = 1.0\nvelocity_sigma_m_s = 0.05\nlever_arm_b_m = [0, 0, -1]\n'
+        '[[segment]]\ntype = "static"\nduration_s = 30\n'
+        '[[segment]]\ntype = "accelerate"\nspeed_m_s = 12\nduration_s = 10\n'
+        '[[segment]]\ntype = "turn"\nangle_deg = 90\nradius_m = 30\n'
+        '[[segment]]\ntype = "cruise"\nduration_s = 40\n'
+        '[[segment]]\ntype = "turn"\nangle_deg = -120\nradius_m = 25\n'
+        '[[segment]]\ntype = "cruise"\nduration_s = 40\n')
+    assert inskit("simulate", scen, "--out", tmp_path / "sim", "--no-plot").returncode == 0
+    r = inskit("navigate", "--imu", tmp_path / "sim" / "imu.csv", "--gnss", tmp_path / "sim" / "gnss.csv",
+               "--lever-arm", "0,0,-1", "--out", tmp_path / "nav", "--no-plots", "--json")
+    assert r.returncode == 0, r.stderr
+    r = inskit("evaluate", tmp_path / "nav" / "solution_forward.csv", tmp_path / "sim" / "truth.csv", "--json")
+    assert r.returncode == 0, r.stderr
+    s = json.loads(r.stdout)
+    assert s["horizontal_m"]["rms"] < 1.0  # 0.5 m white GNSS noise, filtered
+    assert abs(s["roll_arcmin"]["final"]) < 30 and abs(s["pitch_arcmin"]["final"]) < 30

@@ -25,32 +25,46 @@ def level(f_b_mean):
 
 
 def gnss_speed(gnss: GnssData, span_s=1.0):
-    """Horizontal speed [m/s] and course [rad] from position differences over
-    about ``span_s`` (independent of the receiver's velocity output)."""
+    """Horizontal speed [m/s], course [rad] and the speed's noise sigma [m/s].
+
+    Precise fixes (median horizontal sigma below 0.1 m, RTK) use position
+    differences over about ``span_s`` (independent of a receiver velocity that
+    may lag); coarser fixes use the receiver's velocity when there is one,
+    else position differences over a span long enough to average the noise.
+    """
     t = gnss.time
-    ref = gnss.lla[0]
-    p = earth.lla_to_ned(gnss.lla, ref)
+    sig_h = float(np.median(np.hypot(gnss.sigma_ned[:, 0], gnss.sigma_ned[:, 1]) / np.sqrt(2)))
+    if sig_h >= 0.1 and gnss.has_velocity:
+        v = gnss.v_n
+        sig_v = float(np.median(np.hypot(gnss.sigma_v_ned[:, 0], gnss.sigma_v_ned[:, 1]) / np.sqrt(2)))
+        return np.hypot(v[:, 0], v[:, 1]), np.arctan2(v[:, 1], v[:, 0]), sig_v
+    if sig_h >= 0.1:
+        span_s = max(span_s, 10.0 * sig_h)  # noise of the difference ~ sqrt(2) sigma / span
+    p = earth.lla_to_ned(gnss.lla, gnss.lla[0])
     h = max(1, int(round(span_s / max(np.median(np.diff(t)), 1e-3) / 2)))
     i0 = np.clip(np.arange(len(t)) - h, 0, len(t) - 1)
     i1 = np.clip(np.arange(len(t)) + h, 0, len(t) - 1)
     dt = np.maximum(t[i1] - t[i0], 1e-9)
     v = (p[i1] - p[i0]) / dt[:, None]
-    return np.hypot(v[:, 0], v[:, 1]), np.arctan2(v[:, 1], v[:, 0])
+    sig_v = float(np.sqrt(2.0) * sig_h / np.median(dt))
+    return np.hypot(v[:, 0], v[:, 1]), np.arctan2(v[:, 1], v[:, 0]), sig_v
 
 
 def detect_motion_start(gnss: GnssData, threshold_m_s=0.3):
-    """Time of the first GNSS epoch whose speed exceeds ``threshold_m_s``."""
-    speed, _ = gnss_speed(gnss)
-    moving = speed > threshold_m_s
+    """Time of the first GNSS epoch whose speed exceeds ``threshold_m_s`` (or
+    four times the speed noise, if larger)."""
+    speed, _, sig = gnss_speed(gnss)
+    moving = speed > max(threshold_m_s, 4.0 * sig)
     if not moving.any():
         raise InputError("the GNSS track never moves: heading cannot be found from it")
     return float(gnss.time[int(np.argmax(moving))])
 
 
 def static_intervals(gnss: GnssData, threshold_m_s=0.05, min_length_s=2.0, margin_s=0.5):
-    """Intervals where the GNSS speed stays below ``threshold_m_s``."""
-    speed, _ = gnss_speed(gnss, span_s=2.0)
-    still = speed < threshold_m_s
+    """Intervals where the GNSS speed stays below ``threshold_m_s`` (or three
+    times the speed noise, if larger)."""
+    speed, _, sig = gnss_speed(gnss, span_s=2.0)
+    still = speed < max(threshold_m_s, 3.0 * sig)
     out = []
     i = 0
     n = len(still)
@@ -69,12 +83,13 @@ def static_intervals(gnss: GnssData, threshold_m_s=0.05, min_length_s=2.0, margi
 
 
 def heading_from_track(gnss: GnssData, t_from, min_speed_m_s=3.0):
-    """First epoch after ``t_from`` with speed above ``min_speed_m_s``, and the
-    course [rad] there."""
-    speed, course = gnss_speed(gnss)
-    ok = (gnss.time >= t_from) & (speed > min_speed_m_s)
+    """First epoch after ``t_from`` with speed above ``min_speed_m_s`` (and ten
+    times the speed noise, so the course is good to ~6 deg), and its course [rad]."""
+    speed, course, sig = gnss_speed(gnss)
+    ok = (gnss.time >= t_from) & (speed > max(min_speed_m_s, 10.0 * sig))
     if not ok.any():
-        raise InputError(f"the GNSS track never exceeds {min_speed_m_s} m/s: no heading from the track")
+        raise InputError(f"the GNSS track never exceeds {max(min_speed_m_s, 10.0 * sig):.1f} m/s: no heading from "
+                         "the track")
     i = int(np.argmax(ok))
     return float(gnss.time[i]), float(course[i])
 
