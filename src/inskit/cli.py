@@ -454,7 +454,8 @@ def reproduce_alignment(out_dir, as_json):
             lines.append(f"{'':<4}note: {e['note']}")
     lines.append(f"figures: {', '.join(res['figures'])}")
     _emit({"experiment": "alignment-ga", "source": "002", "entries": res["entries"], "headline": res["headline"],
-           "ga_checks": res["ga_checks"], "figures": res["figures"]}, as_json, "\n".join(lines))
+           "one_vs_two_step": res["one_vs_two_step"], "ga_checks": res["ga_checks"], "figures": res["figures"]},
+          as_json, "\n".join(lines))
 
 
 @cli.command()

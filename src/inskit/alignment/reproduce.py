@@ -19,9 +19,9 @@ from __future__ import annotations
 import numpy as np
 
 from .. import rotations as rot
-from ..units import ARCMIN, DEG_PER_HOUR, MILLI_G
+from ..units import ARCMIN, DEG, DEG_PER_HOUR, MILLI_G
 from ..earth import OMEGA_IE
-from .analytic import accel_basis, angle_errors, blend, eq29, eq29_rms, ideal_static
+from .analytic import accel_basis, angle_errors, blend, criterion, eq29, eq29_rms, ideal_static
 from .optimize import ga_best_m, realization_J, scalar_best_m
 
 LAT = np.radians(45.0)
@@ -134,6 +134,47 @@ def headline():
     return out
 
 
+def one_vs_two_step(duration_s=600.0, rate_hz=100.0, seed=0):
+    """The source's claim "one step as good as two", measured: a simulated
+    static log with the headline biases (B = 0.01 m/s^2 on each accelerometer,
+    D = 0.04 deg/h on each gyro) plus white noise (ARW 0.005 deg/sqrt(h),
+    VRW 20 ug/sqrt(Hz)); one step = the analytic alignment on the whole log
+    (unblended and GA-blended on this realization); two steps = coarse
+    (accelerometer basis) then the stationary Kalman filter (ZUPT,
+    gyrocompassing).  Constant biases are unobservable at rest, so the filter
+    cannot beat the analytic limit; what it costs is time."""
+    from ..integration.engine import SensorNoise
+    from ..simulation.imu import ideal_imu
+    from ..simulation.sensors import ImuErrors, TriadErrors, apply_imu_errors
+    from ..simulation.trajectory import StationaryTrajectory
+    from ..types import NavState
+    from ..units import MICRO_G
+    from .fine import fine_align
+
+    B, D = 0.01, 0.04 * DEG_PER_HOUR
+    arw, vrw = 0.005 * DEG / 60.0, 20 * MICRO_G
+    traj = StationaryTrajectory((LAT, 0.0, 0.0))
+    t = np.arange(0.0, duration_s + 1e-9, 1.0 / rate_hz)
+    errs = ImuErrors(TriadErrors(fixed_bias=(D, D, D), white_noise=arw), TriadErrors(fixed_bias=(B, B, B),
+                                                                                      white_noise=vrw))
+    imu, _ = apply_imu_errors(ideal_imu(traj, t, nodes=1), errs, np.random.default_rng(seed))
+    w, f = imu.rates()
+    f_m, w_m = f[1:].mean(axis=0), w[1:].mean(axis=0)
+    J1 = realization_J(f_m, w_m, LAT, C_TRUE)
+    one = J1(0.0) / ARCMIN
+    ga = ga_best_m(J1, seed=seed)
+    C0 = accel_basis(f_m, w_m)
+    start = NavState(0.0, [LAT, 0.0, 0.0], np.zeros(3), rot.quat_from_dcm(C0))
+    fa = fine_align(imu, start, SensorNoise(arw, vrw, 1e-9, 1e-8, np.inf), sigma_tilt=np.radians(0.5),
+                    sigma_yaw=np.radians(2.0), gyro_bias_sigma=np.radians(0.01) / 3600,
+                    accel_bias_sigma=0.001)
+    two = criterion(rot.dcm_from_euler(fa.rpy), C_TRUE) / ARCMIN
+    return {"one_step_unblended_arcmin": one, "one_step_ga_arcmin": ga.J / ARCMIN, "one_step_ga_m": ga.m,
+            "two_step_arcmin": two, "fine_converge_time_s": [None if np.isnan(x) else float(x)
+                                                             for x in fa.converge_time_s],
+            "duration_s": duration_s}
+
+
 def run(out_dir=None, log=None):
     """Everything: figures (when ``out_dir``) and the published-vs-ours table."""
     log = log or (lambda s: None)
@@ -145,6 +186,8 @@ def run(out_dir=None, log=None):
     surf = surfaces()
     log("reproduce: headline case")
     hl = headline()
+    log("reproduce: one step against two (simulated static log, stationary Kalman filter)")
+    ot = one_vs_two_step()
     m6 = [r["m"] for r in s6 if np.isfinite(r["m"])]
     m7 = [r["m"] for r in s7 if np.isfinite(r["m"])]
     tilt7 = max(max(abs(r["alpha"]), abs(r["beta"])) for r in s7)
@@ -195,7 +238,16 @@ def run(out_dir=None, log=None):
                  f"weight k3 = 0 (tilt only) the GA gives {hl['same_signs']['tilt_only_ga_arcmin']:.2f} and "
                  f"{hl['opposite_signs']['tilt_only_ga_arcmin']:.2f}: 'about 4' matches a tilt-only criterion"},
     ]
-    res = {"entries": entries, "headline": hl, "fig6": s6, "fig7": s7,
+    ct = ot["fine_converge_time_s"]
+    entries.append(
+        {"item": "one-step alignment as good as two (analytic + fine Kalman filter) [arcmin]",
+         "published": "one step as good as two, without the second step's time",
+         "ours": f"one step {ot['one_step_unblended_arcmin']:.2f} (GA blend {ot['one_step_ga_arcmin']:.2f}, "
+                 f"m = {ot['one_step_ga_m']:.2f}); two steps {ot['two_step_arcmin']:.2f} after "
+                 f"{ot['duration_s']:.0f} s; the filter's tilt settled after {ct[0]} s, heading after {ct[2]} s",
+         "note": "headline biases plus white noise, static 600 s at 45 deg: constant biases are unobservable at "
+                 "rest, so the Kalman filter converges to the analytic (bias-limited) accuracy and only costs time"})
+    res = {"entries": entries, "headline": hl, "one_vs_two_step": ot, "fig6": s6, "fig7": s7,
            "ga_checks": surf["ga_checks"], "crease": surf["crease"]}
     if out_dir is not None:
         res["figures"] = [str(p) for p in _plots(out_dir, s6, s7, surf)]
