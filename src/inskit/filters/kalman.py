@@ -88,8 +88,8 @@ def joseph_update(P, innovation, H, R, *, gate_probability=None):
     H = np.ascontiguousarray(H, dtype=float)
     R = np.ascontiguousarray(R, dtype=float)
     P = np.ascontiguousarray(P, dtype=float)
-    if not (np.isfinite(nu).all() and np.isfinite(P).all()):
-        raise FilterDivergence("the state or the innovation is not finite: the filter diverged")
+    if not np.isfinite(nu).all():  # P is checked by the caller after each propagation
+        raise FilterDivergence("the innovation is not finite: the filter diverged")
     try:
         dx, Pn, S, nis = _update(P, nu, H, R)
     except np.linalg.LinAlgError:

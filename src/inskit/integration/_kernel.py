@@ -30,7 +30,7 @@ import numpy as np
 from numba import njit
 
 from .. import earth
-from ..strapdown._kernels import _qmul, _qnormalize, _q_from_rv, _radii, ned_step
+from ..strapdown._kernels import _radii, _rv_quat, ned_step
 
 W_IE = earth.OMEGA_IE
 # indices into the layout array
@@ -152,18 +152,24 @@ def _sparse_step(M, F, rows, cols, dt, tmp):
 @njit(cache=True)
 def apply_correction(lla, v_n, q_nb, x, idx, sign, out_lla, out_v, out_q):
     """Navigation state corrected by ``sign * x`` (sign=1: subtract the
-    estimated errors, as closed-loop feedback and open-loop output both do)."""
+    estimated errors, as closed-loop feedback and open-loop output both do).
+    The outputs may be the inputs themselves (in-place feedback)."""
     p, v, a = idx[I_POS], idx[I_VEL], idx[I_ATT]
-    rn, re = _radii(lla[0], lla[2])
-    out_lla[0] = lla[0] - sign * x[p] / rn
-    out_lla[1] = lla[1] - sign * x[p + 1] / (re * math.cos(lla[0]))
-    out_lla[2] = lla[2] + sign * x[p + 2]
+    lat, lon, h = lla[0], lla[1], lla[2]
+    rn, re = _radii(lat, h)
+    out_lla[0] = lat - sign * x[p] / rn
+    out_lla[1] = lon - sign * x[p + 1] / (re * math.cos(lat))
+    out_lla[2] = h + sign * x[p + 2]
     for i in range(3):
         out_v[i] = v_n[i] - sign * x[v + i]
-    qa = np.empty(4)
-    _q_from_rv(sign * x[a], sign * x[a + 1], sign * x[a + 2], qa)
-    _qmul(qa, q_nb, out_q)
-    _qnormalize(out_q)
+    a0, a1, a2, a3 = _rv_quat(sign * x[a], sign * x[a + 1], sign * x[a + 2])
+    q0, q1, q2, q3 = q_nb[0], q_nb[1], q_nb[2], q_nb[3]
+    r0 = a0 * q0 - a1 * q1 - a2 * q2 - a3 * q3
+    r1 = a0 * q1 + a1 * q0 + a2 * q3 - a3 * q2
+    r2 = a0 * q2 - a1 * q3 + a2 * q0 + a3 * q1
+    r3 = a0 * q3 + a1 * q2 - a2 * q1 + a3 * q0
+    inv = 1.0 / math.sqrt(r0 * r0 + r1 * r1 + r2 * r2 + r3 * r3)
+    out_q[0], out_q[1], out_q[2], out_q[3] = r0 * inv, r1 * inv, r2 * inv, r3 * inv
 
 
 @njit(cache=True)
