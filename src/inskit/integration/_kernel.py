@@ -104,36 +104,62 @@ def fill_transition(F, idx, lla, v_n, C, f_b, w_b, tau_inv):
 
 
 @njit(cache=True, fastmath={"contract"})
-def propagate_covariance(P, F, rows, cols, dt, q_psd, A, B, second_order):
+def propagate_covariance(P, F, rows, cols, active, dt, q_psd, A, B, second_order):
     """``P <- (I + F dt) P (I + F dt)^T + diag(q_psd) dt`` over F's pattern.
 
-    ``A = F P`` and ``B = F A^T = F P F^T`` run over the non-zero pattern only,
-    and ``B`` only on the upper triangle (the result is symmetric).  Without
-    ``second_order`` the ``dt^2 F P F^T`` term is dropped (Euler integration of
-    the Riccati equation): cheaper, but not guaranteed positive semi-definite
-    when uncertainties are large (a MEMS car run lost positiveness at 177 s),
-    so the filter keeps it.
+    ``active`` lists the rows of F that hold any pattern entry (9 of 21 with
+    random-walk sensor errors).  ``A = F P`` is non-zero only on those rows,
+    so ``A + A^T`` touches only their rows and columns and ``F P F^T`` only
+    the active-by-active block: the update costs O(pattern * n + active^2)
+    instead of O(n^2).  Without ``second_order`` the ``dt^2 F P F^T`` term is
+    dropped (Euler integration of the Riccati equation): cheaper, but not
+    guaranteed positive semi-definite when uncertainties are large (a MEMS car
+    run lost positiveness at 177 s), so the filter keeps it.
     """
     n = P.shape[0]
-    A[:, :] = 0.0
+    na = active.shape[0]
+    for r in range(na):
+        i = active[r]
+        for m in range(n):
+            A[i, m] = 0.0
     for e in range(rows.shape[0]):
         i, j = rows[e], cols[e]
         fij = F[i, j]
         for m in range(n):
             A[i, m] += fij * P[j, m]
+    # P + dt (A + A^T): row and column of every active index
+    for r in range(na):
+        i = active[r]
+        for m in range(n):
+            val = dt * A[i, m]
+            P[i, m] += val
+            P[m, i] += val
     if second_order:
-        B[:, :] = 0.0
+        # dt^2 F P F^T = dt^2 F A^T on the active block
+        for r in range(na):
+            i = active[r]
+            for c in range(na):
+                B[i, active[c]] = 0.0
         for e in range(rows.shape[0]):
             i, j = rows[e], cols[e]
-            fij = F[i, j]
-            for m in range(i, n):
+            fij = F[i, j] * dt * dt
+            for c in range(na):
+                m = active[c]
                 B[i, m] += fij * A[m, j]
-    dt2 = dt * dt if second_order else 0.0
+        for r in range(na):
+            i = active[r]
+            for c in range(na):
+                m = active[c]
+                P[i, m] += B[i, m]
+    # keep the active block exactly symmetric against rounding
+    for r in range(na):
+        i = active[r]
+        for c in range(r + 1, na):
+            m = active[c]
+            v = 0.5 * (P[i, m] + P[m, i])
+            P[i, m] = v
+            P[m, i] = v
     for i in range(n):
-        for m in range(i, n):
-            s = 0.5 * (P[i, m] + P[m, i]) + dt * (A[i, m] + A[m, i]) + dt2 * B[i, m]
-            P[i, m] = s
-            P[m, i] = s
         P[i, i] += q_psd[i] * dt
 
 
@@ -174,7 +200,7 @@ def apply_correction(lla, v_n, q_nb, x, idx, sign, out_lla, out_v, out_q):
 
 @njit(cache=True)
 def propagate(t, dth_all, dv_all, k0, k1, lla, v_n, q_nb, carry, coning, corr, x, P, q_psd, tau_inv,
-              idx, rows, cols, want_phi, Phi, open_loop, out_lla, out_v, out_q, out_sig, out_corr, w_last,
+              idx, rows, cols, active, want_phi, Phi, open_loop, out_lla, out_v, out_q, out_sig, out_corr, w_last,
               second_order=True):
     """Integrate IMU rows ``k0 .. k1-1`` with covariance propagation.
 
@@ -211,7 +237,7 @@ def propagate(t, dth_all, dv_all, k0, k1, lla, v_n, q_nb, carry, coning, corr, x
         ned_step(dth, dv, dt, lla, v_n, q_nb, carry, coning, 0, 0.0, no_gains)
         carry[0] = t[k]
         fill_transition(F, idx, lla, v_n, C, f_b, w_b, tau_inv)
-        propagate_covariance(P, F, rows, cols, dt, q_psd, A, B, second_order)
+        propagate_covariance(P, F, rows, cols, active, dt, q_psd, A, B, second_order)
         if open_loop:
             for i in range(n):
                 xt[i, 0] = x[i]

@@ -245,6 +245,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     idx = lay.kernel_index()
     q_psd, tau_inv = settings.process_noise()
     rows_pat, cols_pat = lay.transition_pattern(gauss_markov_biases=bool(np.any(tau_inv)))
+    active = np.unique(rows_pat)
     P = settings.initial_covariance()
     x = np.zeros(n)
     corr = np.zeros(12)
@@ -294,7 +295,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             j += 1
         if k_end + 1 > k_done:
             K.propagate(imu.time, imu.dtheta_b, imu.dv_b, k_done, k_end + 1, lla, v_n, q_nb, carry, settings.coning,
-                        corr, x, P, q_psd, tau_inv, idx, rows_pat, cols_pat, want_store, Phi, open_loop,
+                        corr, x, P, q_psd, tau_inv, idx, rows_pat, cols_pat, active, want_store, Phi, open_loop,
                         out_lla, out_v, out_q, out_sig, out_corr, w_last, settings.covariance_second_order)
             if progress is not None:
                 progress(k_end + 1 - k_done)
@@ -363,7 +364,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         i = j
     if k_done < N:
         K.propagate(imu.time, imu.dtheta_b, imu.dv_b, k_done, N, lla, v_n, q_nb, carry, settings.coning,
-                    corr, x, P, q_psd, tau_inv, idx, rows_pat, cols_pat, False, Phi, open_loop,
+                    corr, x, P, q_psd, tau_inv, idx, rows_pat, cols_pat, active, False, Phi, open_loop,
                     out_lla, out_v, out_q, out_sig, out_corr, w_last, settings.covariance_second_order)
         if progress is not None:
             progress(N - k_done)
