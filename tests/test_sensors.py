@@ -112,3 +112,10 @@ def test_presets_units_at_the_edge():
     assert hg.accel.turn_on_bias_sigma == pytest.approx(1000 * MICRO_G)
     with pytest.raises(ConfigError, match="unknown IMU grade"):
         preset("military")
+
+
+def test_preset_overrides_are_checked():
+    p = preset("tactical", gyro={"noise": 0.2})
+    assert p.gyro.white_noise == pytest.approx(0.2 * DEG / 60)
+    with pytest.raises(ConfigError, match=r"imu.gyro: unknown error term\(s\) nois"):
+        preset("tactical", gyro={"nois": 0.2})

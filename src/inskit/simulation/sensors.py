@@ -156,6 +156,13 @@ def preset(name, **overrides) -> ImuErrors:
     datasheet-unit fields: ``gyro={"noise": 0.1}``, ``accel={...}``."""
     if name not in PRESETS:
         raise ConfigError(f"unknown IMU grade {name!r}; choose one of {', '.join(PRESETS)}")
+    allowed = {"fixed_bias", "turn_on_bias", "bias_instability", "bias_instability_tau_s", "rate_random_walk",
+               "noise", "scale_factor_ppm", "g_sensitivity", "quantization", "saturation"}
+    for kind in ("gyro", "accel"):
+        bad = sorted(set(overrides.get(kind, {})) - allowed)
+        if bad:
+            raise ConfigError(f"imu.{kind}: unknown error term(s) {', '.join(bad)}; expected some of "
+                              f"{', '.join(sorted(allowed))}")
     p = PRESETS[name]
     g = {**p["gyro"], **overrides.get("gyro", {})}
     a = {**p["accel"], **overrides.get("accel", {})}
