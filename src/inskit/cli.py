@@ -270,8 +270,9 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
 @click.option("--force", is_flag=True, help="Overwrite files in --out.")
 @click.option("--no-plot", is_flag=True, help="Skip the scenario plot.")
 @click.option("--verify", is_flag=True, help="Also mechanize the ideal IMU (at the rate and at twice it) against the truth.")
+@click.option("--truth-rate", type=float, help="Rate of the truth file [Hz] (default: the IMU rate).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def simulate(scenario_file, out_dir, seed, force, no_plot, verify, as_json):
+def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, as_json):
     """Simulate a scenario: IMU, GNSS and truth files plus a plot."""
     from .simulation.scenario import load_scenario, simulate as run_sim, verify_ideal, write_simulation
 
@@ -282,7 +283,7 @@ def simulate(scenario_file, out_dir, seed, force, no_plot, verify, as_json):
 
     with tqdm(total=len(steps), desc=f"simulate {sc.name}", file=sys.stderr, disable=not sys.stderr.isatty(),
               leave=False) as bar:
-        sim = run_sim(sc, seed, progress=lambda _: bar.update(1))
+        sim = run_sim(sc, seed, truth_rate_hz=truth_rate, progress=lambda _: bar.update(1))
         bar.update(1)
         files = write_simulation(sim, Path(out_dir), overwrite=force, plot=not no_plot)
         bar.update(1)

@@ -95,7 +95,22 @@ def ideal_imu(trajectory, time, *, nodes=6, t_before=None, lever_arm_b=None):
     return ImuData(t, dth, dv)
 
 
-def truth_solution(trajectory, time):
-    """The true navigation solution of a trajectory at ``time``."""
+def truth_solution(trajectory, time, *, with_rates=False):
+    """The true navigation solution of a trajectory at ``time``.
+
+    With ``with_rates`` the solution's ``extra`` also carries the rates: NED
+    acceleration ``an_m_s2, ae_m_s2, ad_m_s2`` (time derivative of ``v_n``),
+    the true body rate ``wx_rad_s, wy_rad_s, wz_rad_s`` (``omega_ib_b``) and
+    specific force ``fx_m_s2, fy_m_s2, fz_m_s2``.
+    """
     kin = trajectory.kinematics(np.asarray(time, dtype=float))
-    return NavSolution(kin.t, kin.lla, kin.v_n, rot.quat_from_dcm(kin.C_nb))
+    extra = {}
+    if with_rates:
+        w_ib, f_b = ideal_rates(kin)
+        for j, a in enumerate("ned"):
+            extra[f"a{a}_m_s2"] = kin.a_n[:, j]
+        for j, a in enumerate("xyz"):
+            extra[f"w{a}_rad_s"] = w_ib[:, j]
+        for j, a in enumerate("xyz"):
+            extra[f"f{a}_m_s2"] = f_b[:, j]
+    return NavSolution(kin.t, kin.lla, kin.v_n, rot.quat_from_dcm(kin.C_nb), extra)

@@ -203,8 +203,10 @@ def simulate(sc: Scenario, seed=0, *, truth_rate_hz=None, progress=None) -> Simu
     imu, draws = apply_imu_errors(ideal, imu_errors(sc), rng)
     gnss, gerr = simulate_gnss(tr, 0.0, tr.duration, gnss_errors(sc), rng)
     draws["gnss_position_errors"] = gerr
+    if truth_rate_hz is not None and not truth_rate_hz > 0:
+        raise ConfigError(f"the truth rate must be > 0 Hz, got {truth_rate_hz}")
     tt = t if truth_rate_hz is None else np.arange(0.0, tr.duration + 1e-9, 1.0 / truth_rate_hz)
-    truth = truth_solution(tr, tt)
+    truth = truth_solution(tr, tt, with_rates=True)
     return Simulation(sc, tr, truth, ideal, imu, gnss, draws)
 
 
