@@ -129,8 +129,12 @@ def test_simulate_navigate_evaluate_pipeline(tmp_path):
         '[[segment]]\ntype = "cruise"\nduration_s = 40\n')
     assert inskit("simulate", scen, "--out", tmp_path / "sim", "--no-plot").returncode == 0
     r = inskit("navigate", "--imu", tmp_path / "sim" / "imu.csv", "--gnss", tmp_path / "sim" / "gnss.csv",
-               "--lever-arm", "0,0,-1", "--out", tmp_path / "nav", "--no-plots", "--json")
+               "--lever-arm", "0,0,-1", "--out", tmp_path / "nav", "--no-plots", "--json", "--smooth",
+               "--truth", tmp_path / "sim" / "truth.csv")
     assert r.returncode == 0, r.stderr
+    t = json.loads(r.stdout)["truth_errors"]
+    # the smoother uses the future too: no worse than the forward filter against the truth
+    assert t["smoothed"]["horizontal_m"]["rms"] <= t["forward"]["horizontal_m"]["rms"] * 1.05
     r = inskit("evaluate", tmp_path / "nav" / "solution_forward.csv", tmp_path / "sim" / "truth.csv", "--json")
     assert r.returncode == 0, r.stderr
     s = json.loads(r.stdout)

@@ -206,9 +206,11 @@ def bench(quick, as_json):
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Output folder (default from config).")
 @click.option("--force", is_flag=True, help="Overwrite an output folder that already holds results.")
 @click.option("--no-plots", is_flag=True, help="Skip the PNG plots.")
+@click.option("--truth", "truth_file", type=click.Path(dir_okay=False),
+              help="A truth file (e.g. from inskit simulate): add the errors against it to the summary.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_arm, imu_time_offset, scheme, outages,
-             smooth, calibrate_time_offset, out_dir, force, no_plots, as_json):
+             smooth, calibrate_time_offset, out_dir, force, no_plots, truth_file, as_json):
     """INS/GNSS integration from a TOML config file or flags."""
     from .integration import config as C
     from .integration import navigate as N
@@ -253,14 +255,31 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
         _log(f"calibrate: best IMU time offset {best:+.4f} s")
         cfg = cfg.model_copy(update={"imu": cfg.imu.model_copy(update={"time_offset_s": best})})
         extra["time_offset_calibration"] = {"best_s": best, "evaluations": [list(e) for e in evals]}
+    truth = None
+    if truth_file:
+        from . import io
+
+        truth = io.read_solution(truth_file)
     with _progress(None, "navigate") as bar:
         res = N.navigate(cfg, smooth=smooth, progress=bar.update)
     s = N.summary(res)
     s.update(extra)
+    text_extra = ""
+    if truth is not None:
+        from . import analysis
+
+        s["truth_errors"] = {}
+        for label, sol in (("forward", res.forward.solution), ("smoothed", res.smoothed)):
+            if sol is None:
+                continue
+            err = analysis.summarize(analysis.nav_error(sol, truth))
+            s["truth_errors"][label] = err
+            text_extra += (f"\nagainst the truth ({label}): horizontal RMS {err['horizontal_m']['rms']:.3f} m, "
+                           f"down RMS {err['down_m']['rms']:.3f} m, yaw RMS {err['yaw_arcmin']['rms']:.2f} arcmin")
     files = N.write_outputs(res, target, s)
     s["files"] = [str(f) for f in files]
     _log(f"wrote {len(files)} files to {target}/")
-    _emit(s, as_json, N.outage_table_text(s))
+    _emit(s, as_json, N.outage_table_text(s) + text_extra)
 
 
 @cli.command()
