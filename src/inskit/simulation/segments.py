@@ -319,8 +319,8 @@ class SegmentTrajectory:
         dy = rhs(tg, y)
         self._pos = CubicHermiteSpline(tg, y, dy, axis=0)
 
-    def kinematics(self, t):
-        """:class:`Kinematics` at times ``t`` (any rate, any order)."""
+    def _state(self, t):
+        """Position, NED velocity and acceleration, Euler angles and rates."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
         if self._pos is None:
             self._integrate_position()
@@ -345,7 +345,23 @@ class SegmentTrajectory:
                 j = ("roll", "pitch", "yaw").index(o.target)
                 rpy[:, j] += x
                 drpy[:, j] += dx
-        return _kinematics_from_ned(t, lla, v_n, a_n, rpy, drpy)
+        return t, lla, v_n, a_n, rpy, drpy
+
+    def kinematics(self, t):
+        """:class:`Kinematics` at times ``t`` (any rate, any order)."""
+        return _kinematics_from_ned(*self._state(t))
+
+    def rates(self, t):
+        """True ``(omega_ib_b, f_b)`` at times ``t``: the compiled equivalent of
+        ``ideal_rates(self.kinematics(t))``."""
+        from .imu import rates_kernel
+
+        t, lla, v_n, a_n, rpy, drpy = self._state(t)
+        w = np.empty((len(t), 3))
+        f = np.empty((len(t), 3))
+        rates_kernel(np.ascontiguousarray(lla[:, 0]), np.ascontiguousarray(lla[:, 2]), np.ascontiguousarray(v_n),
+                     np.ascontiguousarray(a_n), np.ascontiguousarray(rpy), np.ascontiguousarray(drpy), w, f)
+        return w, f
 
 
 def _kinematics_from_ned(t, lla, v_n, a_n, rpy, drpy):
