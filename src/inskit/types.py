@@ -276,27 +276,14 @@ class NavSolution:
         return self.lla[i] * (1 - w) + self.lla[i + 1] * w, self.v_n[i] * (1 - w) + self.v_n[i + 1] * w, q
 
     def interpolate(self, t):
-        """Solution at times ``t`` (linear in position/velocity, slerp-free
-        normalised linear quaternion blend, adequate at IMU rates)."""
+        """Solution at increasing times ``t`` inside the span (see :meth:`sample`)."""
         t = np.asarray(t, dtype=float)
-        if len(t) and (t[0] < self.time[0] or t[-1] > self.time[-1]):
-            raise InputError(
-                f"requested times {t[0]:.3f}..{t[-1]:.3f} s fall outside the solution span "
-                f"{self.time[0]:.3f}..{self.time[-1]:.3f} s"
-            )
+        lla, v, q = self.sample(t)
         i = np.clip(np.searchsorted(self.time, t, side="right") - 1, 0, len(self.time) - 2)
-        w = ((t - self.time[i]) / (self.time[i + 1] - self.time[i]))[:, None]
-
-        def lin(a):
-            return a[i] * (1 - w) + a[i + 1] * w
-
-        q0, q1 = self.q_nb[i], self.q_nb[i + 1]
-        q1 = np.where((np.sum(q0 * q1, axis=1) < 0)[:, None], -q1, q1)
-        q = q0 * (1 - w) + q1 * w
-        q /= np.linalg.norm(q, axis=1, keepdims=True)
-        extra = {k: (v[i] * (1 - w[:, 0]) + v[i + 1] * w[:, 0]) if v.ndim == 1 else lin(v)
-                 for k, v in self.extra.items()}
-        return NavSolution(t, lin(self.lla), lin(self.v_n), q, extra)
+        w = (t - self.time[i]) / (self.time[i + 1] - self.time[i])
+        extra = {k: (x[i] * (1 - w) + x[i + 1] * w) if x.ndim == 1 else (x[i] * (1 - w)[:, None] + x[i + 1] * w[:, None])
+                 for k, x in self.extra.items()}
+        return NavSolution(t, lla, v, q, extra)
 
 
 @dataclass(frozen=True)
