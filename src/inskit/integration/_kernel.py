@@ -30,7 +30,7 @@ import numpy as np
 from numba import njit
 
 from .. import earth
-from ..strapdown._kernels import _radii, _rv_quat, ned_step
+from ..strapdown._kernels import _qmul_s, _radii, _rv_quat, _store_unit, ned_step
 
 W_IE = earth.OMEGA_IE
 # indices into the layout array
@@ -189,13 +189,8 @@ def apply_correction(lla, v_n, q_nb, x, idx, sign, out_lla, out_v, out_q):
     for i in range(3):
         out_v[i] = v_n[i] - sign * x[v + i]
     a0, a1, a2, a3 = _rv_quat(sign * x[a], sign * x[a + 1], sign * x[a + 2])
-    q0, q1, q2, q3 = q_nb[0], q_nb[1], q_nb[2], q_nb[3]
-    r0 = a0 * q0 - a1 * q1 - a2 * q2 - a3 * q3
-    r1 = a0 * q1 + a1 * q0 + a2 * q3 - a3 * q2
-    r2 = a0 * q2 - a1 * q3 + a2 * q0 + a3 * q1
-    r3 = a0 * q3 + a1 * q2 - a2 * q1 + a3 * q0
-    inv = 1.0 / math.sqrt(r0 * r0 + r1 * r1 + r2 * r2 + r3 * r3)
-    out_q[0], out_q[1], out_q[2], out_q[3] = r0 * inv, r1 * inv, r2 * inv, r3 * inv
+    r0, r1, r2, r3 = _qmul_s(a0, a1, a2, a3, q_nb[0], q_nb[1], q_nb[2], q_nb[3])
+    _store_unit(out_q, r0, r1, r2, r3)
 
 
 @njit(cache=True)

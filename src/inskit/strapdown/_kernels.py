@@ -94,6 +94,22 @@ def _rv_quat(x, y, z):
     return math.cos(0.5 * a), k * x, k * y, k * z
 
 
+@njit(cache=True, inline="always")
+def _qmul_s(a0, a1, a2, a3, b0, b1, b2, b3):
+    """Hamilton product of two quaternions given as scalars (kept in registers)."""
+    return (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
+            a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+            a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1,
+            a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0)
+
+
+@njit(cache=True, inline="always")
+def _store_unit(q, r0, r1, r2, r3):
+    """Write the normalised quaternion (r0..r3) into ``q``."""
+    inv = 1.0 / math.sqrt(r0 * r0 + r1 * r1 + r2 * r2 + r3 * r3)
+    q[0], q[1], q[2], q[3] = r0 * inv, r1 * inv, r2 * inv, r3 * inv
+
+
 @njit(cache=True)
 def _qnormalize(q):
     s = 1.0 / math.sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3])
@@ -233,18 +249,10 @@ def ned_step(dth, dv, dt, lla, v_n, q_nb, carry, coning, height_mode, h_ref, h_g
     z1 = -vmn / rn * dt
     z2 = (-W_IE * sl - vme * sl / cl / re) * dt
     a0, a1, a2, a3 = _rv_quat(phi0, phi1, phi2)
-    # q_nb * q(phi)
-    b0 = q0 * a0 - q1 * a1 - q2 * a2 - q3 * a3
-    b1 = q0 * a1 + q1 * a0 + q2 * a3 - q3 * a2
-    b2 = q0 * a2 - q1 * a3 + q2 * a0 + q3 * a1
-    b3 = q0 * a3 + q1 * a2 - q2 * a1 + q3 * a0
+    b0, b1, b2, b3 = _qmul_s(q0, q1, q2, q3, a0, a1, a2, a3)  # q_nb * q(phi)
     a0, a1, a2, a3 = _rv_quat(-z0, -z1, -z2)
-    r0 = a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3
-    r1 = a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2
-    r2 = a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1
-    r3 = a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0
-    inv = 1.0 / math.sqrt(r0 * r0 + r1 * r1 + r2 * r2 + r3 * r3)
-    q_nb[0], q_nb[1], q_nb[2], q_nb[3] = r0 * inv, r1 * inv, r2 * inv, r3 * inv
+    r0, r1, r2, r3 = _qmul_s(a0, a1, a2, a3, b0, b1, b2, b3)  # q(-zeta) * ...
+    _store_unit(q_nb, r0, r1, r2, r3)
     v_n[0], v_n[1], v_n[2] = n0, n1, n2
     lla[0], lla[1], lla[2] = latnew, lonnew, hnew
     carry[0] += dt
