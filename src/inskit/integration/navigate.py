@@ -159,8 +159,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
 
 def mean_gnss_nis(cfg: NavigateConfig, time_offset_s):
     """Mean NIS of the GNSS position updates (used fixes only) for an IMU offset."""
-    cfg2 = cfg.model_copy(update={"outages": cfg.outages})
-    res = navigate(cfg2, time_offset_s=time_offset_s)
+    res = navigate(cfg, time_offset_s=time_offset_s)
     return float(np.mean(res.forward.innovations["gnss_pos"]["nis"]))
 
 

@@ -242,10 +242,4 @@ def apply_imu_errors(imu: ImuData, errors: ImuErrors, rng) -> tuple[ImuData, dic
                                  "gyro_bias": bg_series, "accel_bias": ba_series}
 
 
-def with_noise_only(errors: ImuErrors) -> ImuErrors:
-    """Same white noise, no other error (for consistency tests)."""
-    return ImuErrors(TriadErrors(white_noise=errors.gyro.white_noise),
-                     TriadErrors(white_noise=errors.accel.white_noise), errors.source)
-
-
 __all__ = ["ImuErrors", "PRESETS", "TriadErrors", "apply_imu_errors", "preset", "replace", "triad_from_datasheet"]
