@@ -17,7 +17,7 @@ def test_reproduce_alignment_ga_command(tmp_path):
 
 
 def test_reproduce_sweeps_qualitative_claims():
-    from inskit.alignment.reproduce import sweep
+    from inskit.jobs.reproduce_alignment import sweep
 
     s6 = sweep("accel", n=4, ga_every=10)
     s7 = sweep("gyro", n=4, ga_every=10)

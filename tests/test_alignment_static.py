@@ -9,9 +9,10 @@ import numpy as np
 import pytest
 
 from inskit.alignment.static import align_static
-from inskit.integration.config import load_config
-from inskit.integration.navigate import navigate
-from inskit.simulation.scenario import load_scenario, simulate, write_simulation
+from inskit.jobs.config import load_config
+from inskit.jobs.navigate import navigate
+from inskit.jobs.simulate import write_simulation
+from inskit.simulation.scenario import load_scenario, simulate
 
 ROOT = Path(__file__).resolve().parents[1]
 DRIVE = ROOT / "data" / "drive_0708" / "imu_1934_gpst.csv.gz"
@@ -55,8 +56,8 @@ def test_drive_0708_static_start_against_the_filter():
     assert not r["heading_usable"] and "swamps the Earth rate" in r["heading_reason"]
     cfg = load_config(ROOT / "examples" / "drive_0708.toml", {"output": {"plots": False}})
     res = navigate(cfg, smooth=True)
-    static = res.smoothed.time < res.startup.static_end
-    rpy = np.degrees(res.smoothed.euler[static]).mean(axis=0)
+    static = res.smoothed.nav.time < res.startup.static_end
+    rpy = np.degrees(res.smoothed.nav.euler[static]).mean(axis=0)
     assert abs(r["roll_deg"] - rpy[0]) < 0.5
     assert abs(r["pitch_deg"] - rpy[1]) < 0.5
 

@@ -5,8 +5,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from inskit.integration.config import load_config
-from inskit.integration.navigate import navigate, summary
+from inskit.jobs.config import load_config
+from inskit.jobs.navigate import navigate, summary
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "drive_0708.toml"
 
@@ -60,7 +60,7 @@ def test_startup_levels_the_car(result):
 def test_time_offset_state_recovers_a_wrong_offset():
     """Start 0.06 s off the calibrated offset (-0.26 s): the time-offset state
     finds the difference and the outage protocol still scores within 3 m."""
-    from inskit.integration.navigate import summary
+    from inskit.jobs.navigate import summary
 
     cfg = load_config(EXAMPLE, {"output": {"plots": False}, "imu": {"time_offset_s": -0.20},
                                 "filter": {"time_offset": True}})

@@ -10,8 +10,8 @@ import pytest
 from inskit.errors import ConfigError, InputError
 from inskit.filters.kalman import FilterDivergence, check_covariance, joseph_update
 from inskit.integration import FilterSettings, GnssPosition, SensorNoise, run_filter
-from inskit.integration.config import load_config
-from inskit.integration.navigate import navigate
+from inskit.jobs.config import load_config
+from inskit.jobs.navigate import navigate
 from inskit.io.rtklib import read_pos
 from inskit.simulation import StationaryTrajectory, ideal_imu, truth_solution
 from inskit.types import GnssData, ImuData
@@ -114,7 +114,9 @@ def test_settings_refuse_impossible_values():
     with pytest.raises(InputError, match="scheme"):
         FilterSettings(scheme="tight")
     with pytest.raises(InputError, match="gyro_arw"):
-        FilterSettings(noise=SensorNoise(0.0, 1e-3, 1e-5, 1e-4))
+        SensorNoise(0.0, 1e-3, 1e-5, 1e-4)
+    with pytest.raises(InputError, match="uncoupled"):
+        FilterSettings(scheme="uncoupled")
 
 
 def test_cli_navigate_bad_config_one_line(tmp_path):

@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from inskit.integration.engine import InitialUncertainty
-from inskit.integration.montecarlo import compare_schemes, consistency_errors, monte_carlo
+from inskit.integration import InitialUncertainty
+from inskit.jobs.montecarlo import compare_schemes, consistency_errors, monte_carlo
 from inskit.simulation.gnss import GnssErrors
 from inskit.simulation.scenario import build_trajectory, load_scenario
 from inskit.simulation.segments import SegmentTrajectory
@@ -78,8 +78,8 @@ def test_closed_loop_beats_open_loop_and_uncoupled_through_an_outage():
 
 def test_time_offset_state_estimates_gnss_latency():
     """GNSS fixes stamped 0.2 s late (latency): the state converges to -0.2 s."""
-    from inskit.integration import GnssPosition, StateLayout, run_filter
-    from inskit.integration.montecarlo import matched_settings, perturbed_start
+    from inskit.integration import GnssPosition, run_filter
+    from inskit.jobs.montecarlo import matched_settings, perturbed_start
     from inskit.simulation import ideal_imu, truth_solution
     from inskit.simulation.gnss import simulate_gnss
     from inskit.simulation.sensors import apply_imu_errors
@@ -91,11 +91,11 @@ def test_time_offset_state_estimates_gnss_latency():
     imu, _ = apply_imu_errors(ideal_imu(tr, t, nodes=3), errs, rng)
     g = GnssErrors(rate_hz=5.0, white_h_m=0.02, white_v_m=0.04, velocity_sigma_m_s=0.0, latency_s=0.2)
     gnss, _ = simulate_gnss(tr, t[0], t[-1], g, rng)
-    settings = matched_settings(errs, INIT["tactical"], gate_probability=None)
     from dataclasses import replace
 
-    settings = replace(settings, layout=StateLayout(time_offset=True),
-                       initial=replace(settings.initial, time_offset_s=0.3))
+    settings = matched_settings(errs, replace(INIT["tactical"], time_offset_s=0.3), gate_probability=None,
+                                time_offset=True)
     start = perturbed_start(truth_solution(tr, t[:1]).state(0), matched_settings(errs, INIT["tactical"]), rng)
     out = run_filter(imu, start, [GnssPosition(gnss)], settings)
-    assert out.solution.extra["time_offset_s"][-1] == pytest.approx(-0.2, abs=0.01)
+    assert out.estimate("time_offset")[-1, 0] == pytest.approx(-0.2, abs=0.01)
+    assert out.solution.extra["time_offset_s"][-1] == out.estimate("time_offset")[-1, 0]  # the named column

@@ -1,7 +1,8 @@
 import numpy as np
 
 from inskit import io
-from inskit.simulation.scenario import load_scenario, simulate, write_simulation
+from inskit.jobs.simulate import write_simulation
+from inskit.simulation.scenario import load_scenario, simulate
 
 SCEN = """
 name = "tiny"

@@ -5,7 +5,7 @@ import pytest
 
 from inskit import earth
 from inskit import rotations as rot
-from inskit.demo import DEMO_TRAJECTORY
+from inskit.jobs.demo import DEMO_TRAJECTORY
 from inskit.errors import InputError
 from inskit.simulation import ConingTrajectory, StationaryTrajectory, ideal_imu, truth_solution
 from inskit.strapdown import NedIntegrator, mechanize

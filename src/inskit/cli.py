@@ -182,7 +182,7 @@ def evaluate(solution_file, truth_file, plot_file, force, as_json):
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def bench(quick, as_json):
     """Throughput of the compiled kernels (epochs per second, one core)."""
-    from .bench import run_benchmarks
+    from .jobs.bench import run_benchmarks
 
     res = run_benchmarks(quick=quick, progress=lambda name: _log(f"bench: {name} done"))
     table = "\n".join(f"{k:<28}{v}" for k, v in res.items())
@@ -212,8 +212,8 @@ def bench(quick, as_json):
 def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_arm, imu_time_offset, scheme, outages,
              smooth, calibrate_time_offset, out_dir, force, no_plots, truth_file, as_json):
     """INS/GNSS integration from a TOML config file or flags."""
-    from .integration import config as C
-    from .integration import navigate as N
+    from .jobs import config as C
+    from .jobs import navigate as N
 
     over = {}
     if imu_file:
@@ -266,16 +266,8 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
     s.update(extra)
     text_extra = ""
     if truth is not None:
-        from . import analysis
-
-        s["truth_errors"] = {}
-        for label, sol in (("forward", res.forward.solution), ("smoothed", res.smoothed)):
-            if sol is None:
-                continue
-            err = analysis.summarize(analysis.nav_error(sol, truth))
-            s["truth_errors"][label] = err
-            text_extra += (f"\nagainst the truth ({label}): horizontal RMS {err['horizontal_m']['rms']:.3f} m, "
-                           f"down RMS {err['down_m']['rms']:.3f} m, yaw RMS {err['yaw_arcmin']['rms']:.2f} arcmin")
+        s["truth_errors"] = N.truth_errors(res, truth)
+        text_extra = N.truth_errors_text(s["truth_errors"])
     files = N.write_outputs(res, target, s)
     s["files"] = [str(f) for f in files]
     _log(f"wrote {len(files)} files to {target}/")
@@ -293,7 +285,8 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, as_json):
     """Simulate a scenario: IMU, GNSS and truth files plus a plot."""
-    from .simulation.scenario import load_scenario, simulate as run_sim, verify_ideal, write_simulation
+    from .jobs.simulate import verify_ideal, write_simulation
+    from .simulation.scenario import load_scenario, simulate as run_sim
 
     sc = load_scenario(scenario_file)
     t0 = time.perf_counter()
@@ -333,35 +326,15 @@ def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, a
 def allan(imu_file, plot_file, force, no_unit_check, as_json):
     """Allan deviation of a static IMU log and the filter noise parameters it implies."""
     from . import io
-    from .analysis.allan import allan_imu, plot_allan
-    from .units import DEG_PER_HOUR, MICRO_G
+    from .analysis.allan import plot_allan
+    from .jobs.allan import allan_report
 
     if plot_file and Path(plot_file).exists() and not force:
         raise InputError(f"{plot_file}: already exists; refusing to overwrite it (use --force)")
     imu = io.read_imu(imu_file, check_units=not no_unit_check)
-    r = allan_imu(imu)
-    gyro = [{"axis": a, "arw_deg_sqrt_h": f.white / DEG * 60, "bias_instability_deg_h": f.bias_instability / DEG_PER_HOUR,
-             "gm_sigma_deg_h": f.gm_sigma / DEG_PER_HOUR, "gm_tau_s": f.gm_tau,
-             "rrw_deg_h_sqrt_h": None if f.rate_random_walk is None else f.rate_random_walk / DEG_PER_HOUR * 60}
-            for a, f in zip("xyz", r["gyro_fit"])]
-    acc = [{"axis": a, "vrw_ug_sqrt_hz": f.white / MICRO_G, "vrw_m_s_sqrt_h": f.white * 60,
-            "bias_instability_ug": f.bias_instability / MICRO_G, "gm_sigma_ug": f.gm_sigma / MICRO_G,
-            "gm_tau_s": f.gm_tau,
-            "rrw_ug_sqrt_h": None if f.rate_random_walk is None else f.rate_random_walk / MICRO_G * 60}
-           for a, f in zip("xyz", r["accel_fit"])]
-
-    def rms(rows, k):
-        return float(np.sqrt(np.mean([x[k] ** 2 for x in rows])))
-
-    noise = {  # the [noise] section of an `inskit navigate` config
-        "gyro_arw_deg_sqrt_h": rms(gyro, "arw_deg_sqrt_h"),
-        "accel_vrw_m_s_sqrt_h": rms(acc, "vrw_m_s_sqrt_h"),
-        "gyro_bias_sigma_deg_h": rms(gyro, "gm_sigma_deg_h"),
-        "accel_bias_sigma_ug": rms(acc, "gm_sigma_ug"),
-        "bias_tau_s": float(np.exp(np.mean(np.log([x["gm_tau_s"] for x in gyro + acc])))),
-    }
-    res = {"file": imu_file, "duration_s": float(imu.time[-1] - imu.time[0]), "gyro": gyro, "accel": acc,
-           "navigate_noise_section": noise}
+    r, rep = allan_report(imu)
+    gyro, acc, noise = rep["gyro"], rep["accel"], rep["navigate_noise_section"]
+    res = {"file": imu_file, "duration_s": float(imu.time[-1] - imu.time[0]), **rep}
     if plot_file:
         plot_allan(r, plot_file, title=Path(imu_file).name)
         res["plot"] = plot_file
@@ -380,7 +353,7 @@ def allan(imu_file, plot_file, force, no_unit_check, as_json):
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def schemes(scenario_file, outage, seed, as_json):
     """Uncoupled, open-loop and closed-loop integration on one simulated run."""
-    from .integration.montecarlo import compare_schemes
+    from .jobs.montecarlo import compare_schemes
     from .simulation.scenario import load_scenario
 
     try:
@@ -464,7 +437,7 @@ def reproduce():
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def reproduce_alignment(out_dir, as_json):
     """Source 002: one-step alignment blended by a GA (figures 6-9, headline case)."""
-    from .alignment.reproduce import run
+    from .jobs.reproduce_alignment import run
 
     res = run(out_dir, log=_log)
     lines = [f"{'item':<72} {'published':<28} ours"]
@@ -488,38 +461,19 @@ def reproduce_alignment(out_dir, as_json):
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def consistency(scenario_file, grade, runs, duration, seed, as_json):
     """Monte Carlo consistency (NEES) of the closed-loop filter on a scenario."""
-    from .integration.engine import InitialUncertainty
-    from .integration.montecarlo import consistency_errors, monte_carlo
-    from .simulation.gnss import GnssErrors
-    from .simulation.scenario import build_trajectory, load_scenario
-    from .simulation.sensors import preset
+    from .jobs.montecarlo import consistency_study
+    from .simulation.scenario import load_scenario
 
-    if runs < 2:
-        raise InputError(f"--runs must be at least 2, got {runs}")
     sc = load_scenario(scenario_file)
-    tr = build_trajectory(sc, np.random.default_rng(seed))
-    if duration is not None and not 0 < duration <= tr.duration:
-        raise InputError(f"--duration must be within (0, {tr.duration:.0f}] s, got {duration}")
-    tilt, yaw = (0.2, 1.0) if grade in ("navigation", "tactical") else (1.0, 3.0)
-    init = InitialUncertainty(pos_m=(1.0, 1.0, 2.0), vel_m_s=0.1, roll_pitch_rad=np.radians(tilt),
-                              yaw_rad=np.radians(yaw))
-    g = GnssErrors(rate_hz=1.0, white_h_m=1.0, white_v_m=2.0, velocity_sigma_m_s=0.0)
     from tqdm import tqdm
 
     with tqdm(total=runs, desc="monte carlo", file=sys.stderr, disable=not sys.stderr.isatty(), leave=False) as bar:
-        r = monte_carlo(tr, sc.imu.rate_hz, consistency_errors(preset(grade)), g, init, runs=runs, seed=seed,
-                        duration=duration, progress=bar.update, gate_probability=None)
-    res = {"scenario": sc.name, "grade": grade, "runs": runs, "duration_s": float(r["t"][-1]), "anees": {}}
-    lines = [f"{sc.name}, {grade}, {runs} runs over {r['t'][-1]:.0f} s: average NEES (3 dof each)"]
-    for b in ("pos", "vel", "att"):
-        a = r["anees"][b]
-        lo, hi = r["band"][b]
-        inside = float(((a >= lo) & (a <= hi)).mean())
-        res["anees"][b] = {"mean": float(a.mean()), "band_95": [lo, hi], "fraction_of_epochs_inside": inside}
-        lines.append(f"{b:<4} mean {a.mean():.2f}  95 % band [{lo:.2f}, {hi:.2f}]  epochs inside {inside:.0%}")
-    z = r["bias_normalized"]
-    res["bias_within_3_sigma"] = float((np.abs(z) < 3).mean())
-    res["bias_rms_normalized"] = float(np.sqrt(np.mean(z**2)))
+        res = consistency_study(sc, grade, runs, duration, seed, progress=bar.update)
+    lines = [f"{sc.name}, {grade}, {runs} runs over {res['duration_s']:.0f} s: average NEES (3 dof each)"]
+    for b, a in res["anees"].items():
+        lo, hi = a["band_95"]
+        lines.append(f"{b:<4} mean {a['mean']:.2f}  95 % band [{lo:.2f}, {hi:.2f}]  epochs inside "
+                     f"{a['fraction_of_epochs_inside']:.0%}")
     lines.append(f"final sensor-bias errors: {res['bias_within_3_sigma']:.1%} within 3 sigma, RMS "
                  f"{res['bias_rms_normalized']:.2f} sigma")
     _emit(res, as_json, "\n".join(lines))
@@ -530,7 +484,7 @@ def consistency(scenario_file, grade, runs, duration, seed, as_json):
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def demo(checks, as_json):
     """Closed-form demonstration: ideal IMU, all four mechanizations."""
-    from .demo import closed_form_checks, demo_run
+    from .jobs.demo import closed_form_checks, demo_run
 
     res, table = demo_run(log=_log)
     if checks:

@@ -90,6 +90,21 @@ def gravity_down(lat, h):
 
 
 @register_jitable
+def gravity_down_dh(lat, h):
+    """``d gamma_d / d h`` [1/s^2] of :func:`gravity_down` (exact derivative of
+    the same formula; about ``-2 g / a``).  Used by the filter's error model."""
+    s2 = np.sin(lat) ** 2
+    gamma = GAMMA_E * (1.0 + K_SOMIGLIANA * s2) / np.sqrt(1.0 - E2 * s2)
+    return gamma * (-2.0 / A * (1.0 + F + M_RATIO - 2.0 * F * s2) + 6.0 * h / (A * A))
+
+
+@register_jitable
+def gravity_north_dh(lat, h):
+    """``d gamma_n / d h`` [1/s^2] of :func:`gravity_north`."""
+    return GAMMA_N_PER_M * np.sin(2.0 * lat)
+
+
+@register_jitable
 def gravity_north(lat, h):
     """North component of normal gravity at height ``h`` [m/s^2].
 

@@ -16,6 +16,50 @@ Every function takes a single item (``(3,)``, ``(4,)``, ``(3, 3)``) or a batch
 from __future__ import annotations
 
 import numpy as np
+from numba.extending import register_jitable
+
+
+# --- scalar core ------------------------------------------------------------------
+# One implementation of each primitive, written with arithmetic and numpy
+# ufuncs only and marked ``register_jitable``: the compiled kernels
+# (strapdown, integration) inline them on scalars, and the batch functions
+# below call them on whole arrays.  (As :mod:`inskit.earth` does.)
+@register_jitable
+def qmul(a0, a1, a2, a3, b0, b1, b2, b3):
+    """Hamilton product ``a * b`` of two quaternions given by components."""
+    return (a0 * b0 - a1 * b1 - a2 * b2 - a3 * b3,
+            a0 * b1 + a1 * b0 + a2 * b3 - a3 * b2,
+            a0 * b2 - a1 * b3 + a2 * b0 + a3 * b1,
+            a0 * b3 + a1 * b2 - a2 * b1 + a3 * b0)
+
+
+@register_jitable
+def rotvec_quat(x, y, z):
+    """Quaternion of the rotation vector ``(x, y, z)`` [rad], exact at any
+    angle: ``[cos(a/2), sin(a/2)/a * phi]`` with ``sin(a/2)/a`` written as
+    ``sinc(a / 2 pi) / 2`` (no division by zero, no series switch)."""
+    a = np.sqrt(x * x + y * y + z * z)
+    k = 0.5 * np.sinc(a / (2.0 * np.pi))
+    return np.cos(0.5 * a), k * x, k * y, k * z
+
+
+@register_jitable
+def quat_dcm(q0, q1, q2, q3):
+    """The nine entries ``C00, C01, .., C22`` of the DCM of ``q`` (row major)."""
+    return (q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2.0 * (q1 * q2 - q0 * q3), 2.0 * (q1 * q3 + q0 * q2),
+            2.0 * (q1 * q2 + q0 * q3), q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3, 2.0 * (q2 * q3 - q0 * q1),
+            2.0 * (q1 * q3 - q0 * q2), 2.0 * (q2 * q3 + q0 * q1), q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3)
+
+
+@register_jitable
+def quat_rot(q0, q1, q2, q3, v0, v1, v2):
+    """``C(q) v`` for a unit quaternion, without forming the DCM."""
+    tx = 2.0 * (q2 * v2 - q3 * v1)
+    ty = 2.0 * (q3 * v0 - q1 * v2)
+    tz = 2.0 * (q1 * v1 - q2 * v0)
+    return (v0 + q0 * tx + q2 * tz - q3 * ty,
+            v1 + q0 * ty + q3 * tx - q1 * tz,
+            v2 + q0 * tz + q1 * ty - q2 * tx)
 
 
 def skew(v):
@@ -87,17 +131,8 @@ def quat_multiply(p, q):
     """Hamilton product ``p * q`` (so ``q_ac = quat_multiply(q_ab, q_bc)``)."""
     p = np.asarray(p, dtype=float)
     q = np.asarray(q, dtype=float)
-    p0, p1, p2, p3 = p[..., 0], p[..., 1], p[..., 2], p[..., 3]
-    q0, q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    return np.stack(
-        [
-            p0 * q0 - p1 * q1 - p2 * q2 - p3 * q3,
-            p0 * q1 + p1 * q0 + p2 * q3 - p3 * q2,
-            p0 * q2 - p1 * q3 + p2 * q0 + p3 * q1,
-            p0 * q3 + p1 * q2 - p2 * q1 + p3 * q0,
-        ],
-        -1,
-    )
+    return np.stack(np.broadcast_arrays(*qmul(p[..., 0], p[..., 1], p[..., 2], p[..., 3],
+                                              q[..., 0], q[..., 1], q[..., 2], q[..., 3])), -1)
 
 
 def quat_conjugate(q):
@@ -116,23 +151,8 @@ def quat_normalize(q):
 def dcm_from_quat(q):
     """DCM ``C_ab`` from the unit quaternion ``q_ab``."""
     q = np.asarray(q, dtype=float)
-    q0, q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    if q.shape == (4,):
-        return np.array(
-            [
-                [q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2 * (q1 * q2 - q0 * q3), 2 * (q1 * q3 + q0 * q2)],
-                [2 * (q1 * q2 + q0 * q3), q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3, 2 * (q2 * q3 - q0 * q1)],
-                [2 * (q1 * q3 - q0 * q2), 2 * (q2 * q3 + q0 * q1), q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3],
-            ]
-        )
-    return np.stack(
-        [
-            np.stack([q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3, 2 * (q1 * q2 - q0 * q3), 2 * (q1 * q3 + q0 * q2)], -1),
-            np.stack([2 * (q1 * q2 + q0 * q3), q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3, 2 * (q2 * q3 - q0 * q1)], -1),
-            np.stack([2 * (q1 * q3 - q0 * q2), 2 * (q2 * q3 + q0 * q1), q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3], -1),
-        ],
-        -2,
-    )
+    c = quat_dcm(q[..., 0], q[..., 1], q[..., 2], q[..., 3])
+    return np.stack(c, -1).reshape(q.shape[:-1] + (3, 3))
 
 
 def quat_from_dcm(C):
@@ -164,14 +184,9 @@ def quat_from_dcm(C):
 
 
 def quat_from_rotvec(phi):
-    """Unit quaternion of the rotation vector ``phi`` [rad] (exact, series near 0)."""
+    """Unit quaternion of the rotation vector ``phi`` [rad] (exact at any angle)."""
     phi = np.asarray(phi, dtype=float)
-    a = np.linalg.norm(phi, axis=-1)
-    half = 0.5 * a
-    small = a < 1e-8
-    with np.errstate(invalid="ignore", divide="ignore"):
-        k = np.where(small, 0.5 - a * a / 48.0, np.sin(half) / np.where(small, 1.0, a))
-    return np.concatenate([np.cos(half)[..., None], k[..., None] * phi], -1)
+    return np.stack(rotvec_quat(phi[..., 0], phi[..., 1], phi[..., 2]), -1)
 
 
 def rotvec_from_quat(q):
@@ -219,7 +234,10 @@ def euler_from_quat(q):
 
 def quat_rotate(q, v):
     """Rotate vectors: ``C(q) @ v`` for ``q_ab`` and ``v_b``, returning ``v_a``."""
-    return np.einsum("...ij,...j->...i", dcm_from_quat(q), np.asarray(v, dtype=float))
+    q = np.asarray(q, dtype=float)
+    v = np.asarray(v, dtype=float)
+    return np.stack(np.broadcast_arrays(*quat_rot(q[..., 0], q[..., 1], q[..., 2], q[..., 3],
+                                                  v[..., 0], v[..., 1], v[..., 2])), -1)
 
 
 def orthonormalize(C):

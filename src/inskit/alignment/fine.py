@@ -16,8 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..integration.engine import FilterSettings, InitialUncertainty, SensorNoise, run_filter
-from ..integration.measurements import ZeroVelocity
+from ..integration import FilterSettings, InitialUncertainty, SensorNoise, ZeroVelocity, run_filter
 from ..types import ImuData, NavState
 
 
@@ -51,11 +50,11 @@ def fine_align(imu: ImuData, coarse: NavState, noise: SensorNoise, *, sigma_tilt
     """Stationary Kalman-filter alignment over the whole of ``imu``."""
     init = InitialUncertainty(pos_m=(0.1, 0.1, 0.1), vel_m_s=0.01, roll_pitch_rad=sigma_tilt, yaw_rad=sigma_yaw,
                               gyro_bias=gyro_bias_sigma, accel_bias=accel_bias_sigma)
-    settings = FilterSettings(noise=noise, initial=init, gate_probability=None, gyro_bias0=tuple(gyro_bias0))
+    settings = FilterSettings.standard(noise, init, gate_probability=None, gyro_bias0=tuple(gyro_bias0))
     z = ZeroVelocity([(imu.time[0], imu.time[-1])], rate_hz, zupt_sigma)
     out = run_filter(imu, coarse, [z], settings)
-    sol = out.solution
-    sig = np.column_stack([sol.extra["sigma_att_n_rad"], sol.extra["sigma_att_e_rad"], sol.extra["sigma_att_d_rad"]])
+    sol = out.nav
+    sig = out.sigma_of("att")
     final = sig[-1]
     conv = np.full(3, np.nan)
     t0 = sol.time[0]

@@ -6,7 +6,7 @@ import numpy as np
 
 from .. import earth
 from ..errors import InputError
-from ..integration.engine import SensorNoise
+from ..integration.blocks import SensorNoise
 from ..types import ImuData, NavState
 from ..units import DEG, MICRO_G
 from .analytic import accel_basis, blend, gyro_basis, measured_latitude

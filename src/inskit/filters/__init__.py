@@ -6,6 +6,6 @@ construction, unlike ``P - K H P``), innovation gating by the chi-square test
 of the normalised innovation squared (NIS).
 """
 
-from .kalman import UpdateResult, chi2_threshold, joseph_update, nees
+from .kalman import FilterDivergence, UpdateResult, chi2_threshold, gate_rows, joseph_update, nees
 
-__all__ = ["UpdateResult", "chi2_threshold", "joseph_update", "nees"]
+__all__ = ["FilterDivergence", "UpdateResult", "chi2_threshold", "gate_rows", "joseph_update", "nees"]

@@ -100,6 +100,18 @@ def joseph_update(P, innovation, H, R, *, gate_probability=None):
     return UpdateResult(True, dx, Pn, nu, S, nis)
 
 
+def gate_rows(P, innovation, H, R, probability):
+    """Per-row gate: True for each row whose own NIS ``nu_i^2 / S_ii`` is
+    within the one-degree-of-freedom chi-square quantile of ``probability``
+    (one satellite among several, say, is rejected alone)."""
+    H = np.asarray(H, dtype=float)
+    nu = np.asarray(innovation, dtype=float)
+    s = np.einsum("ij,jk,ik->i", H, P, H) + np.diag(R)
+    if not np.isfinite(nu).all() or not (s > 0).all():
+        raise FilterDivergence("the innovation or its variance is not finite and positive: the filter diverged")
+    return nu * nu / s <= chi2_threshold(1, probability)
+
+
 def check_covariance(P, where=""):
     """Raise FilterDivergence unless P's diagonal is finite and positive (a NaN
     anywhere in P reaches the diagonal within one propagation step)."""

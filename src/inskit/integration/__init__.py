@@ -1,28 +1,31 @@
 """INS/GNSS integration: error-state Kalman filter, schemes, smoother.
 
-* :mod:`.layout`: the state layout (owns every index).
-* :mod:`.measurements`: plug-ins (GNSS position and velocity, ZUPT, NHC).
-* :mod:`.engine`: the filter loop (uncoupled, open loop, closed loop).
+* :mod:`.blocks`: the blocks of the error state, each owning its meaning.
+* :mod:`.layout`: the state layout built from blocks (owns every index).
+* :mod:`.measurements`: the measurement protocol and its plug-ins (GNSS
+  position and velocity, ZUPT, NHC).
+* :mod:`.engine`: the filter loop (open and closed loop).
+* :mod:`.uncoupled`: the uncoupled scheme (GNSS resets the INS).
 * :mod:`.smoother`: Rauch-Tung-Striebel smoothing of a closed-loop run.
-* :mod:`.outages`: outage protocols and their scoring.
-* :mod:`.navigate`: the whole job from a validated config.
+
+Jobs built on it (the navigate job, outage scoring, plots, Monte Carlo) live
+in :mod:`inskit.jobs`.
 
 References: SYSTEM.md §2 and §3; Groves 2013 ch. 14.
 """
 
-from .engine import FilterOutput, FilterSettings, InitialUncertainty, SensorNoise, run_filter
+from .blocks import (AccelBias, AccelScale, AttitudeError, GyroBias, GyroScale, InitialUncertainty, LeverArm,
+                     PositionError, SensorNoise, StateBlock, TimeOffset, VelocityError, ins_blocks)
+from .engine import FilterOutput, FilterSettings, Track, run_filter
 from .layout import StateLayout
-from .measurements import GnssPosition, GnssVelocity, NonHolonomic, ZeroVelocity
+from .measurements import (GnssPosition, GnssVelocity, Measurement, NonHolonomic, UpdateContext, ZeroVelocity,
+                           perturbed_context)
+from .smoother import rts_smooth
+from .uncoupled import run_uncoupled
 
 __all__ = [
-    "FilterOutput",
-    "FilterSettings",
-    "GnssPosition",
-    "GnssVelocity",
-    "InitialUncertainty",
-    "NonHolonomic",
-    "SensorNoise",
-    "StateLayout",
-    "ZeroVelocity",
-    "run_filter",
+    "AccelBias", "AccelScale", "AttitudeError", "FilterOutput", "FilterSettings", "GnssPosition", "GnssVelocity",
+    "GyroBias", "GyroScale", "InitialUncertainty", "LeverArm", "Measurement", "NonHolonomic", "PositionError",
+    "SensorNoise", "StateBlock", "StateLayout", "TimeOffset", "Track", "UpdateContext", "VelocityError",
+    "ZeroVelocity", "ins_blocks", "perturbed_context", "rts_smooth", "run_filter", "run_uncoupled",
 ]

@@ -1,25 +1,34 @@
 """Compiled propagation of the INS/GNSS error-state filter between updates.
 
 One call integrates IMU rows ``k0 .. k1-1``: sensor corrections, the NED
-mechanization (the very step of :func:`inskit.strapdown._kernels.ned_step`),
+mechanization (the very step of :func:`inskit.strapdown.kernels.ned_step`),
 the transition matrix ``F`` of the error model, the covariance
 ``P <- Phi P Phi^T + Q dt`` with ``Phi = I + F dt`` and, when asked, the
 transition accumulated over the segment (for the RTS smoother).
 
 ``F`` is filled only on its non-zero pattern (``rows``, ``cols`` from
 :meth:`StateLayout.transition_pattern`), and the products ``F P`` and
-``F (F P)^T`` run over that pattern alone: about 80 entries for 21 states
-instead of 441.
+``F (F P)^T`` run over that pattern alone: about 90 entries for 21 states
+instead of 441.  The kernel fills the navigation-error entries and the
+couplings of the four inertial-sensor roles at every epoch; every other
+entry is a constant declared by a block, written once per call from
+``(crow, ccol, cval)``.
 
 Error model (x = estimate - truth; phi: ``C_nb_est = (I - [phi x]) C_nb``),
-after Groves 2013 eq. 14.64 and Savage 2000 ch. 12, written for land and air
-vehicles (position error in NED metres):
+after Groves 2013 eq. 14.64-14.71, position error in NED metres:
 
-* ``d pos = vel``
-* ``d vel = [f_n x] phi - (2 w_ie + w_en) x vel + (2 g / R) pos_D e_D
-  - C_nb ba - C_nb diag(f_b) sa``
-* ``d phi = -w_in x phi + d w_en(vel) + C_nb bg + C_nb diag(w_b) sg``
-* ``d b = -b / tau`` for each sensor-error block (random walk when tau = inf).
+* ``d pN = vN + (vN pD - vD pN) / R_N``,
+  ``d pE = vE + (vE tanL pN) / R_N + vE pD / R_E - (vD / R_E + vN tanL / R_N) pE``;
+* ``d vel = [f_n x] phi - (2 w_ie + w_en) x vel + v x d w_en(vel)
+  - (d g / d h) pD - C_nb ba - C_nb diag(f_b) sa``;
+* ``d phi = -w_in x phi + d w_en(vel) + C_nb bg + C_nb diag(w_b) sg``;
+* blocks' own constant entries (``-1 / tau`` of Gauss-Markov states, clock
+  drift into bias, ...).
+
+Dropped on purpose: the couplings of the position error into the Earth and
+transport rates, the Coriolis term and gravity's latitude dependence (all
+below 1e-8 in SI units for speeds under 300 m/s: ``2 W v / R``, ``v^2 / R^2``,
+``d g / d lat / R``); the finite-difference test of F bounds them.
 """
 
 from __future__ import annotations
@@ -30,91 +39,119 @@ import numpy as np
 from numba import njit
 
 from .. import earth
-from ..strapdown._kernels import _qmul_s, _radii, _rv_quat, _store_unit, ned_step
+from ..earth import gravity_down_dh, gravity_north_dh, principal_radii
+from ..rotations import qmul, quat_dcm, rotvec_quat
+from ..strapdown.kernels import ned_step, store_unit
 
 W_IE = earth.OMEGA_IE
-# indices into the layout array
-I_POS, I_VEL, I_ATT, I_BG, I_BA, I_SG, I_SA, I_LEVER, I_N = 0, 1, 2, 3, 4, 5, 6, 7, 8
+# kernel index array (StateLayout.kernel_index): state starts of the sensor
+# roles, their starts in aux, the state size
+X_BG, X_BA, X_SG, X_SA, A_BG, A_BA, A_SG, A_SA, N_STATES = 0, 1, 2, 3, 4, 5, 6, 7, 8
+P0, V0, T0 = 0, 3, 6  # the navigation blocks' fixed starts
+
+
+@njit(cache=True, inline="always")
+def dcm_into(q, C):
+    """``C <- C(q)`` (3, 3)."""
+    c = quat_dcm(q[0], q[1], q[2], q[3])
+    C[0, 0], C[0, 1], C[0, 2] = c[0], c[1], c[2]
+    C[1, 0], C[1, 1], C[1, 2] = c[3], c[4], c[5]
+    C[2, 0], C[2, 1], C[2, 2] = c[6], c[7], c[8]
 
 
 @njit(cache=True)
-def _dcm(q, C):
-    q0, q1, q2, q3 = q[0], q[1], q[2], q[3]
-    C[0, 0] = q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3
-    C[0, 1] = 2 * (q1 * q2 - q0 * q3)
-    C[0, 2] = 2 * (q1 * q3 + q0 * q2)
-    C[1, 0] = 2 * (q1 * q2 + q0 * q3)
-    C[1, 1] = q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3
-    C[1, 2] = 2 * (q2 * q3 - q0 * q1)
-    C[2, 0] = 2 * (q1 * q3 - q0 * q2)
-    C[2, 1] = 2 * (q2 * q3 + q0 * q1)
-    C[2, 2] = q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3
+def fill_transition(F, kidx, lla, v_n, C, f_b, w_b):
+    """Write the epoch-dependent entries of the continuous-time F.
 
-
-@njit(cache=True)
-def _skew_into(F, r, c, a0, a1, a2, sign):
-    F[r, c + 1] = -a2 * sign
-    F[r, c + 2] = a1 * sign
-    F[r + 1, c] = a2 * sign
-    F[r + 1, c + 2] = -a0 * sign
-    F[r + 2, c] = -a1 * sign
-    F[r + 2, c + 1] = a0 * sign
-
-
-@njit(cache=True)
-def fill_transition(F, idx, lla, v_n, C, f_b, w_b, tau_inv):
-    """Write the non-zero entries of the continuous-time F for this epoch."""
+    Parameters
+    ----------
+    F : (n, n) ndarray
+        Written in place on the navigation rows and the sensor couplings;
+        other entries are left as they are (constants).
+    kidx : (9,) int64
+        :meth:`StateLayout.kernel_index`.
+    lla, v_n : (3,) ndarray
+        Navigation state (rad, rad, m; m/s).
+    C : (3, 3) ndarray
+        ``C_nb``.
+    f_b, w_b : (3,) ndarray
+        Corrected specific force [m/s^2] and angular rate [rad/s].
+    """
     lat, h = lla[0], lla[2]
-    rn, re = _radii(lat, h)
+    rn, re = principal_radii(lat, h)
     sl, cl = math.sin(lat), math.cos(lat)
     tl = sl / cl
-    vn, ve = v_n[0], v_n[1]
+    vn, ve, vd = v_n[0], v_n[1], v_n[2]
     wie0, wie2 = W_IE * cl, -W_IE * sl
     wen0, wen1, wen2 = ve / re, -vn / rn, -ve * tl / re
-    p, v, a = idx[I_POS], idx[I_VEL], idx[I_ATT]
+    p, v, a = P0, V0, T0
+    # position: velocity and the transport of the position error
     for i in range(3):
         F[p + i, v + i] = 1.0
-    # gravity gradient on the down channel: d g_D / d pos_D = 2 g / R
-    g = 9.80665
-    F[v + 2, p + 2] = 2.0 * g / math.sqrt(rn * re)
-    # velocity: Coriolis/transport and specific force
-    _skew_into(F, v, v, 2 * wie0 + wen0, wen1, 2 * wie2 + wen2, -1.0)
+    F[p + 0, p + 0] = -vd / rn
+    F[p + 0, p + 2] = vn / rn
+    F[p + 1, p + 0] = ve * tl / rn
+    F[p + 1, p + 1] = -(vd / re + vn * tl / rn)
+    F[p + 1, p + 2] = ve / re
+    # gravity with height (x_D = -(h_est - h_true))
+    F[v + 0, p + 2] = -gravity_north_dh(lat, h)
+    F[v + 2, p + 2] = -gravity_down_dh(lat, h)
+    # velocity: -(2 w_ie + w_en) x dv + v x d w_en(dv)
+    w0, w1, w2 = 2.0 * wie0 + wen0, wen1, 2.0 * wie2 + wen2
+    F[v + 0, v + 0] = vd / rn
+    F[v + 0, v + 1] = w2 - ve * tl / re
+    F[v + 0, v + 2] = -w1
+    F[v + 1, v + 0] = -w2
+    F[v + 1, v + 1] = (vd + vn * tl) / re
+    F[v + 1, v + 2] = w0
+    F[v + 2, v + 0] = w1 - vn / rn
+    F[v + 2, v + 1] = -w0 - ve / re
+    # velocity: specific force, [f_n x] phi
     f0 = C[0, 0] * f_b[0] + C[0, 1] * f_b[1] + C[0, 2] * f_b[2]
     f1 = C[1, 0] * f_b[0] + C[1, 1] * f_b[1] + C[1, 2] * f_b[2]
     f2 = C[2, 0] * f_b[0] + C[2, 1] * f_b[1] + C[2, 2] * f_b[2]
-    _skew_into(F, v, a, f0, f1, f2, 1.0)
-    # attitude: frame rate and transport-rate error
-    _skew_into(F, a, a, wie0 + wen0, wen1, wie2 + wen2, -1.0)
+    F[v + 0, a + 1] = -f2
+    F[v + 0, a + 2] = f1
+    F[v + 1, a + 0] = f2
+    F[v + 1, a + 2] = -f0
+    F[v + 2, a + 0] = -f1
+    F[v + 2, a + 1] = f0
+    # attitude: -w_in x phi and the transport-rate error
+    u0, u1, u2 = wie0 + wen0, wen1, wie2 + wen2
+    F[a + 0, a + 1] = u2
+    F[a + 0, a + 2] = -u1
+    F[a + 1, a + 0] = -u2
+    F[a + 1, a + 2] = u0
+    F[a + 2, a + 0] = u1
+    F[a + 2, a + 1] = -u0
     F[a + 0, v + 1] = 1.0 / re
     F[a + 1, v + 0] = -1.0 / rn
     F[a + 2, v + 1] = -tl / re
-    ba, bg, sa, sg = idx[I_BA], idx[I_BG], idx[I_SA], idx[I_SG]
+    ba, bg, sa, sg = kidx[X_BA], kidx[X_BG], kidx[X_SA], kidx[X_SG]
     for i in range(3):
         for j in range(3):
-            F[v + i, ba + j] = -C[i, j]
-            F[a + i, bg + j] = C[i, j]
+            if ba >= 0:
+                F[v + i, ba + j] = -C[i, j]
+            if bg >= 0:
+                F[a + i, bg + j] = C[i, j]
             if sa >= 0:
                 F[v + i, sa + j] = -C[i, j] * f_b[j]
             if sg >= 0:
                 F[a + i, sg + j] = C[i, j] * w_b[j]
-    n = idx[I_N]
-    for i in range(n):
-        if tau_inv[i] != 0.0:
-            F[i, i] = -tau_inv[i]
 
 
 @njit(cache=True, fastmath={"contract"})
 def propagate_covariance(P, F, rows, cols, active, dt, q_psd, A, B, second_order):
     """``P <- (I + F dt) P (I + F dt)^T + diag(q_psd) dt`` over F's pattern.
 
-    ``active`` lists the rows of F that hold any pattern entry (9 of 21 with
-    random-walk sensor errors).  ``A = F P`` is non-zero only on those rows,
-    so ``A + A^T`` touches only their rows and columns and ``F P F^T`` only
-    the active-by-active block: the update costs O(pattern * n + active^2)
-    instead of O(n^2).  Without ``second_order`` the ``dt^2 F P F^T`` term is
-    dropped (Euler integration of the Riccati equation): cheaper, but not
-    guaranteed positive semi-definite when uncertainties are large (a MEMS car
-    run lost positiveness at 177 s), so the filter keeps it.
+    ``active`` lists the rows of F that hold any pattern entry.  ``A = F P``
+    is non-zero only on those rows, so ``A + A^T`` touches only their rows and
+    columns and ``F P F^T`` only the active-by-active block: the update costs
+    O(pattern * n + active^2) instead of O(n^2).  Without ``second_order`` the
+    ``dt^2 F P F^T`` term is dropped (Euler integration of the Riccati
+    equation): cheaper, but not guaranteed positive semi-definite when
+    uncertainties are large (a MEMS car run lost positiveness at 177 s), so the
+    filter keeps it.
     """
     n = P.shape[0]
     na = active.shape[0]
@@ -176,34 +213,71 @@ def _sparse_step(M, F, rows, cols, dt, tmp):
 
 
 @njit(cache=True)
-def apply_correction(lla, v_n, q_nb, x, idx, sign, out_lla, out_v, out_q):
+def apply_correction(lla, v_n, q_nb, x, sign, out_lla, out_v, out_q):
     """Navigation state corrected by ``sign * x`` (sign=1: subtract the
-    estimated errors, as closed-loop feedback and open-loop output both do).
-    The outputs may be the inputs themselves (in-place feedback)."""
-    p, v, a = idx[I_POS], idx[I_VEL], idx[I_ATT]
+    estimated errors, as closed-loop feedback and open-loop output both do;
+    sign=-1 adds them, making an erroneous state from a true one).  The
+    outputs may be the inputs themselves (in-place feedback)."""
+    p, v, a = P0, V0, T0
     lat, lon, h = lla[0], lla[1], lla[2]
-    rn, re = _radii(lat, h)
+    rn, re = principal_radii(lat, h)
     out_lla[0] = lat - sign * x[p] / rn
     out_lla[1] = lon - sign * x[p + 1] / (re * math.cos(lat))
     out_lla[2] = h + sign * x[p + 2]
     for i in range(3):
         out_v[i] = v_n[i] - sign * x[v + i]
-    a0, a1, a2, a3 = _rv_quat(sign * x[a], sign * x[a + 1], sign * x[a + 2])
-    r0, r1, r2, r3 = _qmul_s(a0, a1, a2, a3, q_nb[0], q_nb[1], q_nb[2], q_nb[3])
-    _store_unit(out_q, r0, r1, r2, r3)
+    a0, a1, a2, a3 = rotvec_quat(sign * x[a], sign * x[a + 1], sign * x[a + 2])
+    r0, r1, r2, r3 = qmul(a0, a1, a2, a3, q_nb[0], q_nb[1], q_nb[2], q_nb[3])
+    store_unit(out_q, r0, r1, r2, r3)
+
+
+@njit(cache=True, inline="always")
+def correct_increments(kidx, aux, dth_raw, dv_raw, dt, dth, dv, w_b, f_b):
+    """Sensor corrections of one interval: ``(raw - bias dt) / (1 + scale)``,
+    and the corrected rate and specific force."""
+    abg, aba, asg, asa = kidx[A_BG], kidx[A_BA], kidx[A_SG], kidx[A_SA]
+    for i in range(3):
+        g_sf = 1.0 + aux[asg + i] if asg >= 0 else 1.0
+        a_sf = 1.0 + aux[asa + i] if asa >= 0 else 1.0
+        bg = aux[abg + i] if abg >= 0 else 0.0
+        ba = aux[aba + i] if aba >= 0 else 0.0
+        dth[i] = (dth_raw[i] - bg * dt) / g_sf
+        dv[i] = (dv_raw[i] - ba * dt) / a_sf
+        w_b[i] = dth[i] / dt
+        f_b[i] = dv[i] / dt
 
 
 @njit(cache=True)
-def propagate(t, dth_all, dv_all, k0, k1, lla, v_n, q_nb, carry, coning, corr, x, P, q_psd, tau_inv,
-              idx, rows, cols, active, want_phi, Phi, open_loop, out_lla, out_v, out_q, out_sig, out_corr, w_last,
-              second_order=True):
+def propagate(imu, nav, filt, model, out, k0, k1, flags):
     """Integrate IMU rows ``k0 .. k1-1`` with covariance propagation.
 
-    ``corr`` holds the sensor-error estimates ``[bg, ba, sg, sa]`` applied to
-    the raw increments.  ``w_last`` receives the last corrected body rate.
+    Parameters
+    ----------
+    imu : tuple ``(t, dtheta_b, dv_b)``
+        The whole IMU log.
+    nav : tuple ``(lla, v_n, q_nb, carry)``
+        Navigation state and mechanization carry, advanced in place.
+    filt : tuple ``(x, P, aux, Phi)``
+        Error state (propagated in open loop only), covariance, auxiliary
+        estimates (applied to the raw increments) and the accumulated
+        transition (when ``want_phi``).
+    model : tuple ``(kidx, q_psd, rows, cols, active, crow, ccol, cval)``
+        Layout index, process noise, F pattern and active rows, constant
+        entries of F.
+    out : tuple ``(lla, v_n, q_nb, var, aux)``
+        Per-row outputs; ``var`` receives the variances of every state.
+    flags : tuple ``(coning, want_phi, open_loop, second_order)``
     """
-    n = idx[I_N]
+    t, dth_all, dv_all = imu
+    lla, v_n, q_nb, carry = nav
+    x, P, aux, Phi = filt
+    kidx, q_psd, rows, cols, active, crow, ccol, cval = model
+    out_lla, out_v, out_q, out_var, out_aux = out
+    coning, want_phi, open_loop, second_order = flags
+    n = kidx[N_STATES]
     F = np.zeros((n, n))
+    for e in range(crow.shape[0]):
+        F[crow[e], ccol[e]] = cval[e]
     A = np.empty((n, n))
     B = np.zeros((n, n))
     tmp = np.empty((n, n))
@@ -213,25 +287,19 @@ def propagate(t, dth_all, dv_all, k0, k1, lla, v_n, q_nb, carry, coning, corr, x
     dth = np.empty(3)
     dv = np.empty(3)
     f_b = np.empty(3)
-    w_b = np.empty(3)
+    w_b = np.zeros(3)
     o_lla = np.empty(3)
     o_v = np.empty(3)
     o_q = np.empty(4)
-    has_sf = idx[I_SG] >= 0
     no_gains = np.zeros(2)
+    n_aux = aux.shape[0]
     for k in range(k0, k1):
         dt = t[k] - carry[0]
-        for i in range(3):
-            g_sf = 1.0 + corr[6 + i] if has_sf else 1.0
-            a_sf = 1.0 + corr[9 + i] if has_sf else 1.0
-            dth[i] = (dth_all[k, i] - corr[i] * dt) / g_sf
-            dv[i] = (dv_all[k, i] - corr[3 + i] * dt) / a_sf
-            w_b[i] = dth[i] / dt
-            f_b[i] = dv[i] / dt
-        _dcm(q_nb, C)
+        correct_increments(kidx, aux, dth_all[k], dv_all[k], dt, dth, dv, w_b, f_b)
+        dcm_into(q_nb, C)
         ned_step(dth, dv, dt, lla, v_n, q_nb, carry, coning, 0, 0.0, no_gains)
         carry[0] = t[k]
-        fill_transition(F, idx, lla, v_n, C, f_b, w_b, tau_inv)
+        fill_transition(F, kidx, lla, v_n, C, f_b, w_b)
         propagate_covariance(P, F, rows, cols, active, dt, q_psd, A, B, second_order)
         if open_loop:
             for i in range(n):
@@ -242,7 +310,7 @@ def propagate(t, dth_all, dv_all, k0, k1, lla, v_n, q_nb, carry, coning, corr, x
         if want_phi:
             _sparse_step(Phi, F, rows, cols, dt, tmp)
         if open_loop:
-            apply_correction(lla, v_n, q_nb, x, idx, 1.0, o_lla, o_v, o_q)
+            apply_correction(lla, v_n, q_nb, x, 1.0, o_lla, o_v, o_q)
             for i in range(3):
                 out_lla[k, i] = o_lla[i]
                 out_v[k, i] = o_v[i]
@@ -254,9 +322,7 @@ def propagate(t, dth_all, dv_all, k0, k1, lla, v_n, q_nb, carry, coning, corr, x
                 out_v[k, i] = v_n[i]
             for i in range(4):
                 out_q[k, i] = q_nb[i]
-        for i in range(9):
-            out_sig[k, i] = P[i, i]  # variances; the caller takes the square roots in one pass
-        for i in range(corr.shape[0]):
-            out_corr[k, i] = corr[i]
-    for i in range(3):
-        w_last[i] = w_b[i]
+        for i in range(n):
+            out_var[k, i] = P[i, i]  # variances; the caller takes the square roots in one pass
+        for i in range(n_aux):
+            out_aux[k, i] = aux[i]

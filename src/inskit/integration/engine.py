@@ -4,156 +4,94 @@ Schemes (SYSTEM.md §2 table 2-2 and §3, source 004 figures 1 and 2):
 
 * ``"closed"``: loosely coupled, closed loop.  After every update the error
   estimates are fed back into the mechanization (position, velocity,
-  attitude) and into the sensor corrections (biases, scale factors), and the
-  error state is reset to zero.  The correction survives an outage.
+  attitude) and into every block's estimate (biases, scale factors, lever
+  arm, ...: each block says how), and the error state is reset to zero.  The
+  correction survives an outage.
 * ``"open"``: loosely coupled, open loop.  The INS runs free on the raw
   sensors; the filter's error estimate is propagated and subtracted from the
   INS output only; nothing is fed back.
-* ``"uncoupled"``: no filter: every GNSS fix resets the INS position (and
-  velocity, when the GNSS gives one).
+
+The uncoupled scheme ("GNSS resets the INS") has no filter: it is the plain
+function :func:`inskit.integration.uncoupled.run_uncoupled`.
+
+The loop knows the layout only through :class:`StateLayout` and the
+measurements only through the protocol of :mod:`.measurements`.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
 
-from .. import earth
-from .. import rotations as rot
 from ..errors import InputError
-from ..filters.kalman import FilterDivergence, check_covariance, joseph_update
+from ..filters.kalman import FilterDivergence, check_covariance, gate_rows, joseph_update
+from ..rotations import dcm_from_quat
 from ..types import ImuData, NavSolution, NavState
 from . import _kernel as K
+from .blocks import InitialUncertainty, SensorNoise, StateBlock, ins_blocks
 from .layout import StateLayout
-from .measurements import GnssPosition, GnssVelocity, UpdateContext, ned_difference
+from .measurements import UpdateContext
 
-SCHEMES = ("closed", "open", "uncoupled")
-
-
-@dataclass(frozen=True)
-class SensorNoise:
-    """Continuous-time noise of the inertial sensors (SI units).
-
-    Attributes
-    ----------
-    gyro_arw : float
-        Angle random walk [rad/s/sqrt(Hz)] (= rad/sqrt(s)).
-    accel_vrw : float
-        Velocity random walk [m/s^2/sqrt(Hz)].
-    gyro_bias_sigma, accel_bias_sigma : float
-        Steady-state sigma of the first-order Gauss-Markov biases [rad/s],
-        [m/s^2]; with ``bias_tau_s = inf`` they are the random-walk PSDs
-        [rad/s^2/sqrt(Hz)], [m/s^3/sqrt(Hz)] instead.
-    bias_tau_s : float
-        Correlation time of the biases [s]; ``inf`` for random walk.
-    scale_sigma : float
-        Random-walk PSD of scale-factor errors [1/sqrt(s)].
-    """
-
-    gyro_arw: float
-    accel_vrw: float
-    gyro_bias_sigma: float
-    accel_bias_sigma: float
-    bias_tau_s: float = np.inf
-    scale_sigma: float = 1e-6
-    time_offset_rw: float = 1e-6     # random walk of the IMU-GNSS time offset [s/sqrt(s)]
-
-
-@dataclass(frozen=True)
-class InitialUncertainty:
-    """1-sigma initial errors (SI units)."""
-
-    pos_m: tuple = (1.0, 1.0, 1.0)
-    vel_m_s: float = 0.1
-    roll_pitch_rad: float = np.radians(1.0)
-    yaw_rad: float = np.radians(5.0)
-    gyro_bias: float = np.radians(0.05)
-    accel_bias: float = 0.1
-    scale: float = 0.01
-    lever_m: float = 0.1
-    time_offset_s: float = 0.05
+SCHEMES = ("closed", "open")
+_default_feedback = StateBlock.feedback
+#: blocks whose sigmas go into the named solution columns by default
+NAV_SIGMA_BLOCKS = ("pos", "vel", "att")
 
 
 @dataclass(frozen=True)
 class FilterSettings:
-    """Everything the loop needs besides data and measurements."""
+    """Everything the loop needs besides data and measurements.
 
-    layout: StateLayout = StateLayout()
-    noise: SensorNoise = SensorNoise(1e-3, 1e-2, 1e-5, 1e-4)
-    initial: InitialUncertainty = InitialUncertainty()
+    Attributes
+    ----------
+    layout : StateLayout
+        The error state (its blocks carry their own noise, sigmas and
+        initial estimates).
+    scheme : {"closed", "open"}
+    gate_probability : float or None
+        Chi-square gate of the innovations (None: no gating).
+    gate_max_consecutive : int or None
+        After this many consecutive rejections of one measurement the next is
+        applied ungated: a run of rejections means the filter is lost (say
+        after an outage), not that every measurement is an outlier.
+    coning : bool
+    smoother_node_s : float
+        Spacing of the extra smoother nodes between updates [s].
+    covariance_second_order : bool
+        Keep the ``F P F^T dt^2`` term of ``Phi P Phi^T``.  Dropping it (Euler
+        steps) is not positive semi-definite when uncertainties are large: a
+        simulated MEMS car lost positiveness after 177 s without it.
+    """
+
+    layout: StateLayout = field(default_factory=StateLayout)
     scheme: str = "closed"
     gate_probability: float | None = 0.9999
-    #: after this many consecutive rejections of one measurement the next is
-    #: applied ungated: a run of rejections means the filter is lost (say after
-    #: an outage), not that every measurement is an outlier
     gate_max_consecutive: int | None = 3
-    lever_arm_b: tuple = (0.0, 0.0, 0.0)
-    gyro_bias0: tuple = (0.0, 0.0, 0.0)
-    accel_bias0: tuple = (0.0, 0.0, 0.0)
-    time_offset0: float = 0.0
     coning: bool = True
     smoother_node_s: float = 0.25
-    #: keep the F P F^T dt^2 term of Phi P Phi^T.  Dropping it (Euler steps)
-    #: changes a static run's sigmas by ~1e-6 after an hour, but it is not
-    #: positive semi-definite when uncertainties are large: a simulated MEMS
-    #: car lost positiveness after 177 s without it.  Off only for experiments.
     covariance_second_order: bool = True
 
     def __post_init__(self):
+        if self.scheme == "uncoupled":
+            raise InputError("the uncoupled scheme has no filter: use inskit.integration.run_uncoupled")
         if self.scheme not in SCHEMES:
             raise InputError(f"filter scheme must be one of {SCHEMES}, got {self.scheme!r}")
-        n = self.noise
-        for name in ("gyro_arw", "accel_vrw", "gyro_bias_sigma", "accel_bias_sigma"):
-            if not getattr(n, name) > 0:
-                raise InputError(f"noise.{name} must be > 0, got {getattr(n, name)}")
-        if not n.bias_tau_s > 0:
-            raise InputError(f"noise.bias_tau_s must be > 0 (inf for random walk), got {n.bias_tau_s}")
-        i = self.initial
-        for name in ("vel_m_s", "roll_pitch_rad", "yaw_rad", "gyro_bias", "accel_bias", "scale", "lever_m"):
-            if not getattr(i, name) > 0:
-                raise InputError(f"initial uncertainty {name} must be > 0, got {getattr(i, name)}")
-        if not all(s > 0 for s in i.pos_m):
-            raise InputError(f"initial position sigmas must be > 0, got {i.pos_m}")
+        if not isinstance(self.layout, StateLayout):
+            raise InputError(f"FilterSettings.layout must be a StateLayout, got {type(self.layout).__name__}")
 
-    def process_noise(self):
-        """Diagonal PSDs ``q`` and inverse correlation times of every state."""
-        lay, n = self.layout, self.noise
-        q = np.zeros(lay.size)
-        tau_inv = np.zeros(lay.size)
-        q[lay.slice("vel")] = n.accel_vrw**2
-        q[lay.slice("att")] = n.gyro_arw**2
-        gm = np.isfinite(n.bias_tau_s)
-        for b, s in (("bg", n.gyro_bias_sigma), ("ba", n.accel_bias_sigma)):
-            if gm:
-                q[lay.slice(b)] = 2.0 * s**2 / n.bias_tau_s
-                tau_inv[lay.slice(b)] = 1.0 / n.bias_tau_s
-            else:
-                q[lay.slice(b)] = s**2
-        for b in ("sg", "sa"):
-            if lay.slice(b) is not None:
-                q[lay.slice(b)] = n.scale_sigma**2
-        if lay.time_offset:
-            q[lay.slice("dt")] = n.time_offset_rw**2
-        return q, tau_inv
-
-    def initial_covariance(self):
-        lay, i = self.layout, self.initial
-        d = np.zeros(lay.size)
-        d[lay.slice("pos")] = np.asarray(i.pos_m, float) ** 2
-        d[lay.slice("vel")] = i.vel_m_s**2
-        a = lay.slice("att")
-        d[a] = [i.roll_pitch_rad**2, i.roll_pitch_rad**2, i.yaw_rad**2]
-        d[lay.slice("bg")] = i.gyro_bias**2
-        d[lay.slice("ba")] = i.accel_bias**2
-        for b in ("sg", "sa"):
-            if lay.slice(b) is not None:
-                d[lay.slice(b)] = i.scale**2
-        if lay.lever_arm:
-            d[lay.slice("lever")] = i.lever_m**2
-        if lay.time_offset:
-            d[lay.slice("dt")] = i.time_offset_s**2
-        return np.diag(d)
+    @classmethod
+    def standard(cls, noise: SensorNoise = SensorNoise(1e-3, 1e-2, 1e-5, 1e-4),
+                 initial: InitialUncertainty = InitialUncertainty(), *, scale_factors=False, lever_arm=False,
+                 time_offset=False, lever_arm_b=(0.0, 0.0, 0.0), gyro_bias0=(0.0, 0.0, 0.0),
+                 accel_bias0=(0.0, 0.0, 0.0), time_offset0=0.0, extra_blocks=(), **kw):
+        """Settings with the standard INS blocks (:func:`.blocks.ins_blocks`)
+        plus ``extra_blocks``."""
+        blocks = ins_blocks(noise, initial, scale_factors=scale_factors, lever_arm=lever_arm,
+                            time_offset=time_offset, lever_arm_b=lever_arm_b, gyro_bias0=gyro_bias0,
+                            accel_bias0=accel_bias0, time_offset0=time_offset0)
+        return cls(layout=StateLayout(list(blocks) + list(extra_blocks)), **kw)
 
 
 @dataclass
@@ -168,16 +106,50 @@ class SmootherStore:
 
 
 @dataclass
-class FilterOutput:
-    """Result of a filter run.
+class Track:
+    """A navigation solution with the filter's estimates, as arrays.
 
     Attributes
     ----------
-    solution : NavSolution
-        At every IMU sample; ``extra`` holds ``sigma_*`` columns and the
-        sensor-error estimates (``bg_*_rad_s``, ``ba_*_m_s2``, ...).
+    nav : NavSolution
+        Position, velocity, attitude at every IMU sample (no extra columns).
+    aux : (N, layout.aux_size) ndarray
+        Estimates of the blocks that carry one, held between updates.
+    sigma : (N, layout.size) ndarray
+        1-sigma of every state.
+    layout : StateLayout
+    """
+
+    nav: NavSolution
+    aux: np.ndarray
+    sigma: np.ndarray
+    layout: StateLayout
+
+    def estimate(self, name):
+        """(N, size) history of block ``name``'s estimate."""
+        return self.aux[:, self.layout.aux_slice(name)]
+
+    def sigma_of(self, name):
+        """(N, size) 1-sigma history of block ``name``."""
+        return self.sigma[:, self.layout.slice(name)]
+
+    @cached_property
+    def solution(self) -> NavSolution:
+        """The solution with named columns (navigation sigmas and every
+        estimate) in ``extra``, for files, plots and tables."""
+        extra = self.layout.columns(self.aux, self.sigma, sigma_blocks=NAV_SIGMA_BLOCKS)
+        return NavSolution._trusted(self.nav.time, self.nav.lla, self.nav.v_n, self.nav.q_nb, extra)
+
+
+@dataclass
+class FilterOutput(Track):
+    """Result of a filter run: a :class:`Track` plus
+
+    Attributes
+    ----------
     counts : dict
-        Per measurement name: ``{"used": n, "rejected": n, "skipped": n}``.
+        Per measurement name: ``{"used": n, "rejected": n, "skipped": n}``
+        (``rejected`` counts updates with at least one rejected row).
     innovations : dict
         Per measurement name: arrays ``t``, ``nu`` (m, k), ``sigma`` (m, k),
         ``nis``, ``accepted``.
@@ -185,10 +157,9 @@ class FilterOutput:
     store : SmootherStore or None
     """
 
-    solution: NavSolution
-    counts: dict
-    innovations: dict
-    settings: FilterSettings
+    counts: dict = field(default_factory=dict)
+    innovations: dict = field(default_factory=dict)
+    settings: FilterSettings = None
     store: SmootherStore | None = None
 
 
@@ -199,19 +170,35 @@ def _nodes(imu, measurements, smoother_node_s, want_store):
     skipped = {}
     for m in measurements:
         tm = np.asarray(m.times(), float)
-        rows = m.rows()
+        rows = np.asarray(m.rows())
         k = np.searchsorted(t, tm, side="right") - 1
         ok = (k >= 1) & (tm <= t[-1])
         skipped[m.name] = int((~ok).sum())
-        for kk, tt, r in zip(k[ok], tm[ok], rows[ok]):
-            items.append((int(kk), float(tt), m, int(r)))
+        for kk, tt, r in zip(k[ok].tolist(), tm[ok].tolist(), rows[ok].tolist()):
+            items.append((kk, tt, m, r))
     if want_store and smoother_node_s > 0:
         grid = np.arange(t[0] + smoother_node_s, t[-1], smoother_node_s)
         kg = np.searchsorted(t, grid, side="right") - 1
-        for kk in np.unique(kg[kg >= 1]):
-            items.append((int(kk), float(t[kk]), None, -1))
+        for kk in np.unique(kg[kg >= 1]).tolist():
+            items.append((kk, float(t[kk]), None, -1))
     items.sort(key=lambda it: (it[0], it[1]))
     return items, skipped
+
+
+def _check_measurements(measurements):
+    names = [getattr(m, "name", None) for m in measurements]
+    for m, nm in zip(measurements, names):
+        for attr in ("times", "rows", "linearize"):
+            if not callable(getattr(m, attr, None)):
+                raise InputError(f"measurement {nm or type(m).__name__!r} lacks the method {attr}() of the "
+                                 "measurement protocol (inskit.integration.measurements)")
+        if not isinstance(nm, str) or not nm:
+            raise InputError(f"measurement {type(m).__name__} needs a non-empty `name`")
+        if getattr(m, "gating", "vector") not in ("vector", "row"):
+            raise InputError(f"measurement {nm!r}: gating must be 'vector' or 'row', got {m.gating!r}")
+    dup = {n for n in names if names.count(n) > 1}
+    if dup:
+        raise InputError(f"measurement names must be unique; repeated: {sorted(dup)}")
 
 
 def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSettings, *,
@@ -224,7 +211,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         ``imu.time[0]`` is the initial epoch.
     initial : NavState
         Initial IMU state at ``imu.time[0]``.
-    measurements : list of measurement plug-ins
+    measurements : list of measurement plug-ins (the protocol of :mod:`.measurements`)
     settings : FilterSettings
     smoother : bool
         Keep what the RTS smoother needs (closed loop only).
@@ -240,19 +227,25 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
                          f"({imu.time[0]:.3f} s)")
     if smoother and settings.scheme != "closed":
         raise InputError("the RTS smoother works on the closed-loop filter only")
+    _check_measurements(measurements)
     lay = settings.layout
     n = lay.size
-    idx = lay.kernel_index()
-    q_psd, tau_inv = settings.process_noise()
-    rows_pat, cols_pat = lay.transition_pattern(gauss_markov_biases=bool(np.any(tau_inv)))
+    q_psd = lay.process_noise()
+    rows_pat, cols_pat = lay.transition_pattern()
+    crow, ccol, cval = lay.constant_entries()
     active = np.unique(rows_pat)
-    P = settings.initial_covariance()
+    model = (lay.kernel_index(), q_psd, rows_pat, cols_pat, active, crow, ccol, cval)
+    P = lay.initial_covariance()
     x = np.zeros(n)
-    corr = np.zeros(12)
-    corr[0:3] = settings.gyro_bias0
-    corr[3:6] = settings.accel_bias0
-    lever = np.asarray(settings.lever_arm_b, float).copy()
-    offset = np.array([float(settings.time_offset0)])  # IMU-GNSS time offset estimate [s]
+    aux = lay.initial_aux()
+    aux_idx = lay.aux_state_index
+    custom_feedback = [(lay.slice(b.name), lay.aux_slice(b.name), b) for b in lay.blocks
+                       if b.has_estimate and type(b).feedback is not _default_feedback]
+    default_aux = np.ones(lay.aux_size, bool)
+    for _, sa, _ in custom_feedback:
+        default_aux[sa] = False
+    default_aux_idx = np.nonzero(default_aux)[0]
+    default_x_idx = aux_idx[default_aux_idx]
     lla, v_n, q_nb = initial.lla.copy(), initial.v_n.copy(), initial.q_nb.copy()
     carry = np.zeros(11)
     carry[0] = imu.time[0]
@@ -260,27 +253,32 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     out_lla = np.empty((N, 3))
     out_v = np.empty((N, 3))
     out_q = np.empty((N, 4))
-    out_sig = np.empty((N, 9))
-    out_corr = np.empty((N, 12))
-    w_last = np.zeros(3)
+    out_var = np.empty((N, n))
+    out_aux = np.empty((N, lay.aux_size))
+    w_raw = np.zeros(3)
     open_loop = settings.scheme == "open"
-    uncoupled = settings.scheme == "uncoupled"
     want_store = smoother
     store = SmootherStore() if want_store else None
     Phi = np.eye(n)
+    nav = (lla, v_n, q_nb, carry)
+    outs = (out_lla, out_v, out_q, out_var, out_aux)
+    imu_arrays = (imu.time, imu.dtheta_b, imu.dv_b)
+    eye_n = np.eye(n)
 
     def write_row(k):
         if open_loop:
-            K.apply_correction(lla, v_n, q_nb, x, idx, 1.0, out_lla[k], out_v[k], out_q[k])
+            K.apply_correction(lla, v_n, q_nb, x, 1.0, out_lla[k], out_v[k], out_q[k])
         else:
             out_lla[k], out_v[k], out_q[k] = lla, v_n, q_nb
-        out_sig[k] = P.diagonal()[:9]  # variances until the end of the run
-        out_corr[k] = corr
+        out_var[k] = P.diagonal()  # variances until the end of the run
+        out_aux[k] = aux
 
-    out_offset = np.full(N, np.nan) if lay.time_offset else None
+    def propagate(k0, k1, want_phi):
+        filt = (x, P, aux, Phi)
+        K.propagate(imu_arrays, nav, filt, model, outs, k0, k1,
+                    (settings.coning, want_phi, open_loop, settings.covariance_second_order))
+
     write_row(0)
-    if out_offset is not None:
-        out_offset[0] = offset[0]
     items, skipped = _nodes(imu, measurements, settings.smoother_node_s, want_store)
     counts = {m.name: {"used": 0, "rejected": 0, "skipped": skipped[m.name]} for m in measurements}
     innov = {m.name: {"t": [], "nu": [], "sigma": [], "nis": [], "accepted": []} for m in measurements}
@@ -288,44 +286,35 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     k_done = 1
     i = 0
     n_items = len(items)
+    t_imu = imu.time
     while i < n_items:
         k_end = items[i][0]
         j = i
         while j < n_items and items[j][0] == k_end:
             j += 1
         if k_end + 1 > k_done:
-            K.propagate(imu.time, imu.dtheta_b, imu.dv_b, k_done, k_end + 1, lla, v_n, q_nb, carry, settings.coning,
-                        corr, x, P, q_psd, tau_inv, idx, rows_pat, cols_pat, active, want_store, Phi, open_loop,
-                        out_lla, out_v, out_q, out_sig, out_corr, w_last, settings.covariance_second_order)
+            propagate(k_done, k_end + 1, want_store)
             if progress is not None:
                 progress(k_end + 1 - k_done)
             k_done = k_end + 1
+            w_raw[:] = (imu.dtheta_b[k_end]) / (t_imu[k_end] - t_imu[k_end - 1])
         if want_store:
             store.k.append(k_end)
             store.P_minus.append(P.copy())
             store.Phi.append(Phi.copy())
-            Phi[:] = np.eye(n)
-        dx_total = np.zeros(n)
-        C_nb = np.empty((3, 3))
-        K._dcm(q_nb, C_nb)
+            Phi[:] = eye_n
+        dx_total = np.zeros(n) if want_store else None
+        C_nb = dcm_from_quat(q_nb)
         for _, tm, meas, row in items[i:j]:
             if meas is None:
                 continue
-            if uncoupled:
-                _reset_uncoupled(meas, row, lla, v_n, C_nb, lever, tm - imu.time[k_end], w_last)
-                counts[meas.name]["used"] += 1
-                continue
-            if lay.lever_arm:
-                lev = lever - (x[lay.slice("lever")] if open_loop else 0.0)
-            else:
-                lev = lever
             if open_loop:
                 o_lla, o_v, o_q = np.empty(3), np.empty(3), np.empty(4)
-                K.apply_correction(lla, v_n, q_nb, x, idx, 1.0, o_lla, o_v, o_q)
-                ctx = UpdateContext(tm, tm - imu.time[k_end], o_lla, o_v, rot.dcm_from_quat(o_q), w_last, lay, lev,
-                                    offset[0])
+                K.apply_correction(lla, v_n, q_nb, x, 1.0, o_lla, o_v, o_q)
+                ctx = UpdateContext(tm, tm - t_imu[k_end], o_lla, o_v, dcm_from_quat(o_q), w_raw, lay,
+                                    aux - x[aux_idx])
             else:
-                ctx = UpdateContext(tm, tm - imu.time[k_end], lla, v_n, C_nb, w_last, lay, lev, offset[0])
+                ctx = UpdateContext(tm, tm - t_imu[k_end], lla, v_n, C_nb, w_raw, lay, aux)
             lin = meas.linearize(ctx, row)
             if lin is None:
                 counts[meas.name]["skipped"] += 1
@@ -335,9 +324,18 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             streak = rejected_streak.get(meas.name, 0)
             if settings.gate_max_consecutive is not None and streak >= settings.gate_max_consecutive:
                 gate = None
+            rec = innov[meas.name]
+            if gate is not None and getattr(meas, "gating", "vector") == "row":
+                keep = gate_rows(P, nu, H, R, gate)
+                if not keep.all():
+                    counts[meas.name]["rejected"] += 1
+                    if not keep.any():
+                        rejected_streak[meas.name] = streak + 1
+                        continue
+                    nu, H, R = nu[keep], H[keep], R[np.ix_(keep, keep)]
+                gate = None
             res = joseph_update(P, nu, H, R, gate_probability=gate)
             rejected_streak[meas.name] = 0 if res.accepted else streak + 1
-            rec = innov[meas.name]
             rec["t"].append(tm)
             rec["nu"].append(res.innovation)
             rec["sigma"].append(np.sqrt(np.diag(res.S)))
@@ -351,72 +349,29 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             if open_loop:
                 x += res.dx
             else:
-                _feedback(res.dx, lay, idx, lla, v_n, q_nb, corr, lever, offset)
-                dx_total += res.dx
-                K._dcm(q_nb, C_nb)
-        check_covariance(P, f"at t = {imu.time[k_end]:.3f} s")
+                dx = res.dx
+                K.apply_correction(lla, v_n, q_nb, dx, 1.0, lla, v_n, q_nb)
+                aux[default_aux_idx] -= dx[default_x_idx]
+                for sx, sa, b in custom_feedback:
+                    b.feedback(aux[sa], dx[sx])
+                if want_store:
+                    dx_total += dx
+                C_nb = dcm_from_quat(q_nb)
+        check_covariance(P, f"at t = {t_imu[k_end]:.3f} s")
         if want_store:
             store.P_plus.append(P.copy())
             store.dx.append(dx_total)
         write_row(k_end)
-        if out_offset is not None:
-            out_offset[k_end] = offset[0]
         i = j
     if k_done < N:
-        K.propagate(imu.time, imu.dtheta_b, imu.dv_b, k_done, N, lla, v_n, q_nb, carry, settings.coning,
-                    corr, x, P, q_psd, tau_inv, idx, rows_pat, cols_pat, active, False, Phi, open_loop,
-                    out_lla, out_v, out_q, out_sig, out_corr, w_last, settings.covariance_second_order)
+        propagate(k_done, N, False)
         if progress is not None:
             progress(N - k_done)
     check_covariance(P, "at the end of the run")
     if not (np.isfinite(out_lla).all() and np.isfinite(out_v).all() and np.isfinite(out_q).all()):
         raise FilterDivergence("the navigation solution became NaN: the filter diverged")
-    np.sqrt(np.maximum(out_sig, 0.0, out=out_sig), out=out_sig)
-    extra = _extra_columns(out_sig, out_corr, lay)
-    if out_offset is not None:  # held between updates
-        idx_valid = np.maximum.accumulate(np.where(np.isfinite(out_offset), np.arange(N), 0))
-        extra["time_offset_s"] = out_offset[idx_valid]
-    sol = NavSolution._trusted(imu.time, out_lla, out_v, out_q, extra)
+    np.sqrt(np.maximum(out_var, 0.0, out=out_var), out=out_var)
+    nav_sol = NavSolution._trusted(imu.time, out_lla, out_v, out_q)
     innovations = {k: {kk: np.asarray(vv) for kk, vv in v.items()} for k, v in innov.items()}
-    return FilterOutput(sol, counts, innovations, settings, store)
+    return FilterOutput(nav_sol, out_aux, out_var, lay, counts, innovations, settings, store)
 
-
-def _extra_columns(sig, corr, lay):
-    names = ["sigma_n_m", "sigma_e_m", "sigma_d_m", "sigma_vn_m_s", "sigma_ve_m_s", "sigma_vd_m_s",
-             "sigma_att_n_rad", "sigma_att_e_rad", "sigma_att_d_rad"]
-    extra = {nm: sig[:, i] for i, nm in enumerate(names)}
-    for i, a in enumerate("xyz"):
-        extra[f"bg_{a}_rad_s"] = corr[:, i]
-        extra[f"ba_{a}_m_s2"] = corr[:, 3 + i]
-        if lay.scale_factors:
-            extra[f"sg_{a}"] = corr[:, 6 + i]
-            extra[f"sa_{a}"] = corr[:, 9 + i]
-    return extra
-
-
-def _feedback(dx, lay, idx, lla, v_n, q_nb, corr, lever, offset):
-    """Closed loop: remove the estimated errors from the navigation state and
-    the sensor corrections (in place)."""
-    K.apply_correction(lla, v_n, q_nb, dx, idx, 1.0, lla, v_n, q_nb)
-    corr[0:3] -= dx[lay.slice("bg")]
-    corr[3:6] -= dx[lay.slice("ba")]
-    if lay.scale_factors:
-        corr[6:9] -= dx[lay.slice("sg")]
-        corr[9:12] -= dx[lay.slice("sa")]
-    if lay.lever_arm:
-        lever -= dx[lay.slice("lever")]
-    if lay.time_offset:
-        offset -= dx[lay.slice("dt")]
-
-
-def _reset_uncoupled(meas, row, lla, v_n, C_nb, lever, dt, w_b):
-    """Uncoupled scheme: overwrite the INS position or velocity with GNSS."""
-    if isinstance(meas, GnssPosition):
-        target = meas.gnss.lla[row]
-        d = ned_difference(lla, target) + C_nb @ lever + v_n * dt
-        rn, re = earth.principal_radii(lla[0], lla[2])
-        lla[0] -= d[0] / rn
-        lla[1] -= d[1] / (re * np.cos(lla[0]))
-        lla[2] += d[2]
-    elif isinstance(meas, GnssVelocity):
-        v_n[:] = meas.gnss.v_n[row] - C_nb @ np.cross(w_b, lever)

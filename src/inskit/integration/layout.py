@@ -1,127 +1,219 @@
-"""The error-state layout: one object owns every index.
+"""The error-state layout: built from a list of blocks, owns every index.
 
-Error states are ``estimate - truth`` (SYSTEM.md §2; Groves 2013 §14.2):
-
-======  ====  ==========================================================
-block   size  meaning
-======  ====  ==========================================================
-pos     3     position error north, east, down [m]
-vel     3     velocity error in NED [m/s]
-att     3     attitude error phi [rad]: ``C_nb_est = (I - [phi x]) C_nb``
-bg      3     gyro bias error [rad/s]
-ba      3     accelerometer bias error [m/s^2]
-sg      3     gyro scale-factor error [-] (optional)
-sa      3     accelerometer scale-factor error [-] (optional)
-lever   3     IMU-to-antenna lever arm error, body axes [m] (optional)
-dt      1     IMU-GNSS time offset error [s] (optional): a GNSS time tag
-              ``t`` matches the INS at ``t + offset``
-======  ====  ==========================================================
-
-Nothing else in the package hard-codes a state index.
+Error states are ``estimate - truth`` (SYSTEM.md §2; Groves 2013 §14.2).  The
+layout places the blocks one after the other (the navigation blocks ``pos``,
+``vel``, ``att`` first, at 0, 3, 6), and places the blocks that carry an
+estimate (sensor errors, lever arm, offsets, clocks...) in one vector of
+auxiliary estimates ``aux``.  It builds, from what the blocks declare, the
+process noise, the initial covariance, the constant and epoch-dependent
+entries of F and their sparse pattern, and the reported names.  Nothing else
+in the package hard-codes a state index.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
 
-BLOCKS = ("pos", "vel", "att", "bg", "ba", "sg", "sa", "lever")  # the blocks the compiled kernel knows
-SIZES = {"pos": 3, "vel": 3, "att": 3, "bg": 3, "ba": 3, "sg": 3, "sa": 3, "lever": 3, "dt": 1}
+from ..errors import InputError
+from .blocks import NAV_ROLES, SENSOR_ROLES, StateBlock, ins_blocks
+
+#: order of the kernel index array: state starts of the sensor roles, their
+#: starts in ``aux``, then the state size
+KERNEL_ROLES = SENSOR_ROLES
 
 
-@dataclass(frozen=True)
 class StateLayout:
-    """Which optional blocks are in the filter, and where each block lives.
+    """The blocks of the error state and where each one lives.
 
     Parameters
     ----------
-    scale_factors : bool
-        Add gyro and accelerometer scale-factor errors (15 -> 21 states).
-    lever_arm : bool
-        Estimate the IMU-to-antenna lever arm.
-    time_offset : bool
-        Estimate the IMU-GNSS time offset (one state, a random constant or
-        slow random walk; the measurements carry its Jacobian).
+    blocks : sequence of StateBlock
+        The first three must have the roles ``pos``, ``vel``, ``att``; names
+        must be unique; each sensor role may appear once.
+
+    Examples
+    --------
+    >>> lay = StateLayout(ins_blocks(scale_factors=True))
+    >>> lay.size, lay.slice("sa")
+    (21, slice(18, 21, None))
     """
 
-    scale_factors: bool = False
-    lever_arm: bool = False
-    time_offset: bool = False
+    def __init__(self, blocks=None):
+        blocks = tuple(ins_blocks() if blocks is None else blocks)
+        for b in blocks:
+            if not isinstance(b, StateBlock):
+                raise InputError(f"a layout takes StateBlock objects, got {type(b).__name__}")
+        if len(blocks) < 3 or tuple(b.role for b in blocks[:3]) != NAV_ROLES:
+            raise InputError("a layout starts with the navigation blocks pos, vel, att (in this order)")
+        names = [b.name for b in blocks]
+        dup = {n for n in names if names.count(n) > 1}
+        if dup:
+            raise InputError(f"state block names must be unique; repeated: {sorted(dup)}")
+        roles = [b.role for b in blocks if b.role is not None]
+        dup = {r for r in roles if roles.count(r) > 1}
+        if dup:
+            raise InputError(f"each role may appear once in a layout; repeated: {sorted(dup)}")
+        if any(b.role in NAV_ROLES for b in blocks[3:]):
+            raise InputError("navigation blocks may appear only as the first three")
+        self.blocks = blocks
+        self._by_name = {b.name: b for b in blocks}
+        self._slices, self._aux = {}, {}
+        i = a = 0
+        for b in blocks:
+            self._slices[b.name] = slice(i, i + b.size)
+            i += b.size
+            if b.has_estimate:
+                self._aux[b.name] = slice(a, a + b.size)
+                a += b.size
+        self.size = i
+        self.aux_size = a
+        for b in blocks:
+            for (r, cb, c, _) in b.transition():
+                if cb not in self._by_name:
+                    raise InputError(f"state block {b.name!r} couples to block {cb!r}, which is not in the layout")
+                if not (0 <= r < b.size and 0 <= c < self._by_name[cb].size):
+                    raise InputError(f"state block {b.name!r}: transition entry ({r}, {cb}[{c}]) is out of range")
 
-    @cached_property
-    def blocks(self):
-        out = ["pos", "vel", "att", "bg", "ba"]
-        if self.scale_factors:
-            out += ["sg", "sa"]
-        if self.lever_arm:
-            out += ["lever"]
-        if self.time_offset:
-            out += ["dt"]
-        return tuple(out)
+    def __repr__(self):
+        return f"StateLayout([{', '.join(b.name for b in self.blocks)}], size={self.size})"
 
-    @cached_property
-    def size(self):
-        return sum(SIZES[b] for b in self.blocks)
+    # --- lookup -------------------------------------------------------------------
+    def __contains__(self, name):
+        return name in self._by_name
 
-    @cached_property
-    def _slices(self):
-        out, i = {}, 0
+    def block(self, name) -> StateBlock:
+        return self._by_name[name]
+
+    def slice(self, name):
+        """``slice`` of a block in the state vector; ``None`` if absent."""
+        return self._slices.get(name)
+
+    def aux_slice(self, name):
+        """``slice`` of a block's estimate in the ``aux`` vector; ``None`` if absent."""
+        return self._aux.get(name)
+
+    def by_role(self, role):
+        """The block with this role, or ``None``."""
         for b in self.blocks:
-            out[b] = slice(i, i + SIZES[b])
-            i += SIZES[b]
+            if b.role == role:
+                return b
+        return None
+
+    @property
+    def names(self):
+        """Names of the blocks, in order."""
+        return tuple(b.name for b in self.blocks)
+
+    def state_names(self):
+        """``block_axis`` for every state, in order."""
+        return [f"{b.name}_{a}" for b in self.blocks for a in b.axes]
+
+    # --- what the filter needs ---------------------------------------------------------
+    @cached_property
+    def aux_state_index(self):
+        """(aux_size,) int: the state index of every aux element."""
+        out = np.empty(self.aux_size, dtype=np.int64)
+        for name, s in self._aux.items():
+            out[s] = np.arange(self._slices[name].start, self._slices[name].stop)
         return out
 
-    def slice(self, block):
-        """``slice`` of a block in the state vector; ``None`` if absent."""
-        return self._slices.get(block)
+    def initial_aux(self):
+        """(aux_size,) the blocks' initial estimates."""
+        out = np.zeros(self.aux_size)
+        for name, s in self._aux.items():
+            out[s] = self._by_name[name].estimate0
+        return out
 
-    def start(self, block):
-        """First index of a block, or -1 if absent (for the compiled kernel)."""
-        s = self.slice(block)
-        return -1 if s is None else s.start
+    def initial_covariance(self):
+        """Diagonal ``P0`` from the blocks' ``sigma0``."""
+        return np.diag(np.concatenate([b.sigma0 for b in self.blocks]) ** 2)
+
+    def process_noise(self):
+        """(size,) diagonal PSDs ``q`` (``Q = diag(q) dt``)."""
+        return np.concatenate([b.psd for b in self.blocks])
 
     def kernel_index(self):
-        """int64 array ``[pos, vel, att, bg, ba, sg, sa, lever, size]`` of starts."""
-        return np.array([self.start(b) for b in BLOCKS] + [self.size], dtype=np.int64)
+        """int64 ``[x_bg, x_ba, x_sg, x_sa, a_bg, a_ba, a_sg, a_sa, size]``:
+        state and aux starts of the sensor roles (-1 if absent)."""
+        xs, aus = [], []
+        for role in KERNEL_ROLES:
+            b = self.by_role(role)
+            xs.append(-1 if b is None else self._slices[b.name].start)
+            aus.append(-1 if b is None else self._aux[b.name].start)
+        return np.array(xs + aus + [self.size], dtype=np.int64)
 
-    def names(self):
-        """Human-readable names of every state, in order."""
-        axes = {"pos": "NED", "vel": "NED", "att": "NED", "bg": "xyz", "ba": "xyz", "sg": "xyz", "sa": "xyz",
-                "lever": "xyz", "dt": ["s"]}
-        return [f"{b}_{a}" for b in self.blocks for a in axes[b]]
+    def constant_entries(self):
+        """``(rows, cols, values)`` of the blocks' constant F entries."""
+        r, c, v = [], [], []
+        for b in self.blocks:
+            s = self._slices[b.name]
+            for (i, cb, j, val) in b.transition():
+                r.append(s.start + i)
+                c.append(self._slices[cb].start + j)
+                v.append(float(val))
+        return np.array(r, np.int64), np.array(c, np.int64), np.array(v, float)
 
-    def transition_pattern(self, gauss_markov_biases=True):
+    def transition_pattern(self):
         """``(rows, cols)`` of the entries of F that can be non-zero.
 
         The compiled kernel multiplies only these, so the cost of the
         covariance propagation grows with them, not with ``size**2``.  Skew
-        blocks have zero diagonals; of the gravity-gradient block only
-        ``(vD, pD)`` is used; bias diagonals (``-1/tau``) exist only for
-        Gauss-Markov biases (``gauss_markov_biases``); scale factors are random
-        walks.
+        blocks have zero diagonals; of the position-to-velocity block only
+        the gravity terms ``(vN, pD)``, ``(vD, pD)`` are used; the rest comes
+        from the sensor roles and the blocks' constant entries.
         """
         n = self.size
         mask = np.zeros((n, n), dtype=bool)
-        p, v, a = self.slice("pos"), self.slice("vel"), self.slice("att")
+        p, v, a = 0, 3, 6
         off = ~np.eye(3, dtype=bool)
-        mask[p, v] = np.eye(3, dtype=bool)
-        mask[v.start + 2, p.start + 2] = True  # gravity gradient, down channel
-        mask[v, v] = off
-        mask[v, a] = off
-        mask[a, a] = off
-        mask[a.start + 0, v.start + 1] = True  # transport-rate error
-        mask[a.start + 1, v.start + 0] = True
-        mask[a.start + 2, v.start + 1] = True
-        mask[v, self.slice("ba")] = True
-        mask[a, self.slice("bg")] = True
-        if gauss_markov_biases:
-            for b in ("bg", "ba"):
-                s = self.slice(b)
-                mask[s, s] = np.eye(3, dtype=bool)
-        if self.scale_factors:
-            mask[v, self.slice("sa")] = True
-            mask[a, self.slice("sg")] = True
+        mask[p:p + 3, v:v + 3] = np.eye(3, dtype=bool)
+        mask[p + 0, [p + 0, p + 2]] = True          # pN: -vD/rn pN + vN/rn pD
+        mask[p + 1, [p + 0, p + 1, p + 2]] = True   # pE: transport of the east error
+        mask[v + 0, p + 2] = True                   # gravity, north and down, with height
+        mask[v + 2, p + 2] = True
+        mask[v:v + 3, v:v + 3] = off
+        mask[v + 0, v + 0] = mask[v + 1, v + 1] = True  # [v x] d w_en / d v
+        mask[v:v + 3, a:a + 3] = off
+        mask[a:a + 3, a:a + 3] = off
+        mask[a + 0, v + 1] = mask[a + 1, v + 0] = mask[a + 2, v + 1] = True  # transport-rate error
+        for role, rows in (("gyro_bias", a), ("accel_bias", v), ("gyro_scale", a), ("accel_scale", v)):
+            b = self.by_role(role)
+            if b is not None:
+                s = self._slices[b.name]
+                mask[rows:rows + 3, s] = True
+        r, c, _ = self.constant_entries()
+        mask[r, c] = True
         rows, cols = np.nonzero(mask)
         return rows.astype(np.int64), cols.astype(np.int64)
+
+    # --- reporting ----------------------------------------------------------------------
+    def estimate_names(self):
+        """Names of the aux elements, in order."""
+        out = []
+        for b in self.blocks:
+            if b.has_estimate:
+                out += b.estimate_names()
+        return out
+
+    def sigma_names(self):
+        """Names of the sigma of every state, in order."""
+        return [nm for b in self.blocks for nm in b.sigma_names()]
+
+    def columns(self, aux=None, sigma=None, sigma_blocks=None):
+        """Named columns ``{name: (N,) array}`` of estimates and sigmas (made
+        only for files and tables; the filter keeps arrays).  ``sigma_blocks``
+        limits the sigmas to these blocks (all by default)."""
+        out = {}
+        if sigma is not None:
+            for b in self.blocks:
+                if sigma_blocks is not None and b.name not in sigma_blocks:
+                    continue
+                s = self._slices[b.name]
+                for j, nm in zip(range(s.start, s.stop), b.sigma_names()):
+                    out[nm] = sigma[:, j]
+        if aux is not None:
+            for j, nm in enumerate(self.estimate_names()):
+                out[nm] = aux[:, j]
+        return out

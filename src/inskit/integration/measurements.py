@@ -1,34 +1,63 @@
-"""Measurement plug-ins of the integration filter.
+"""Measurements of the integration filter: a written protocol and its plug-ins.
 
-A measurement is any object with
+The protocol
+------------
+A measurement is any object with (:class:`Measurement`):
 
-* ``name`` (str), and ``times()``: the epochs [s] at which it has data;
-* ``linearize(ctx, row) -> (innovation, H, R)`` or ``None`` to skip.
+``name`` : str
+    Its key in counts and innovation records.
+``gating`` : ``"vector"`` or ``"row"``
+    Test the whole innovation vector against the chi-square gate, or each
+    row on its own (one satellite, say) and update with the rows that pass.
+``times() -> (m,) ndarray``
+    The epochs [s] at which it has data, in the IMU's time base.
+``rows() -> (m,) int ndarray``
+    The row of its own data belonging to each epoch (passed back below).
+``linearize(ctx, row) -> (innovation, H, R)`` or ``None`` to skip
+    ``innovation = h(estimate) - measured`` (k,), ``H`` (k, layout.size)
+    over the whole layout, ``R`` (k, k).  With error states
+    ``x = estimate - truth`` the innovation is ``H x + noise`` (SYSTEM.md §2,
+    where the loosely coupled ``z = P_INS - P_GPS`` with ``H = [I 0 0]`` in
+    this sign).
 
 ``ctx`` is an :class:`UpdateContext`: the navigation state at the IMU sample
-just before the measurement time, how far to extrapolate, the corrected body
-rate and the layout.  The filter loop knows nothing about GNSS, ZUPT or
-odometers; new aiding sources plug in here.
-
-Sign convention: ``innovation = h(estimate) - measured``, so that with error
-states ``x = estimate - truth`` it is ``H x + noise`` (SYSTEM.md §2, where the
-loosely coupled ``z = P_INS - P_GPS`` with ``H = [I 0 0]`` in this sign).
+just before the measurement time, how far to extrapolate, the raw and
+corrected body rate, the layout and the current estimates of every block that
+carries one (``ctx.estimate("lever")``).  The filter loop knows nothing about
+GNSS, ZUPT or odometers; new aiding sources plug in here.  Every H is checked
+against central finite differences of its own innovation over the fullest
+layout (``tests/test_integration_measurements.py``), using
+:func:`perturbed_context`.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
 from .. import earth
 from ..rotations import skew
 from ..types import GnssData
+from . import _kernel as K
 from .layout import StateLayout
 
 
-@dataclass
+@runtime_checkable
+class Measurement(Protocol):
+    """What the filter loop asks of an aiding measurement (see the module text)."""
+
+    name: str
+    gating: str
+
+    def times(self) -> np.ndarray: ...
+
+    def rows(self) -> np.ndarray: ...
+
+    def linearize(self, ctx: "UpdateContext", row: int): ...
+
+
 class UpdateContext:
     """What a measurement may use to linearize.
 
@@ -39,59 +68,116 @@ class UpdateContext:
     dt : float
         ``t`` minus the navigation state's time (>= 0, below one IMU step).
     lla, v_n : (3,) ndarray
-        IMU position and NED velocity.
+        IMU position [rad, rad, m] and NED velocity [m/s].
     C_nb : (3, 3) ndarray
-    omega_ib_b : (3,) ndarray
-        Corrected body rate [rad/s] over the last IMU interval.
+    omega_raw_b : (3,) ndarray
+        Raw (uncorrected) body rate [rad/s] over the last IMU interval.
     layout : StateLayout
-    lever_arm_b : (3,) ndarray
-        Current IMU-to-antenna lever arm estimate, body axes [m].
-    time_offset : float
-        Current IMU-GNSS time offset estimate [s]: a GNSS time tag ``t``
-        matches the INS at ``t + time_offset``.
+    aux : (layout.aux_size,) ndarray
+        Current estimates of the blocks that carry one.
     """
 
-    t: float
-    dt: float
-    lla: np.ndarray
-    v_n: np.ndarray
-    C_nb: np.ndarray
-    omega_ib_b: np.ndarray
-    layout: StateLayout
-    lever_arm_b: np.ndarray
-    time_offset: float = 0.0
+    __slots__ = ("t", "dt", "lla", "v_n", "C_nb", "omega_raw_b", "layout", "aux")
+
+    def __init__(self, t, dt, lla, v_n, C_nb, omega_raw_b, layout: StateLayout, aux):
+        self.t, self.dt, self.lla, self.v_n, self.C_nb = t, dt, lla, v_n, C_nb
+        self.omega_raw_b, self.layout, self.aux = omega_raw_b, layout, aux
+
+    def estimate(self, name, default=None):
+        """Current estimate of block ``name`` (a copy), or ``default`` when the
+        layout does not hold it."""
+        s = self.layout.aux_slice(name)
+        if s is None:
+            return default
+        return self.aux[s].copy()
+
+    def _role(self, role):
+        b = self.layout.by_role(role)
+        return None if b is None else self.aux[self.layout.aux_slice(b.name)]
+
+    @property
+    def gyro_scale_factor(self):
+        """``1 + s_g`` per axis (ones without a gyro scale-factor block)."""
+        s = self._role("gyro_scale")
+        return np.ones(3) if s is None else 1.0 + s
+
+    @property
+    def omega_ib_b(self):
+        """Corrected body rate [rad/s]: ``(raw - b_g) / (1 + s_g)``."""
+        b = self._role("gyro_bias")
+        w = self.omega_raw_b if b is None else self.omega_raw_b - b
+        return w / self.gyro_scale_factor
+
+
+def perturbed_context(ctx: UpdateContext, dx) -> UpdateContext:
+    """The context of an estimate whose error is larger by ``dx`` (layout.size,):
+    navigation state through the filter's own correction (with the sign
+    reversed), estimates ``aux + dx`` on their states.  For finite-difference
+    checks of H: ``innovation(perturbed) - innovation(ctx) ~ H dx``."""
+    dx = np.asarray(dx, dtype=float)
+    lla, v, q = np.empty(3), np.empty(3), np.empty(4)
+    from ..rotations import dcm_from_quat, quat_from_dcm
+
+    K.apply_correction(ctx.lla, ctx.v_n, quat_from_dcm(ctx.C_nb), dx, -1.0, lla, v, q)
+    aux = ctx.aux + dx[ctx.layout.aux_state_index]
+    return UpdateContext(ctx.t, ctx.dt, lla, v, dcm_from_quat(q), ctx.omega_raw_b, ctx.layout, aux)
 
 
 def ned_difference(lla_a, lla_b):
     """NED vector from ``lla_b`` to ``lla_a`` [m], small-offset form (exact to
-    millimetres over kilometres), for one point (scalar math: called per update)."""
+    millimetres over kilometres), for one point (scalar math: called per
+    update).  Longitudes are wrapped, so the difference across 180 deg is the
+    short way round."""
     lat, h = float(lla_b[0]), float(lla_b[2])
     s = math.sin(lat)
     w = math.sqrt(1.0 - earth.E2 * s * s)
     rn = earth.A * (1.0 - earth.E2) / (w * w * w) + h
     re = earth.A / w + h
-    return np.array([(lla_a[0] - lat) * rn, (lla_a[1] - lla_b[1]) * re * math.cos(lat), -(lla_a[2] - h)])
+    dlon = (lla_a[1] - lla_b[1] + math.pi) % (2.0 * math.pi) - math.pi
+    return np.array([(lla_a[0] - lat) * rn, dlon * re * math.cos(lat), -(lla_a[2] - h)])
+
+
+_TEMPLATES: dict = {}
 
 
 def _template(layout, rows, block):
     """H with an identity on ``block`` (cached per layout and size)."""
-    key = (layout, rows, block)
+    key = (id(layout), rows, block)
     H = _TEMPLATES.get(key)
-    if H is None:
+    if H is None or H.shape[1] != layout.size:
         H = np.zeros((rows, layout.size))
         H[:, layout.slice(block)] = np.eye(rows, 3)
         _TEMPLATES[key] = H
     return H.copy()
 
 
-_TEMPLATES: dict = {}
+def _sensor_rate_columns(H, ctx, M):
+    """Add ``M d(omega_ib_b)``'s columns: ``omega = (raw - b_g) / (1 + s_g)``,
+    so ``d omega / d b_g = -I / (1 + s_g)`` and ``d omega / d s_g =
+    -diag(omega / (1 + s_g))`` (M maps a rate change to the innovation)."""
+    lay = ctx.layout
+    sf = ctx.gyro_scale_factor
+    b = lay.by_role("gyro_bias")
+    if b is not None:
+        H[:, lay.slice(b.name)] += -M / sf
+    b = lay.by_role("gyro_scale")
+    if b is not None:
+        H[:, lay.slice(b.name)] += -M * (ctx.omega_ib_b / sf)
 
 
 class GnssPosition:
-    """GNSS antenna position fixes (loosely coupled), with lever arm.
+    """GNSS antenna position fixes (loosely coupled), with lever arm and
+    IMU-GNSS time offset.
 
-    ``h = p_imu + C_nb l_b`` extrapolated to the fix time by the velocity;
-    ``H = [I, 0, [(C_nb l_b) x], 0 ..., C_nb (lever state)]``.
+    Prediction of the antenna at the fix time, ``tau = dt + offset`` after the
+    IMU sample: ``p_imu + C_nb l_b + v_ant tau`` with the antenna velocity
+    ``v_ant = v_n + C_nb (omega_ib_b x l_b)``, so
+
+    ``H = [I, tau I, [(C_nb a) x], C_nb [l x] tau d omega, C_nb (I + [omega x] tau) (lever), v_ant (offset)]``
+
+    with ``a = l_b + (omega x l_b) tau``.  ``l_b`` is the ``lever`` block's
+    estimate when the layout holds one, else ``lever_arm_b``; the offset is
+    the ``time_offset`` block's estimate, else 0.
 
     Parameters
     ----------
@@ -100,14 +186,18 @@ class GnssPosition:
         Which fixes to use (the rest are withheld, e.g. outage tests).
     sigma_floor_m : float
         Lower bound of each sigma [m].
+    lever_arm_b : (3,) array_like
+        IMU-to-antenna lever arm, body axes [m], when it is not estimated.
     """
 
     name = "gnss_pos"
+    gating = "vector"
 
-    def __init__(self, gnss: GnssData, use=None, sigma_floor_m=0.0):
+    def __init__(self, gnss: GnssData, use=None, sigma_floor_m=0.0, lever_arm_b=(0.0, 0.0, 0.0)):
         self.gnss = gnss
         self.use = np.ones(len(gnss), bool) if use is None else np.asarray(use, bool)
         self.sigma = np.maximum(gnss.sigma_ned, sigma_floor_m)
+        self.lever_arm_b = np.asarray(lever_arm_b, dtype=float)
         self._rows = np.nonzero(self.use)[0]
 
     def times(self):
@@ -116,24 +206,32 @@ class GnssPosition:
     def rows(self):
         return self._rows
 
-    def antenna_offset(self, ctx):
-        return ctx.C_nb @ ctx.lever_arm_b
-
     def linearize(self, ctx: UpdateContext, row):
         lay = ctx.layout
-        cl = self.antenna_offset(ctx)
-        nu = ned_difference(ctx.lla, self.gnss.lla[row]) + cl + ctx.v_n * (ctx.dt + ctx.time_offset)
+        lev = ctx.estimate("lever", self.lever_arm_b)
+        off = ctx.estimate("time_offset")
+        tau = ctx.dt + (0.0 if off is None else off[0])
+        C = ctx.C_nb
+        w = ctx.omega_ib_b
+        wl = np.cross(w, lev)
+        v_ant = ctx.v_n + C @ wl
+        a = lev + wl * tau
+        nu = ned_difference(ctx.lla, self.gnss.lla[row]) + C @ lev + v_ant * tau
         H = _template(lay, 3, "pos")
-        H[:, lay.slice("att")] = skew(cl)
-        if lay.lever_arm:
-            H[:, lay.slice("lever")] = ctx.C_nb
-        if lay.time_offset:  # d h / d offset = antenna velocity
-            H[:, lay.slice("dt")] = (ctx.v_n + ctx.C_nb @ np.cross(ctx.omega_ib_b, ctx.lever_arm_b))[:, None]
+        H[:, 3:6] = np.eye(3) * tau
+        H[:, 6:9] = skew(C @ a)
+        _sensor_rate_columns(H, ctx, -C @ skew(lev) * tau)
+        if "lever" in lay:
+            H[:, lay.slice("lever")] = C @ (np.eye(3) + skew(w) * tau)
+        if off is not None:
+            H[:, lay.slice("time_offset")] = v_ant[:, None]
         return nu, H, np.diag(self.sigma[row] ** 2)
 
 
 class GnssVelocity:
-    """GNSS velocity (antenna), ``h = v_n + C_nb (omega_ib_b x l_b)``.
+    """GNSS velocity of the antenna, ``h = v_n + C_nb (omega_ib_b x l_b)``.
+
+    ``H = [0, I, [(C_nb (omega x l)) x], -C_nb [l x] d omega, C_nb [omega x] (lever)]``.
 
     Parameters
     ----------
@@ -142,17 +240,21 @@ class GnssVelocity:
         ``t - delay_s`` (the drive_0708 .pos velocity lags by about 0.13 s).
     sigma_scale : float
         Multiply the file's sigmas (inflate a velocity you trust less).
+    lever_arm_b : (3,) array_like
+        As for :class:`GnssPosition`.
     """
 
     name = "gnss_vel"
+    gating = "vector"
 
-    def __init__(self, gnss: GnssData, use=None, delay_s=0.0, sigma_scale=1.0):
+    def __init__(self, gnss: GnssData, use=None, delay_s=0.0, sigma_scale=1.0, lever_arm_b=(0.0, 0.0, 0.0)):
         if not gnss.has_velocity:
             raise ValueError("the GNSS data carry no velocity")
         self.gnss = gnss
         self.use = np.ones(len(gnss), bool) if use is None else np.asarray(use, bool)
         self.delay = float(delay_s)
         self.sigma = gnss.sigma_v_ned * float(sigma_scale)
+        self.lever_arm_b = np.asarray(lever_arm_b, dtype=float)
         self._rows = np.nonzero(self.use)[0]
 
     def times(self):
@@ -163,15 +265,23 @@ class GnssVelocity:
 
     def linearize(self, ctx: UpdateContext, row):
         lay = ctx.layout
-        lever_v = ctx.C_nb @ np.cross(ctx.omega_ib_b, ctx.lever_arm_b)
+        lev = ctx.estimate("lever", self.lever_arm_b)
+        C = ctx.C_nb
+        w = ctx.omega_ib_b
+        lever_v = C @ np.cross(w, lev)
         nu = ctx.v_n + lever_v - self.gnss.v_n[row]
         H = _template(lay, 3, "vel")
-        H[:, lay.slice("att")] = skew(lever_v)
+        H[:, 6:9] = skew(lever_v)
+        _sensor_rate_columns(H, ctx, -C @ skew(lev))
+        if "lever" in lay:
+            H[:, lay.slice("lever")] = C @ skew(w)
         return nu, H, np.diag(self.sigma[row] ** 2)
 
 
 class _GridMeasurement:
     """A pseudo-measurement on a regular time grid inside given intervals."""
+
+    gating = "vector"
 
     def __init__(self, intervals, rate_hz, sigma):
         self.sigma = float(sigma)
@@ -186,7 +296,7 @@ class _GridMeasurement:
 
 
 class ZeroVelocity(_GridMeasurement):
-    """Zero-velocity update (ZUPT) while the vehicle stands still."""
+    """Zero-velocity update (ZUPT) while the vehicle stands still: ``h = v_n``."""
 
     name = "zupt"
 
@@ -208,6 +318,6 @@ class NonHolonomic(_GridMeasurement):
         C_bn = ctx.C_nb.T
         v_b = C_bn @ ctx.v_n
         H = np.zeros((2, lay.size))
-        H[:, lay.slice("vel")] = C_bn[1:3]
-        H[:, lay.slice("att")] = -(C_bn @ skew(ctx.v_n))[1:3]
+        H[:, 3:6] = C_bn[1:3]
+        H[:, 6:9] = -(C_bn @ skew(ctx.v_n))[1:3]
         return v_b[1:3], H, np.eye(2) * self.sigma**2

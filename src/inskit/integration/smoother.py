@@ -24,16 +24,16 @@ from .. import earth
 from .. import rotations as rot
 from ..errors import InputError
 from ..types import NavSolution
-from .engine import FilterOutput
+from .engine import FilterOutput, Track
 
 
-def rts_smooth(out: FilterOutput) -> NavSolution:
-    """Smoothed solution (with smoothed sigmas and sensor errors) of a run made
-    with ``run_filter(..., smoother=True)``."""
+def rts_smooth(out: FilterOutput) -> Track:
+    """Smoothed track (navigation solution, estimates of every block and
+    sigmas of every state) of a run made with ``run_filter(..., smoother=True)``."""
     st = out.store
     if st is None or not st.k:
         raise InputError("the filter run kept no smoother data: run it with smoother=True")
-    lay = out.settings.layout
+    lay = out.layout
     m = len(st.k)
     n = lay.size
     e_post = np.zeros((m, n))
@@ -47,12 +47,12 @@ def rts_smooth(out: FilterOutput) -> NavSolution:
         Ps[j] = st.P_plus[j] + A @ D @ A.T
         Ps[j] = 0.5 * (Ps[j] + Ps[j].T)
     # the initial epoch (row 0)
-    P0 = out.settings.initial_covariance()
+    P0 = lay.initial_covariance()
     A0 = np.linalg.solve(st.P_minus[0], st.Phi[0] @ P0).T
     e0 = A0 @ (e_post[0] + st.dx[0])
     Ps0 = P0 + A0 @ (Ps[0] - st.P_minus[0]) @ A0.T
 
-    sol = out.solution
+    sol = out.nav
     N = len(sol)
     t = sol.time
     ks = np.asarray(st.k)
@@ -71,34 +71,24 @@ def rts_smooth(out: FilterOutput) -> NavSolution:
                 e_rows[k0 + 1:k1] = e_start[a] * (1 - w) + e_end[a] * w
             else:
                 e_rows[k0 + 1:k1] = e_start[a]
-    lla, v, q = _correct(sol, e_rows, lay)
+    lla, v, q = _correct(sol, e_rows)
     # sigmas at the anchors, interpolated in time
-    sig_nodes = np.sqrt(np.maximum(np.vstack([np.diag(Ps0)[None, :9], np.einsum("jii->ji", Ps)[:, :9]]), 0.0))
+    sig_nodes = np.sqrt(np.maximum(np.vstack([np.diag(Ps0)[None, :], np.einsum("jii->ji", Ps)]), 0.0))
     t_nodes = t[anchors_k]
-    extra = dict(sol.extra)
-    names = ["sigma_n_m", "sigma_e_m", "sigma_d_m", "sigma_vn_m_s", "sigma_ve_m_s", "sigma_vd_m_s",
-             "sigma_att_n_rad", "sigma_att_e_rad", "sigma_att_d_rad"]
-    for i, nm in enumerate(names):
-        extra[nm] = np.interp(t, t_nodes, sig_nodes[:, i])
-    for blk, prefix, unit in (("bg", "bg", "_rad_s"), ("ba", "ba", "_m_s2"), ("sg", "sg", ""), ("sa", "sa", "")):
-        s = lay.slice(blk)
-        if s is None:
-            continue
-        for i, a in enumerate("xyz"):
-            key = f"{prefix}_{a}{unit}"
-            extra[key] = extra[key] - e_rows[:, s.start + i]
-    return NavSolution._trusted(t, lla, v, q, extra)
+    sigma = np.column_stack([np.interp(t, t_nodes, sig_nodes[:, i]) for i in range(n)])
+    aux = out.aux - e_rows[:, lay.aux_state_index]
+    return Track(NavSolution._trusted(t, lla, v, q), aux, sigma, lay)
 
 
-def _correct(sol, e, lay):
-    """Remove error estimates ``e`` (rows) from a solution, vectorised."""
-    p, v, a = lay.slice("pos"), lay.slice("vel"), lay.slice("att")
+def _correct(sol, e):
+    """Remove error estimates ``e`` (rows; navigation blocks at 0, 3, 6) from
+    a solution, vectorised."""
     lla = sol.lla.copy()
     rn, re = earth.principal_radii(lla[:, 0], lla[:, 2])
-    lla[:, 0] -= e[:, p.start] / rn
-    lla[:, 1] -= e[:, p.start + 1] / (re * np.cos(sol.lla[:, 0]))
-    lla[:, 2] += e[:, p.start + 2]
-    vel = sol.v_n - e[:, v]
-    q = rot.quat_multiply(rot.quat_from_rotvec(e[:, a]), sol.q_nb)
+    lla[:, 0] -= e[:, 0] / rn
+    lla[:, 1] -= e[:, 1] / (re * np.cos(sol.lla[:, 0]))
+    lla[:, 2] += e[:, 2]
+    vel = sol.v_n - e[:, 3:6]
+    q = rot.quat_multiply(rot.quat_from_rotvec(e[:, 6:9]), sol.q_nb)
     q /= np.linalg.norm(q, axis=1, keepdims=True)
     return lla, vel, q

@@ -14,7 +14,7 @@ Two ways to call:
   chunk to the next, so logs larger than memory can be processed.  Chunked and
   whole-array runs give identical numbers.
 
-The per-epoch loops are compiled (:mod:`inskit.strapdown._kernels`).
+The per-epoch loops are compiled (:mod:`inskit.strapdown.kernels`).
 
 References
 ----------
@@ -31,7 +31,7 @@ from .. import earth
 from .. import rotations as rot
 from ..errors import InputError
 from ..types import ImuData, NavSolution, NavState
-from . import _kernels as K
+from . import kernels as K
 
 __all__ = [
     "EcefIntegrator",
@@ -151,6 +151,15 @@ class NedIntegrator(_Integrator):
     @property
     def state(self) -> NavState:
         return NavState(self._carry[0], self._lla, self._v, self._q)
+
+    def reset(self, lla=None, v_n=None):
+        """Overwrite the current position ``(3,)`` [rad, rad, m] and/or NED
+        velocity ``(3,)`` [m/s] (an uncoupled INS/GNSS "reset"); the next
+        chunk continues from them."""
+        if lla is not None:
+            self._lla[:] = np.asarray(lla, dtype=float)
+        if v_n is not None:
+            self._v[:] = np.asarray(v_n, dtype=float)
 
 
 class WanderIntegrator(_Integrator):

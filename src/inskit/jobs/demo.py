@@ -9,9 +9,9 @@ import time
 
 import numpy as np
 
-from . import analysis
-from .simulation import HarmonicTrajectory, ideal_imu, truth_solution
-from .strapdown import FRAMES, mechanize
+from .. import analysis
+from ..simulation import HarmonicTrajectory, ideal_imu, truth_solution
+from ..strapdown import FRAMES, mechanize
 
 DEMO_TRAJECTORY = HarmonicTrajectory(
     (np.radians(40.0), np.radians(-105.0), 1500.0),
@@ -46,11 +46,11 @@ def demo_run(log=print):
 def closed_form_checks(log=print):
     """The closed-form checks of the mechanizations, measured (issue 2):
     stationary 1 h, Schuler 3 h, coning 10 min at two rates."""
-    from . import earth
-    from . import rotations as rot
-    from .simulation import ConingTrajectory, StationaryTrajectory
-    from .types import ImuData
-    from .units import ARCSEC, MICRO_G
+    from .. import earth
+    from .. import rotations as rot
+    from ..simulation import ConingTrajectory, StationaryTrajectory
+    from ..types import ImuData
+    from ..units import ARCSEC, MICRO_G
 
     out = {}
     lat = np.radians(45.0)

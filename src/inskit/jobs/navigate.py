@@ -15,12 +15,11 @@ from ..errors import InputError
 from ..io.rtklib import read_pos, read_rtklibexplorer_imu
 from ..types import GnssData, ImuData, NavState
 from ..units import DEG, DEG_PER_HOUR, MICRO_G
+from ..integration import (FilterOutput, FilterSettings, GnssPosition, GnssVelocity, InitialUncertainty,
+                           NonHolonomic, SensorNoise, Track, ZeroVelocity, rts_smooth, run_filter, run_uncoupled)
+from ..types import NavSolution
 from .config import NavigateConfig
-from .engine import FilterOutput, FilterSettings, InitialUncertainty, SensorNoise, run_filter
-from .layout import StateLayout
-from .measurements import GnssPosition, GnssVelocity, NonHolonomic, ZeroVelocity
 from .outages import OutageScore, rtklibexplorer_outages, score_outages, withheld_mask
-from .smoother import rts_smooth
 
 
 @dataclass
@@ -32,8 +31,8 @@ class NavigateResult:
     used: np.ndarray
     startup: Startup | None
     settings: FilterSettings
-    forward: FilterOutput
-    smoothed: object | None
+    forward: FilterOutput | Track
+    smoothed: Track | None
     score_forward: OutageScore
     score_smoothed: OutageScore | None
     elapsed_s: float
@@ -106,20 +105,38 @@ def build_settings(cfg: NavigateConfig, startup: Startup | None, measured=None) 
                              i.sigma_yaw_deg * DEG, i.sigma_gyro_bias_deg_s * DEG, i.sigma_accel_bias_m_s2,
                              i.sigma_scale_factor, i.sigma_lever_arm_m, i.sigma_time_offset_s)
     f = cfg.filter
-    return FilterSettings(
-        layout=StateLayout(scale_factors=f.scale_factors, lever_arm=f.lever_arm, time_offset=f.time_offset),
-        noise=noise, initial=unc, scheme=f.scheme, gate_probability=f.gate_probability,
-        gate_max_consecutive=f.gate_max_consecutive, lever_arm_b=tuple(cfg.gnss.lever_arm_b_m),
+    return FilterSettings.standard(
+        noise, unc, scale_factors=f.scale_factors, lever_arm=f.lever_arm, time_offset=f.time_offset,
+        lever_arm_b=tuple(cfg.gnss.lever_arm_b_m),
         gyro_bias0=tuple(startup.gyro_bias) if startup else (0.0, 0.0, 0.0),
         accel_bias0=tuple(startup.accel_bias) if startup else (0.0, 0.0, 0.0),
-        smoother_node_s=f.smoother_node_s,
+        scheme="closed" if f.scheme == "uncoupled" else f.scheme, gate_probability=f.gate_probability,
+        gate_max_consecutive=f.gate_max_consecutive, smoother_node_s=f.smoother_node_s,
     )
 
 
-def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=None, log=None) -> NavigateResult:
-    """Run the whole job described by ``cfg``."""
+def _uncoupled_track(imu, initial, gnss, used, lever, settings):
+    """The uncoupled scheme as a Track (no estimates, no sigmas)."""
+    sol = run_uncoupled(imu, initial, gnss, use=used, lever_arm_b=lever, use_velocity=False)
+    n = len(sol)
+    lay = settings.layout
+    aux = np.tile(lay.initial_aux(), (n, 1))
+    return FilterOutput(sol, aux, np.full((n, lay.size), np.nan), lay,
+                        {"gnss_pos": {"used": int(used.sum()), "rejected": 0, "skipped": 0}},
+                        {"gnss_pos": {"t": np.empty(0), "nu": np.empty((0, 3)), "sigma": np.empty((0, 3)),
+                                      "nis": np.empty(0), "accepted": np.empty(0, bool)}}, settings, None)
+
+
+def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=None, log=None,
+             inputs=None) -> NavigateResult:
+    """Run the whole job described by ``cfg``.
+
+    ``inputs`` is ``(imu, gnss)`` already read (by :func:`load_inputs`, with
+    the time offset applied): calibration loops pass it to read the files
+    once.
+    """
     t_start = time.perf_counter()
-    imu, gnss = load_inputs(cfg, time_offset_s)
+    imu, gnss = load_inputs(cfg, time_offset_s) if inputs is None else inputs
     windows = outage_windows(cfg, gnss)
     used = ~withheld_mask(gnss.time, windows)
     if used.sum() < 2:
@@ -139,40 +156,48 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         initial = NavState.from_euler(imu.time[0], [i.lat_deg * DEG, i.lon_deg * DEG, i.height_m], i.v_ned_m_s,
                                       np.radians(i.rpy_deg))
     settings = build_settings(cfg, startup, measured)
-    meas = [GnssPosition(gnss, used, cfg.gnss.sigma_floor_m)]
-    if cfg.gnss.use_velocity:
-        if not gnss.has_velocity:
-            raise InputError(f"{cfg.gnss.file}: use_velocity is set but the file has no velocity")
-        meas.append(GnssVelocity(gnss, used, cfg.gnss.velocity_delay_s, cfg.gnss.velocity_sigma_scale))
-    c = cfg.constraints
-    if c.zupt:
-        meas.append(ZeroVelocity(static_intervals(gnss_used), c.rate_hz, c.zupt_sigma_m_s))
-    if c.nhc:
-        meas.append(NonHolonomic([(imu.time[0], imu.time[-1])], c.rate_hz, c.nhc_sigma_m_s))
-    out = run_filter(imu, initial, meas, settings, smoother=smooth, progress=progress)
-    sm = rts_smooth(out) if smooth else None
+    if cfg.filter.scheme == "uncoupled":
+        if smooth:
+            raise InputError("the RTS smoother needs a filter: the uncoupled scheme has none")
+        out = _uncoupled_track(imu, initial, gnss, used, lever, settings)
+        sm = None
+    else:
+        meas = [GnssPosition(gnss, used, cfg.gnss.sigma_floor_m, lever_arm_b=lever)]
+        if cfg.gnss.use_velocity:
+            if not gnss.has_velocity:
+                raise InputError(f"{cfg.gnss.file}: use_velocity is set but the file has no velocity")
+            meas.append(GnssVelocity(gnss, used, cfg.gnss.velocity_delay_s, cfg.gnss.velocity_sigma_scale,
+                                     lever_arm_b=lever))
+        c = cfg.constraints
+        if c.zupt:
+            meas.append(ZeroVelocity(static_intervals(gnss_used), c.rate_hz, c.zupt_sigma_m_s))
+        if c.nhc:
+            meas.append(NonHolonomic([(imu.time[0], imu.time[-1])], c.rate_hz, c.nhc_sigma_m_s))
+        out = run_filter(imu, initial, meas, settings, smoother=smooth, progress=progress)
+        sm = rts_smooth(out) if smooth else None
     score_f = score_outages(out.solution, gnss, windows, lever)
-    score_s = score_outages(sm, gnss, windows, lever) if sm is not None else None
+    score_s = score_outages(sm.solution, gnss, windows, lever) if sm is not None else None
     return NavigateResult(cfg, imu, gnss, windows, used, startup, settings, out, sm, score_f, score_s,
                           time.perf_counter() - t_start, measured)
-
-
-def mean_gnss_nis(cfg: NavigateConfig, time_offset_s):
-    """Mean NIS of the GNSS position updates (used fixes only) for an IMU offset."""
-    res = navigate(cfg, time_offset_s=time_offset_s)
-    return float(np.mean(res.forward.innovations["gnss_pos"]["nis"]))
 
 
 def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, log=None):
     """IMU time offset [s] that minimises the mean NIS of the GNSS position
     updates, by a bounded scalar search (scipy).  Only the fixes the filter
-    uses enter, never the withheld ones."""
+    uses enter, never the withheld ones.  The files are read once; each
+    evaluation shifts the IMU time tags."""
     from scipy.optimize import minimize_scalar
 
+    # read with the largest offset: it keeps every sample any offset in the bounds needs
+    imu0, gnss = load_inputs(cfg, bounds[1])
     evals = []
 
     def f(off):
-        v = mean_gnss_nis(cfg, off)
+        imu = ImuData(imu0.time + (off - bounds[1]), imu0.dtheta_b, imu0.dv_b)
+        k0 = int(np.searchsorted(imu.time, max(gnss.time[0], cfg.imu.start_s if cfg.imu.start_s is not None
+                                                 else -np.inf)))
+        res = navigate(cfg, inputs=(imu.slice(k0), gnss))
+        v = float(np.mean(res.forward.innovations["gnss_pos"]["nis"]))
         evals.append((float(off), v))
         if log:
             log(f"calibrate: offset {off:+.4f} s -> mean NIS {v:.3f}")
@@ -180,6 +205,24 @@ def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, lo
 
     r = minimize_scalar(f, bounds=bounds, method="bounded", options={"xatol": tol})
     return float(r.x), sorted(evals)
+
+
+def truth_errors(res: NavigateResult, truth: NavSolution) -> dict:
+    """Errors of the forward (and smoothed) solution against a truth file,
+    summarised (:func:`inskit.analysis.summarize`)."""
+    from .. import analysis
+
+    out = {}
+    for label, track in (("forward", res.forward), ("smoothed", res.smoothed)):
+        if track is not None:
+            out[label] = analysis.summarize(analysis.nav_error(track.nav, truth))
+    return out
+
+
+def truth_errors_text(errs: dict) -> str:
+    return "".join(f"\nagainst the truth ({label}): horizontal RMS {e['horizontal_m']['rms']:.3f} m, "
+                   f"down RMS {e['down_m']['rms']:.3f} m, yaw RMS {e['yaw_arcmin']['rms']:.2f} arcmin"
+                   for label, e in errs.items())
 
 
 def summary(res: NavigateResult) -> dict:
@@ -202,8 +245,8 @@ def summary(res: NavigateResult) -> dict:
         "forward": {**fwd, "outage_table": res.score_forward.table},
         "measurements": res.forward.counts,
         "noise_used": {
-            "gyro_arw_deg_sqrt_h": res.settings.noise.gyro_arw / DEG * 60.0,
-            "accel_vrw_m_s_sqrt_h": res.settings.noise.accel_vrw * 60.0,
+            "gyro_arw_deg_sqrt_h": float(np.sqrt(res.settings.layout.block("att").psd[0])) / DEG * 60.0,
+            "accel_vrw_m_s_sqrt_h": float(np.sqrt(res.settings.layout.block("vel").psd[0])) * 60.0,
             "measured_on_static_start": bool(res.measured_noise),
         },
     }
@@ -215,13 +258,16 @@ def summary(res: NavigateResult) -> dict:
             "static_s": float(res.startup.static_end - res.imu.time[0]),
             "heading_from_track_at_s": float(res.startup.heading_time - res.imu.time[0]),
         }
-    sol = res.forward.solution
-    if "time_offset_s" in sol.extra:
-        out["estimated_time_offset_s"] = float(sol.extra["time_offset_s"][-1])
+    fw = res.forward
+    if "time_offset" in fw.layout:
+        out["estimated_time_offset_s"] = float(fw.estimate("time_offset")[-1, 0])
     out["final_bias"] = {
-        "gyro_deg_s": [float(sol.extra[f"bg_{a}_rad_s"][-1] / DEG) for a in "xyz"],
-        "accel_m_s2": [float(sol.extra[f"ba_{a}_m_s2"][-1]) for a in "xyz"],
+        "gyro_deg_s": [float(v) for v in fw.estimate("bg")[-1] / DEG],
+        "accel_m_s2": [float(v) for v in fw.estimate("ba")[-1]],
     }
+    out["final_estimates"] = {b.name: {"values": [float(v) for v in fw.estimate(b.name)[-1]],
+                                       "sigma": [float(v) for v in fw.sigma_of(b.name)[-1]], "unit": b.unit}
+                              for b in fw.layout.blocks if b.has_estimate}
     return out
 
 
@@ -255,7 +301,7 @@ def write_outputs(res: NavigateResult, out_dir: Path, s: dict) -> list:
     io.write_solution(out_dir / "solution_forward.csv", res.forward.solution, overwrite=True)
     files.append(out_dir / "solution_forward.csv")
     if res.smoothed is not None:
-        io.write_solution(out_dir / "solution_smoothed.csv", res.smoothed, overwrite=True)
+        io.write_solution(out_dir / "solution_smoothed.csv", res.smoothed.solution, overwrite=True)
         files.append(out_dir / "solution_smoothed.csv")
     (out_dir / "summary.json").write_text(json.dumps(s, indent=2, default=float))
     files.append(out_dir / "summary.json")

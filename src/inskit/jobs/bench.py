@@ -11,10 +11,10 @@ import time
 
 import numpy as np
 
-from . import __version__
-from .simulation import StationaryTrajectory, ideal_imu, truth_solution
-from .strapdown import mechanize
-from .types import ImuData
+from .. import __version__
+from ..simulation import StationaryTrajectory, ideal_imu, truth_solution
+from ..strapdown import mechanize
+from ..types import ImuData
 
 
 def _best_rate(fn, n, repeats):
@@ -74,11 +74,11 @@ def _simulate_rate(quick):
     the full industrial-MEMS error model; GNSS and files excluded)."""
     from pathlib import Path
 
-    from .simulation.imu import ideal_imu
-    from .simulation.scenario import build_trajectory, imu_errors, load_scenario
-    from .simulation.sensors import apply_imu_errors
+    from ..simulation.imu import ideal_imu
+    from ..simulation.scenario import build_trajectory, imu_errors, load_scenario
+    from ..simulation.sensors import apply_imu_errors
 
-    path = Path(__file__).resolve().parents[2] / "examples" / "car.toml"
+    path = Path(__file__).resolve().parents[3] / "examples" / "car.toml"
     if not path.is_file():
         return None, "examples/car.toml not found (run from a source checkout)"
     sc = load_scenario(path)
@@ -96,11 +96,11 @@ def _simulate_rate(quick):
 def _lc_job(imu, init):
     """The whole closed-loop filter: NED mechanization and 21-state covariance
     propagation at IMU rate, a GNSS position update every second."""
-    from .integration import FilterSettings, GnssPosition, StateLayout, run_filter
-    from .types import GnssData
+    from ..integration import FilterSettings, GnssPosition, run_filter
+    from ..types import GnssData
 
     tg = imu.time[::100]
     gnss = GnssData(tg, np.tile(init.lla, (len(tg), 1)), np.full((len(tg), 3), 0.5))
-    settings = FilterSettings(layout=StateLayout(scale_factors=True))
+    settings = FilterSettings.standard(scale_factors=True)
     meas = [GnssPosition(gnss)]
     return lambda: run_filter(imu, init, meas, settings)

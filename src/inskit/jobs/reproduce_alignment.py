@@ -21,8 +21,8 @@ import numpy as np
 from .. import rotations as rot
 from ..units import ARCMIN, DEG, DEG_PER_HOUR, MILLI_G
 from ..earth import OMEGA_IE
-from .analytic import accel_basis, angle_errors, blend, criterion, eq29, eq29_rms, ideal_static
-from .optimize import ga_best_m, realization_J, scalar_best_m
+from ..alignment.analytic import accel_basis, angle_errors, blend, criterion, eq29, eq29_rms, ideal_static
+from ..alignment.optimize import ga_best_m, realization_J, scalar_best_m
 
 LAT = np.radians(45.0)
 SIGNS = (1.0, 1.0)  # accelerometer and gyro errors both positive
@@ -143,13 +143,13 @@ def one_vs_two_step(duration_s=600.0, rate_hz=100.0, seed=0):
     (accelerometer basis) then the stationary Kalman filter (ZUPT,
     gyrocompassing).  Constant biases are unobservable at rest, so the filter
     cannot beat the analytic limit; what it costs is time."""
-    from ..integration.engine import SensorNoise
+    from ..integration import SensorNoise
     from ..simulation.imu import ideal_imu
     from ..simulation.sensors import ImuErrors, TriadErrors, apply_imu_errors
     from ..simulation.trajectory import StationaryTrajectory
     from ..types import NavState
     from ..units import MICRO_G
-    from .fine import fine_align
+    from ..alignment.fine import fine_align
 
     B, D = 0.01, 0.04 * DEG_PER_HOUR
     arw, vrw = 0.005 * DEG / 60.0, 20 * MICRO_G

@@ -43,7 +43,7 @@ def plot_all(res, out_dir):
     pf = earth.lla_to_ned(fwd.lla[::10], ref)
     ax.plot(pf[:, 1], pf[:, 0], lw=0.8, color="tab:blue", label="forward filter")
     if res.smoothed is not None:
-        ps = earth.lla_to_ned(res.smoothed.lla[::10], ref)
+        ps = earth.lla_to_ned(res.smoothed.nav.lla[::10], ref)
         ax.plot(ps[:, 1], ps[:, 0], lw=0.8, color="tab:green", label="RTS smoother")
     ax.set_xlabel("east [m]")
     ax.set_ylabel("north [m]")
@@ -60,7 +60,7 @@ def plot_all(res, out_dir):
     tg = g.time[inside]
     fig, axes = plt.subplots(3, 1, figsize=(10, 8), sharex=True)
     for s, label, color in ((fwd, "forward", "tab:blue"),) + (
-            ((res.smoothed, "smoothed", "tab:green"),) if res.smoothed is not None else ()):
+            ((res.smoothed.solution, "smoothed", "tab:green"),) if res.smoothed is not None else ()):
         ant = antenna_positions(s, tg, lever)
         d = earth.lla_to_ned(ant, g.lla[inside])
         si = s.interpolate(tg)

@@ -1,0 +1,365 @@
+"""Blocks of the error state: each one owns its whole meaning.
+
+A block declares, in one place,
+
+* its ``name``, ``axes`` and SI ``unit`` (``size = len(axes)``);
+* its initial 1-sigma ``sigma0`` and process-noise PSD ``psd`` per axis
+  (``Q = diag(psd) dt``), and its correlation time ``tau_s`` (first-order
+  Gauss-Markov: ``d x / dt = -x / tau``; ``inf`` for a random walk or a
+  random constant);
+* its constant entries of the transition matrix F (:meth:`transition`:
+  ``(row, column block, column, value)``, rows local to the block), for
+  example a clock's ``d bias / dt = drift``;
+* a ``role`` when the compiled propagation must know it: the navigation
+  blocks (``"pos"``, ``"vel"``, ``"att"``) and the inertial-sensor errors
+  (``"gyro_bias"``, ``"accel_bias"``, ``"gyro_scale"``, ``"accel_scale"``),
+  which correct the raw increments and couple into the navigation-error rows
+  through ``C_nb``, ``f_b`` and ``omega_ib_b`` at each epoch;
+* its running estimate (``estimate0``; ``None`` for the navigation blocks,
+  whose estimate is the navigation state itself), how an estimated error is
+  fed back into it (:meth:`feedback`: closed loop ``estimate -= dx`` by
+  default, since error states are ``estimate - truth``), and the names under
+  which estimate and sigma are reported (:meth:`estimate_names`,
+  :meth:`sigma_names`).
+
+A new state is one new block object: nothing in the filter loop changes.
+
+References: SYSTEM.md §2; Groves 2013 §14.2 (error states), §14.2.7 (sensor
+error states), §9.4.2 (receiver clock states).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import InputError
+
+NAV_ROLES = ("pos", "vel", "att")
+SENSOR_ROLES = ("gyro_bias", "accel_bias", "gyro_scale", "accel_scale")
+
+
+def _per_axis(value, n, what, name):
+    a = np.broadcast_to(np.asarray(value, dtype=float), (n,)).copy() if np.ndim(value) == 0 else \
+        np.asarray(value, dtype=float)
+    if a.shape != (n,):
+        raise InputError(f"state block {name!r}: {what} needs {n} values (one per axis), got {a.shape}")
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class StateBlock:
+    """One block of the error state (see the module text).
+
+    Parameters
+    ----------
+    name : str
+        Unique within a layout; measurements find the block by it.
+    axes : tuple of str
+        Axis names (``("n", "e", "d")``, ``("x", "y", "z")``, ``("bias",
+        "drift")``...).
+    unit : str
+        SI unit of the error, used in reported names (``"m"``, ``"rad_s"``).
+    sigma0 : float or (size,) array_like
+        Initial 1-sigma [unit].
+    psd : float or (size,) array_like
+        Process-noise power spectral density [unit^2 / s].
+    tau_s : float
+        Correlation time [s]; ``inf`` for a random walk (or, with ``psd`` 0, a
+        random constant).
+    role : str, optional
+        One of ``NAV_ROLES`` or ``SENSOR_ROLES`` when the compiled
+        propagation handles this block's couplings.
+    estimate0 : float or (size,) array_like, optional
+        Initial value of the quantity this block estimates (bias, lever arm,
+        offset...).  ``None`` for the navigation blocks.
+    entries : tuple, optional
+        Extra constant entries of F: ``(row, column_block, column, value)``.
+    """
+
+    name: str
+    axes: tuple
+    unit: str
+    sigma0: object = 1.0
+    psd: object = 0.0
+    tau_s: float = math.inf
+    role: str | None = None
+    estimate0: object = None
+    entries: tuple = field(default=())
+    description: str = ""
+
+    def __post_init__(self):
+        if not self.name or not isinstance(self.name, str):
+            raise InputError(f"state block name must be a non-empty string, got {self.name!r}")
+        if len(self.axes) == 0:
+            raise InputError(f"state block {self.name!r} needs at least one axis")
+        n = len(self.axes)
+        object.__setattr__(self, "axes", tuple(self.axes))
+        object.__setattr__(self, "sigma0", _per_axis(self.sigma0, n, "sigma0", self.name))
+        object.__setattr__(self, "psd", _per_axis(self.psd, n, "psd", self.name))
+        if not np.all(np.isfinite(self.sigma0)) or not np.all(self.sigma0 > 0):
+            raise InputError(f"state block {self.name!r}: initial sigmas must be finite and > 0, got {self.sigma0}")
+        if not np.all(np.isfinite(self.psd)) or np.any(self.psd < 0):
+            raise InputError(f"state block {self.name!r}: process-noise PSDs must be finite and >= 0, got {self.psd}")
+        if not self.tau_s > 0:
+            raise InputError(f"state block {self.name!r}: tau_s must be > 0 (inf for a random walk), got {self.tau_s}")
+        if self.role is not None and self.role not in NAV_ROLES + SENSOR_ROLES:
+            raise InputError(f"state block {self.name!r}: unknown role {self.role!r}; "
+                             f"known: {NAV_ROLES + SENSOR_ROLES}")
+        if self.role in NAV_ROLES and self.estimate0 is not None:
+            raise InputError(f"navigation block {self.name!r} carries no separate estimate")
+        if self.role in SENSOR_ROLES and self.estimate0 is None:
+            object.__setattr__(self, "estimate0", np.zeros(n))
+        if self.estimate0 is not None:
+            object.__setattr__(self, "estimate0", _per_axis(self.estimate0, n, "estimate0", self.name))
+        if self.role is not None and n != 3:
+            raise InputError(f"state block {self.name!r} with role {self.role!r} must have 3 axes")
+
+    @property
+    def size(self) -> int:
+        return len(self.axes)
+
+    @property
+    def has_estimate(self) -> bool:
+        return self.estimate0 is not None
+
+    def transition(self):
+        """Constant entries of F: ``[(row, column_block, column, value)]``.
+
+        The first-order Gauss-Markov diagonal ``-1 / tau`` and the declared
+        ``entries``.
+        """
+        out = list(self.entries)
+        if math.isfinite(self.tau_s):
+            out += [(i, self.name, i, -1.0 / self.tau_s) for i in range(self.size)]
+        return out
+
+    def feedback(self, estimate, dx):
+        """Closed loop: remove the estimated error ``dx`` from the block's
+        estimate, in place (``estimate - truth = dx``)."""
+        estimate -= dx
+
+    def estimate_names(self):
+        return [f"{self.name}_{a}_{self.unit}" if self.unit else f"{self.name}_{a}" for a in self.axes]
+
+    def sigma_names(self):
+        return [f"sigma_{n}" for n in self.estimate_names()]
+
+
+# --- the standard blocks of an INS error state ---------------------------------------
+class _Named(StateBlock):
+    """A standard block whose reported names are given explicitly."""
+
+    _est_names: tuple = ()
+    _sig_names: tuple = ()
+
+    def estimate_names(self):
+        return list(self._est_names) if self._est_names else super().estimate_names()
+
+    def sigma_names(self):
+        return list(self._sig_names) if self._sig_names else super().sigma_names()
+
+
+class PositionError(_Named):
+    """Position error north, east, down [m] (``estimate - truth``)."""
+
+    _sig_names = ("sigma_n_m", "sigma_e_m", "sigma_d_m")
+
+    def __init__(self, sigma0=(1.0, 1.0, 1.0)):
+        super().__init__("pos", ("n", "e", "d"), "m", sigma0, 0.0, role="pos",
+                         description="position error north, east, down")
+
+
+class VelocityError(_Named):
+    """NED velocity error [m/s], driven by the accelerometer white noise (VRW)."""
+
+    _sig_names = ("sigma_vn_m_s", "sigma_ve_m_s", "sigma_vd_m_s")
+
+    def __init__(self, sigma0=0.1, accel_vrw=1e-2):
+        super().__init__("vel", ("n", "e", "d"), "m_s", sigma0, accel_vrw**2, role="vel",
+                         description="velocity error in NED")
+
+
+class AttitudeError(_Named):
+    """Attitude error ``phi`` [rad], ``C_nb_est = (I - [phi x]) C_nb``, driven
+    by the gyro white noise (ARW)."""
+
+    _sig_names = ("sigma_att_n_rad", "sigma_att_e_rad", "sigma_att_d_rad")
+
+    def __init__(self, sigma0=(np.radians(1.0), np.radians(1.0), np.radians(5.0)), gyro_arw=1e-3):
+        super().__init__("att", ("n", "e", "d"), "rad", sigma0, gyro_arw**2, role="att",
+                         description="attitude error about north, east, down")
+
+
+def _bias_psd(sigma, tau_s):
+    """PSD of a first-order Gauss-Markov process of steady-state ``sigma``;
+    for ``tau_s = inf``, ``sigma`` is itself the random-walk PSD's root."""
+    return 2.0 * sigma**2 / tau_s if math.isfinite(tau_s) else sigma**2
+
+
+class GyroBias(_Named):
+    """Gyro bias error [rad/s]: Gauss-Markov with ``tau_s`` (steady-state sigma
+    ``instability``) or a random walk (``tau_s = inf``, ``instability`` the
+    PSD root [rad/s/sqrt(s)])."""
+
+    _est_names = ("bg_x_rad_s", "bg_y_rad_s", "bg_z_rad_s")
+    _sig_names = ("sigma_bg_x_rad_s", "sigma_bg_y_rad_s", "sigma_bg_z_rad_s")
+
+    def __init__(self, sigma0=np.radians(0.05), instability=1e-5, tau_s=math.inf, estimate0=(0.0, 0.0, 0.0)):
+        super().__init__("bg", ("x", "y", "z"), "rad_s", sigma0, _bias_psd(instability, tau_s), tau_s,
+                         role="gyro_bias", estimate0=estimate0, description="gyro bias")
+
+
+class AccelBias(_Named):
+    """Accelerometer bias error [m/s^2] (as :class:`GyroBias`)."""
+
+    _est_names = ("ba_x_m_s2", "ba_y_m_s2", "ba_z_m_s2")
+    _sig_names = ("sigma_ba_x_m_s2", "sigma_ba_y_m_s2", "sigma_ba_z_m_s2")
+
+    def __init__(self, sigma0=0.1, instability=1e-4, tau_s=math.inf, estimate0=(0.0, 0.0, 0.0)):
+        super().__init__("ba", ("x", "y", "z"), "m_s2", sigma0, _bias_psd(instability, tau_s), tau_s,
+                         role="accel_bias", estimate0=estimate0, description="accelerometer bias")
+
+
+class GyroScale(_Named):
+    """Gyro scale-factor error [-], a random walk of PSD ``rw**2`` [1/s]."""
+
+    _est_names = ("sg_x", "sg_y", "sg_z")
+    _sig_names = ("sigma_sg_x", "sigma_sg_y", "sigma_sg_z")
+
+    def __init__(self, sigma0=0.01, rw=1e-6):
+        super().__init__("sg", ("x", "y", "z"), "", sigma0, rw**2, role="gyro_scale",
+                         description="gyro scale-factor error")
+
+
+class AccelScale(_Named):
+    """Accelerometer scale-factor error [-], a random walk."""
+
+    _est_names = ("sa_x", "sa_y", "sa_z")
+    _sig_names = ("sigma_sa_x", "sigma_sa_y", "sigma_sa_z")
+
+    def __init__(self, sigma0=0.01, rw=1e-6):
+        super().__init__("sa", ("x", "y", "z"), "", sigma0, rw**2, role="accel_scale",
+                         description="accelerometer scale-factor error")
+
+
+class LeverArm(_Named):
+    """IMU-to-antenna lever arm in body axes [m], a random constant.  The GNSS
+    measurements use its estimate when the layout holds it."""
+
+    _est_names = ("lever_x_m", "lever_y_m", "lever_z_m")
+
+    def __init__(self, sigma0=0.1, estimate0=(0.0, 0.0, 0.0)):
+        super().__init__("lever", ("x", "y", "z"), "m", sigma0, 0.0, estimate0=estimate0,
+                         description="IMU-to-antenna lever arm, body axes")
+
+
+class TimeOffset(_Named):
+    """IMU-GNSS time offset [s]: a GNSS time tag ``t`` matches the INS at
+    ``t + offset``; a slow random walk of PSD ``rw**2`` [s^2/s]."""
+
+    _est_names = ("time_offset_s",)
+    _sig_names = ("sigma_time_offset_s",)
+
+    def __init__(self, sigma0=0.05, rw=1e-6, estimate0=0.0):
+        super().__init__("time_offset", ("dt",), "s", sigma0, rw**2, estimate0=estimate0,
+                         description="IMU-GNSS time offset")
+
+
+# --- parameter bundles for the standard layout ------------------------------------------
+@dataclass(frozen=True)
+class SensorNoise:
+    """Continuous-time noise of the inertial sensors (SI units).
+
+    Attributes
+    ----------
+    gyro_arw : float
+        Angle random walk [rad/s/sqrt(Hz)] (= rad/sqrt(s)).
+    accel_vrw : float
+        Velocity random walk [m/s^2/sqrt(Hz)].
+    gyro_bias_sigma, accel_bias_sigma : float
+        Steady-state sigma of the first-order Gauss-Markov biases [rad/s],
+        [m/s^2]; with ``bias_tau_s = inf`` they are the random-walk PSD roots
+        [rad/s^2/sqrt(Hz)], [m/s^3/sqrt(Hz)] instead.
+    bias_tau_s : float
+        Correlation time of the biases [s] (both sensors unless
+        ``accel_bias_tau_s`` is given); ``inf`` for random walk.
+    scale_sigma : float
+        Random-walk PSD root of scale-factor errors [1/sqrt(s)].
+    time_offset_rw : float
+        Random walk of the IMU-GNSS time offset [s/sqrt(s)].
+    accel_bias_tau_s : float, optional
+        Correlation time of the accelerometer biases, when it differs.
+    """
+
+    gyro_arw: float
+    accel_vrw: float
+    gyro_bias_sigma: float
+    accel_bias_sigma: float
+    bias_tau_s: float = math.inf
+    scale_sigma: float = 1e-6
+    time_offset_rw: float = 1e-6
+    accel_bias_tau_s: float | None = None
+
+    def __post_init__(self):
+        for name in ("gyro_arw", "accel_vrw", "gyro_bias_sigma", "accel_bias_sigma"):
+            if not getattr(self, name) > 0:
+                raise InputError(f"noise.{name} must be > 0, got {getattr(self, name)}")
+        for name in ("bias_tau_s", "accel_bias_tau_s"):
+            v = getattr(self, name)
+            if v is not None and not v > 0:
+                raise InputError(f"noise.{name} must be > 0 (inf for random walk), got {v}")
+
+
+@dataclass(frozen=True)
+class InitialUncertainty:
+    """1-sigma initial errors (SI units)."""
+
+    pos_m: tuple = (1.0, 1.0, 1.0)
+    vel_m_s: float = 0.1
+    roll_pitch_rad: float = np.radians(1.0)
+    yaw_rad: float = np.radians(5.0)
+    gyro_bias: float = np.radians(0.05)
+    accel_bias: float = 0.1
+    scale: float = 0.01
+    lever_m: float = 0.1
+    time_offset_s: float = 0.05
+
+    def __post_init__(self):
+        for name in ("vel_m_s", "roll_pitch_rad", "yaw_rad", "gyro_bias", "accel_bias", "scale", "lever_m",
+                     "time_offset_s"):
+            if not getattr(self, name) > 0:
+                raise InputError(f"initial uncertainty {name} must be > 0, got {getattr(self, name)}")
+        if not all(s > 0 for s in self.pos_m):
+            raise InputError(f"initial position sigmas must be > 0, got {self.pos_m}")
+
+
+def ins_blocks(noise: SensorNoise = SensorNoise(1e-3, 1e-2, 1e-5, 1e-4),
+               initial: InitialUncertainty = InitialUncertainty(), *, scale_factors=False, lever_arm=False,
+               time_offset=False, lever_arm_b=(0.0, 0.0, 0.0), gyro_bias0=(0.0, 0.0, 0.0),
+               accel_bias0=(0.0, 0.0, 0.0), time_offset0=0.0):
+    """The standard blocks of a loosely coupled INS error state, in order:
+    ``pos, vel, att, bg, ba`` (15 states), then optionally ``sg, sa`` (21),
+    ``lever`` and ``time_offset``.
+
+    ``noise`` and ``initial`` are datasheet-like bundles; each block takes
+    its part of them.
+    """
+    n, i = noise, initial
+    tau_a = n.bias_tau_s if n.accel_bias_tau_s is None else n.accel_bias_tau_s
+    out = [
+        PositionError(tuple(i.pos_m)),
+        VelocityError(i.vel_m_s, n.accel_vrw),
+        AttitudeError((i.roll_pitch_rad, i.roll_pitch_rad, i.yaw_rad), n.gyro_arw),
+        GyroBias(i.gyro_bias, n.gyro_bias_sigma, n.bias_tau_s, gyro_bias0),
+        AccelBias(i.accel_bias, n.accel_bias_sigma, tau_a, accel_bias0),
+    ]
+    if scale_factors:
+        out += [GyroScale(i.scale, n.scale_sigma), AccelScale(i.scale, n.scale_sigma)]
+    if lever_arm:
+        out.append(LeverArm(i.lever_m, lever_arm_b))
+    if time_offset:
+        out.append(TimeOffset(i.time_offset_s, n.time_offset_rw, time_offset0))
+    return out
