@@ -20,8 +20,9 @@ after Groves 2013 eq. 14.64-14.71, position error in NED metres:
 * ``d pN = vN + (vN pD - vD pN) / R_N``,
   ``d pE = vE + (vE tanL pN) / R_N + vE pD / R_E - (vD / R_E + vN tanL / R_N) pE``;
 * ``d vel = [f_n x] phi - (2 w_ie + w_en) x vel + v x d w_en(vel)
-  - (d g / d h) pD - C_nb ba - C_nb diag(f_b) sa``;
-* ``d phi = -w_in x phi + d w_en(vel) + C_nb bg + C_nb diag(w_b) sg``;
+  - (d g / d h) pD - C_nb S_a^-1 (ba + diag(f_b) sa)``;
+* ``d phi = -w_in x phi + d w_en(vel) + C_nb S_g^-1 (bg + diag(w_b) sg)``,
+  ``S = diag(1 + s)`` the current scale-factor corrections;
 * blocks' own constant entries (``-1 / tau`` of Gauss-Markov states, clock
   drift into bias, ...).
 
@@ -60,7 +61,7 @@ def dcm_into(q, C):
 
 
 @njit(cache=True)
-def fill_transition(F, kidx, lla, v_n, C, f_b, w_b):
+def fill_transition(F, kidx, lla, v_n, C, f_b, w_b, aux):
     """Write the epoch-dependent entries of the continuous-time F.
 
     Parameters
@@ -76,6 +77,10 @@ def fill_transition(F, kidx, lla, v_n, C, f_b, w_b):
         ``C_nb``.
     f_b, w_b : (3,) ndarray
         Corrected specific force [m/s^2] and angular rate [rad/s].
+    aux : (aux_size,) ndarray
+        Current estimates: the corrections ``(raw - b dt) / (1 + s)`` make a
+        bias error enter as ``-1 / (1 + s)`` and a scale-factor error as
+        ``-f / (1 + s)``.
     """
     lat, h = lla[0], lla[2]
     rn, re = principal_radii(lat, h)
@@ -128,16 +133,19 @@ def fill_transition(F, kidx, lla, v_n, C, f_b, w_b):
     F[a + 1, v + 0] = -1.0 / rn
     F[a + 2, v + 1] = -tl / re
     ba, bg, sa, sg = kidx[X_BA], kidx[X_BG], kidx[X_SA], kidx[X_SG]
-    for i in range(3):
-        for j in range(3):
+    asa, asg = kidx[A_SA], kidx[A_SG]
+    for j in range(3):
+        ia = 1.0 / (1.0 + aux[asa + j]) if asa >= 0 else 1.0
+        ig = 1.0 / (1.0 + aux[asg + j]) if asg >= 0 else 1.0
+        for i in range(3):
             if ba >= 0:
-                F[v + i, ba + j] = -C[i, j]
+                F[v + i, ba + j] = -C[i, j] * ia
             if bg >= 0:
-                F[a + i, bg + j] = C[i, j]
+                F[a + i, bg + j] = C[i, j] * ig
             if sa >= 0:
-                F[v + i, sa + j] = -C[i, j] * f_b[j]
+                F[v + i, sa + j] = -C[i, j] * f_b[j] * ia
             if sg >= 0:
-                F[a + i, sg + j] = C[i, j] * w_b[j]
+                F[a + i, sg + j] = C[i, j] * w_b[j] * ig
 
 
 @njit(cache=True, fastmath={"contract"})
@@ -299,7 +307,7 @@ def propagate(imu, nav, filt, model, out, k0, k1, flags):
         dcm_into(q_nb, C)
         ned_step(dth, dv, dt, lla, v_n, q_nb, carry, coning, 0, 0.0, no_gains)
         carry[0] = t[k]
-        fill_transition(F, kidx, lla, v_n, C, f_b, w_b)
+        fill_transition(F, kidx, lla, v_n, C, f_b, w_b, aux)
         propagate_covariance(P, F, rows, cols, active, dt, q_psd, A, B, second_order)
         if open_loop:
             for i in range(n):
