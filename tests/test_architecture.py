@@ -16,9 +16,10 @@ LAYERS = {
     "io": 4, "analysis": 4, "simulation": 4, "strapdown": 4,
     "integration": 5, "gyrofree": 5, "platform": 5,
     "alignment": 6,
-    "jobs": 7, "jobs_gyrofree": 7, "jobs_platform": 7,
-    "cli": 8, "cli_gyrofree": 8, "cli_platform": 8,
-    "__init__": 9, "__main__": 9,
+    "jobs": 7,
+    "cli_gyrofree": 8, "cli_platform": 8,
+    "cli": 9,
+    "__init__": 10, "__main__": 10,
 }
 
 

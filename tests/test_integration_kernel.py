@@ -98,6 +98,25 @@ def _f_model(lla0):
     return F[:9]
 
 
+def _f_dropped(lla0):
+    """The terms ``_kernel`` drops on purpose, written out (its docstring):
+    transport of the position error, the velocity error's own transport-rate
+    term ``v x d w_en(vel)``, gravity's north height gradient.  The test holds
+    ``F + these`` to the finite differences, so it checks both that F is right
+    and that what it leaves out is exactly what it says, of order |v| / R."""
+    lat, h = lla0[0], lla0[2]
+    rn, re = earth.principal_radii(lat, h)
+    tl = np.tan(lat)
+    vn, ve, vd = V_N
+    D = np.zeros((9, LAY.size))
+    D[0, 0], D[0, 2] = -vd / rn, vn / rn
+    D[1, 0], D[1, 1], D[1, 2] = ve * tl / rn, -(vd / re + vn * tl / rn), ve / re
+    M = np.array([[0.0, 1.0 / re, 0.0], [-1.0 / rn, 0.0, 0.0], [0.0, -tl / re, 0.0]])  # d w_en / d v
+    D[3:6, 3:6] = rot.skew(V_N) @ M
+    D[3, 2] = -earth.gravity_north_dh(lat, h)
+    return D
+
+
 @pytest.mark.parametrize("point", ["mid-latitude", "equator"])
 def test_transition_matches_finite_differences_of_the_ned_step(point):
     """Every entry of the position, velocity and attitude rows of F against
@@ -115,7 +134,7 @@ def test_transition_matches_finite_differences_of_the_ned_step(point):
     """
     lla0 = np.array([0.7, 0.1, 300.0]) if point == "mid-latitude" else np.array([2e-3, 1e-3, 0.5])
     Ffd, eps, h = _f_fd(lla0)
-    F = _f_model(lla0)
+    F = _f_model(lla0) + _f_dropped(lla0)
     R = 6.4e6
     spacing = np.r_[np.full(3, np.spacing(lla0[0]) * R + np.spacing(lla0[2])), np.full(3, 1e-15), np.full(3, 1e-16)]
     rounding = 10.0 * 3.0 / h * spacing[:, None] / eps[None, :]
@@ -134,10 +153,10 @@ def test_transition_catches_a_wrong_entry():
     or a missing 1/(1+s) factor (2e-3 relative) fails it."""
     lla0 = np.array([0.7, 0.1, 300.0])
     Ffd, eps, h = _f_fd(lla0)
-    F = _f_model(lla0)
+    F = _f_model(lla0) + _f_dropped(lla0)
     tol = 1e-6 * np.abs(F) + 1e-8
     bad = F.copy()
-    bad[3, 0 + 3] *= -1.0  # vel_n / vel_n: vD / R_N
+    bad[3, 0 + 3] *= -1.0  # vel_n / vel_n: vD / R_N (a dropped term: the test knows its form too)
     assert np.abs(Ffd - bad)[3, 3] > tol[3, 3]
     bad = F.copy()
     ba = LAY.slice("ba")

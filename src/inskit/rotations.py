@@ -151,6 +151,8 @@ def quat_normalize(q):
 def dcm_from_quat(q):
     """DCM ``C_ab`` from the unit quaternion ``q_ab``."""
     q = np.asarray(q, dtype=float)
+    if q.shape == (4,):  # one quaternion (called per filter update): no stacking
+        return np.array(quat_dcm(float(q[0]), float(q[1]), float(q[2]), float(q[3]))).reshape(3, 3)
     c = quat_dcm(q[..., 0], q[..., 1], q[..., 2], q[..., 3])
     return np.stack(c, -1).reshape(q.shape[:-1] + (3, 3))
 

@@ -17,19 +17,28 @@ entry is a constant declared by a block, written once per call from
 Error model (x = estimate - truth; phi: ``C_nb_est = (I - [phi x]) C_nb``),
 after Groves 2013 eq. 14.64-14.71, position error in NED metres:
 
-* ``d pN = vN + (vN pD - vD pN) / R_N``,
-  ``d pE = vE + (vE tanL pN) / R_N + vE pD / R_E - (vD / R_E + vN tanL / R_N) pE``;
-* ``d vel = [f_n x] phi - (2 w_ie + w_en) x vel + v x d w_en(vel)
-  - (d g / d h) pD - C_nb S_a^-1 (ba + diag(f_b) sa)``;
+* ``d pos = vel``;
+* ``d vel = [f_n x] phi - (2 w_ie + w_en) x vel - (d g / d h) pD
+  - C_nb S_a^-1 (ba + diag(f_b) sa)``;
 * ``d phi = -w_in x phi + d w_en(vel) + C_nb S_g^-1 (bg + diag(w_b) sg)``,
   ``S = diag(1 + s)`` the current scale-factor corrections;
 * blocks' own constant entries (``-1 / tau`` of Gauss-Markov states, clock
   drift into bias, ...).
 
-Dropped on purpose: the couplings of the position error into the Earth and
-transport rates, the Coriolis term and gravity's latitude dependence (all
-below 1e-8 in SI units for speeds under 300 m/s: ``2 W v / R``, ``v^2 / R^2``,
-``d g / d lat / R``); the finite-difference test of F bounds them.
+Dropped on purpose, as in Groves' short-term model, because each is of order
+``|v| / R`` (3e-6 1/s at 20 m/s, a 2e-4 relative change of an error over a
+60 s outage) and each sparse entry costs about 3 % of the propagation:
+
+* the transport of the position error, ``(vN pD - vD pN) / R_N`` in ``d pN``
+  and ``(vE tanL pN) / R_N + vE pD / R_E - (vD / R_E + vN tanL / R_N) pE`` in
+  ``d pE``;
+* the velocity error's own transport-rate term ``v x d w_en(vel)``;
+* the height gradient of gravity's north component (8e-9 1/s^2);
+* position into the Earth and transport rates, Coriolis and gravity's
+  latitude dependence (below 1e-8 1/s^2 for speeds under 300 m/s).
+
+``tests/test_integration_kernel.py`` checks that F plus exactly these terms
+equals the finite-difference Jacobian of the compiled NED step.
 """
 
 from __future__ import annotations
@@ -40,7 +49,7 @@ import numpy as np
 from numba import njit
 
 from .. import earth
-from ..earth import gravity_down_dh, gravity_north_dh, principal_radii
+from ..earth import principal_radii, radii_and_gravity_gradient
 from ..rotations import qmul, quat_dcm, rotvec_quat
 from ..strapdown.kernels import ned_step, store_unit
 
@@ -83,34 +92,26 @@ def fill_transition(F, kidx, lla, v_n, C, f_b, w_b, aux):
         ``-f / (1 + s)``.
     """
     lat, h = lla[0], lla[2]
-    rn, re = principal_radii(lat, h)
+    rn, re, _, dgd_dh = radii_and_gravity_gradient(lat, h)
     sl, cl = math.sin(lat), math.cos(lat)
     tl = sl / cl
-    vn, ve, vd = v_n[0], v_n[1], v_n[2]
+    vn, ve = v_n[0], v_n[1]
     wie0, wie2 = W_IE * cl, -W_IE * sl
     wen0, wen1, wen2 = ve / re, -vn / rn, -ve * tl / re
     p, v, a = P0, V0, T0
-    # position: velocity and the transport of the position error
+    # position: velocity
     for i in range(3):
         F[p + i, v + i] = 1.0
-    F[p + 0, p + 0] = -vd / rn
-    F[p + 0, p + 2] = vn / rn
-    F[p + 1, p + 0] = ve * tl / rn
-    F[p + 1, p + 1] = -(vd / re + vn * tl / rn)
-    F[p + 1, p + 2] = ve / re
     # gravity with height (x_D = -(h_est - h_true))
-    F[v + 0, p + 2] = -gravity_north_dh(lat, h)
-    F[v + 2, p + 2] = -gravity_down_dh(lat, h)
-    # velocity: -(2 w_ie + w_en) x dv + v x d w_en(dv)
+    F[v + 2, p + 2] = -dgd_dh
+    # velocity: -(2 w_ie + w_en) x dv
     w0, w1, w2 = 2.0 * wie0 + wen0, wen1, 2.0 * wie2 + wen2
-    F[v + 0, v + 0] = vd / rn
-    F[v + 0, v + 1] = w2 - ve * tl / re
+    F[v + 0, v + 1] = w2
     F[v + 0, v + 2] = -w1
     F[v + 1, v + 0] = -w2
-    F[v + 1, v + 1] = (vd + vn * tl) / re
     F[v + 1, v + 2] = w0
-    F[v + 2, v + 0] = w1 - vn / rn
-    F[v + 2, v + 1] = -w0 - ve / re
+    F[v + 2, v + 0] = w1
+    F[v + 2, v + 1] = -w0
     # velocity: specific force, [f_n x] phi
     f0 = C[0, 0] * f_b[0] + C[0, 1] * f_b[1] + C[0, 2] * f_b[2]
     f1 = C[1, 0] * f_b[0] + C[1, 1] * f_b[1] + C[1, 2] * f_b[2]
@@ -272,15 +273,17 @@ def propagate(imu, nav, filt, model, out, k0, k1, flags):
     model : tuple ``(kidx, q_psd, rows, cols, active, crow, ccol, cval)``
         Layout index, process noise, F pattern and active rows, constant
         entries of F.
-    out : tuple ``(lla, v_n, q_nb, var, aux)``
-        Per-row outputs; ``var`` receives the variances of every state.
+    out : tuple ``(lla, v_n, q_nb, var)``
+        Per-row outputs; ``var`` (N, n) receives the variances of every
+        state (the estimates in ``aux`` change only at updates: the caller
+        records them there).
     flags : tuple ``(coning, want_phi, open_loop, second_order)``
     """
     t, dth_all, dv_all = imu
     lla, v_n, q_nb, carry = nav
     x, P, aux, Phi = filt
     kidx, q_psd, rows, cols, active, crow, ccol, cval = model
-    out_lla, out_v, out_q, out_var, out_aux = out
+    out_lla, out_v, out_q, out_var = out
     coning, want_phi, open_loop, second_order = flags
     n = kidx[N_STATES]
     F = np.zeros((n, n))
@@ -300,7 +303,6 @@ def propagate(imu, nav, filt, model, out, k0, k1, flags):
     o_v = np.empty(3)
     o_q = np.empty(4)
     no_gains = np.zeros(2)
-    n_aux = aux.shape[0]
     for k in range(k0, k1):
         dt = t[k] - carry[0]
         correct_increments(kidx, aux, dth_all[k], dv_all[k], dt, dth, dv, w_b, f_b)
@@ -332,5 +334,3 @@ def propagate(imu, nav, filt, model, out, k0, k1, flags):
                 out_q[k, i] = q_nb[i]
         for i in range(n):
             out_var[k, i] = P[i, i]  # variances; the caller takes the square roots in one pass
-        for i in range(n_aux):
-            out_aux[k, i] = aux[i]

@@ -116,7 +116,7 @@ class Track:
     aux : (N, layout.aux_size) ndarray
         Estimates of the blocks that carry one, held between updates.
     sigma : (N, layout.size) ndarray
-        1-sigma of every state.
+        1-sigma of every state at every row.
     layout : StateLayout
     """
 
@@ -254,14 +254,14 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     out_v = np.empty((N, 3))
     out_q = np.empty((N, 4))
     out_var = np.empty((N, n))
-    out_aux = np.empty((N, lay.aux_size))
+    node_rows, node_aux = [], []
     w_raw = np.zeros(3)
     open_loop = settings.scheme == "open"
     want_store = smoother
     store = SmootherStore() if want_store else None
     Phi = np.eye(n)
     nav = (lla, v_n, q_nb, carry)
-    outs = (out_lla, out_v, out_q, out_var, out_aux)
+    outs = (out_lla, out_v, out_q, out_var)
     imu_arrays = (imu.time, imu.dtheta_b, imu.dv_b)
     eye_n = np.eye(n)
 
@@ -271,7 +271,8 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         else:
             out_lla[k], out_v[k], out_q[k] = lla, v_n, q_nb
         out_var[k] = P.diagonal()  # variances until the end of the run
-        out_aux[k] = aux
+        node_rows.append(k)
+        node_aux.append(aux - x[aux_idx] if open_loop else aux.copy())
 
     def propagate(k0, k1, want_phi):
         filt = (x, P, aux, Phi)
@@ -370,8 +371,14 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     check_covariance(P, "at the end of the run")
     if not (np.isfinite(out_lla).all() and np.isfinite(out_v).all() and np.isfinite(out_q).all()):
         raise FilterDivergence("the navigation solution became NaN: the filter diverged")
-    np.sqrt(np.maximum(out_var, 0.0, out=out_var), out=out_var)
+    if open_loop:  # the open-loop estimate drifts with x between updates: record it at the end too
+        node_rows.append(N - 1)
+        node_aux.append(aux - x[aux_idx])
+    # every row holds the estimates of the last node at or before it (they change only at updates)
+    hold = np.searchsorted(np.asarray(node_rows), np.arange(N), side="right") - 1
+    out_aux = np.asarray(node_aux).reshape(-1, lay.aux_size)[hold]
+    sigma = np.sqrt(np.maximum(out_var, 0.0, out=out_var), out=out_var)
     nav_sol = NavSolution._trusted(imu.time, out_lla, out_v, out_q)
     innovations = {k: {kk: np.asarray(vv) for kk, vv in v.items()} for k, v in innov.items()}
-    return FilterOutput(nav_sol, out_aux, out_var, lay, counts, innovations, settings, store)
+    return FilterOutput(nav_sol, out_aux, sigma, lay, counts, innovations, settings, store)
 

@@ -59,6 +59,7 @@ class StateLayout:
             raise InputError("navigation blocks may appear only as the first three")
         self.blocks = blocks
         self._by_name = {b.name: b for b in blocks}
+        self._by_role = {b.role: b for b in blocks if b.role is not None}
         self._slices, self._aux = {}, {}
         i = a = 0
         for b in blocks:
@@ -96,10 +97,7 @@ class StateLayout:
 
     def by_role(self, role):
         """The block with this role, or ``None``."""
-        for b in self.blocks:
-            if b.role == role:
-                return b
-        return None
+        return self._by_role.get(role)
 
     @property
     def names(self):
@@ -161,7 +159,7 @@ class StateLayout:
         The compiled kernel multiplies only these, so the cost of the
         covariance propagation grows with them, not with ``size**2``.  Skew
         blocks have zero diagonals; of the position-to-velocity block only
-        the gravity terms ``(vN, pD)``, ``(vD, pD)`` are used; the rest comes
+        the gravity gradient ``(vD, pD)`` is used; the rest comes
         from the sensor roles and the blocks' constant entries.
         """
         n = self.size
@@ -169,12 +167,8 @@ class StateLayout:
         p, v, a = 0, 3, 6
         off = ~np.eye(3, dtype=bool)
         mask[p:p + 3, v:v + 3] = np.eye(3, dtype=bool)
-        mask[p + 0, [p + 0, p + 2]] = True          # pN: -vD/rn pN + vN/rn pD
-        mask[p + 1, [p + 0, p + 1, p + 2]] = True   # pE: transport of the east error
-        mask[v + 0, p + 2] = True                   # gravity, north and down, with height
-        mask[v + 2, p + 2] = True
+        mask[v + 2, p + 2] = True                   # gravity with height
         mask[v:v + 3, v:v + 3] = off
-        mask[v + 0, v + 0] = mask[v + 1, v + 1] = True  # [v x] d w_en / d v
         mask[v:v + 3, a:a + 3] = off
         mask[a:a + 3, a:a + 3] = off
         mask[a + 0, v + 1] = mask[a + 1, v + 0] = mask[a + 2, v + 1] = True  # transport-rate error
