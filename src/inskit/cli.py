@@ -502,6 +502,16 @@ def demo(checks, as_json):
     _emit(res, as_json, table)
 
 
+# --- gyro-free and platform INS (their own modules, same conventions) ---------------
+from .cli_gyrofree import register as _register_gyrofree  # noqa: E402
+from .cli_platform import platform as _platform_group  # noqa: E402
+from .cli_platform import reproduce_integration_filters as _reproduce_integration_filters  # noqa: E402
+
+_register_gyrofree(cli, reproduce)
+cli.add_command(_platform_group, "platform")
+reproduce.add_command(_reproduce_integration_filters, "integration-filters")
+
+
 def main(argv=None):
     """Entry point: run the CLI, turning user errors into one line and exit 2."""
     debug = os.environ.get("INSKIT_DEBUG")

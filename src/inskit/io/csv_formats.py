@@ -38,7 +38,7 @@ _GYRO_RAD_MAX = 10.0      # 99th percentile |w| in rad/s above this looks like d
 _GYRO_RAD_MEDIAN = 1.0    # median |w| in rad/s above this looks like deg/s
 
 
-def _read_table(path) -> tuple[Path, pd.DataFrame]:
+def read_table(path) -> tuple[Path, pd.DataFrame]:
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: no such file")
@@ -54,7 +54,7 @@ def _read_table(path) -> tuple[Path, pd.DataFrame]:
     return path, df
 
 
-def _numeric(path, df, columns):
+def numeric_columns(path, df, columns):
     """The named columns as a float array; names the line of a bad value."""
     out = np.empty((len(df), len(columns)))
     for j, c in enumerate(columns):
@@ -69,7 +69,7 @@ def _numeric(path, df, columns):
     return out
 
 
-def _require(path, df, columns, hint=""):
+def require_columns(path, df, columns, hint=""):
     missing = [c for c in columns if c not in df.columns]
     if missing:
         raise InputError(
@@ -77,7 +77,7 @@ def _require(path, df, columns, hint=""):
         )
 
 
-def _check_time(path, t, column="time_s"):
+def check_time_column(path, t, column="time_s"):
     d = np.diff(t)
     bad = d <= 0
     if bad.any():
@@ -122,30 +122,30 @@ def read_imu(path, *, check_units=True, sampled="instant") -> ImuData:
     -------
     ImuData
     """
-    path, df = _read_table(path)
-    _require(path, df, ["time_s"])
-    t = _numeric(path, df, ["time_s"])[:, 0]
-    _check_time(path, t)
+    path, df = read_table(path)
+    require_columns(path, df, ["time_s"])
+    t = numeric_columns(path, df, ["time_s"])[:, 0]
+    check_time_column(path, t)
     gu, au = _find_triplet(df, "gyro", GYRO_UNITS), _find_triplet(df, "accel", ACCEL_UNITS)
     du, vu = _find_triplet(df, "dtheta", DTHETA_UNITS), _find_triplet(df, "dv", DV_UNITS)
     if gu and au:
         gcols = [f"gyro_{a}_{gu}" for a in AXES]
         acols = [f"accel_{a}_{au}" for a in AXES]
-        w = _numeric(path, df, gcols) * GYRO_UNITS[gu]
-        f = _numeric(path, df, acols) * ACCEL_UNITS[au]
+        w = numeric_columns(path, df, gcols) * GYRO_UNITS[gu]
+        f = numeric_columns(path, df, acols) * ACCEL_UNITS[au]
         if check_units:
-            _check_imu_units(path, w, f, gcols[0], acols[0], gu, au)
+            check_imu_units(path, w, f, gcols[0], acols[0], gu, au)
         if len(t) < 2:
             raise InputError(f"{path}: needs at least two rows to integrate rates")
         return ImuData.from_rates(t, w, f, sampled=sampled)
     if du and vu:
         tcols = [f"dtheta_{a}_{du}" for a in AXES]
         vcols = [f"dv_{a}_{vu}" for a in AXES]
-        dth = _numeric(path, df, tcols) * DTHETA_UNITS[du]
-        dv = _numeric(path, df, vcols)
+        dth = numeric_columns(path, df, tcols) * DTHETA_UNITS[du]
+        dv = numeric_columns(path, df, vcols)
         if check_units and len(t) > 1:
             dt = np.diff(t)
-            _check_imu_units(path, dth[1:] / dt[:, None], dv[1:] / dt[:, None], tcols[0], vcols[0],
+            check_imu_units(path, dth[1:] / dt[:, None], dv[1:] / dt[:, None], tcols[0], vcols[0],
                              "rad_s" if du == "rad" else "deg_s", "m_s2")
         return ImuData(t, dth, dv)
     raise InputError(
@@ -155,7 +155,7 @@ def read_imu(path, *, check_units=True, sampled="instant") -> ImuData:
     )
 
 
-def _check_imu_units(path, w, f, gcol, acol, gunit, aunit):
+def check_imu_units(path, w, f, gcol, acol, gunit, aunit):
     fn = np.median(np.linalg.norm(f, axis=1))
     if aunit in ("m_s2",) and fn < _ACCEL_G_LIKE:
         raise InputError(
@@ -178,7 +178,7 @@ def _check_imu_units(path, w, f, gcol, acol, gunit, aunit):
 
 def write_imu(path, imu: ImuData, *, overwrite=False):
     """Write increments in the IMU format (``dtheta_*_rad``, ``dv_*_m_s``)."""
-    path = _writable(path, overwrite)
+    path = check_writable(path, overwrite)
     data = {"time_s": imu.time}
     for i, a in enumerate(AXES):
         data[f"dtheta_{a}_rad"] = imu.dtheta_b[:, i]
@@ -187,7 +187,7 @@ def write_imu(path, imu: ImuData, *, overwrite=False):
     pd.DataFrame(data).to_csv(path, index=False, float_format="%.17g")
 
 
-def _writable(path, overwrite):
+def check_writable(path, overwrite):
     path = Path(path)
     if path.exists() and not overwrite:
         raise InputError(f"{path}: already exists; refusing to overwrite it (use --force / overwrite=True)")
@@ -202,17 +202,17 @@ def read_gnss(path) -> GnssData:
     sigma_d_m`` and optionally ``vn_m_s, ve_m_s, vd_m_s, sigma_vn_m_s,
     sigma_ve_m_s, sigma_vd_m_s``.  Sigmas are 1-sigma and must be > 0.
     """
-    path, df = _read_table(path)
-    _require(path, df, GNSS_COLUMNS)
-    a = _numeric(path, df, GNSS_COLUMNS)
-    _check_time(path, a[:, 0])
+    path, df = read_table(path)
+    require_columns(path, df, GNSS_COLUMNS)
+    a = numeric_columns(path, df, GNSS_COLUMNS)
+    check_time_column(path, a[:, 0])
     _check_latlon(path, a[:, 1], a[:, 2])
     _check_positive(path, df, a[:, 4:7], GNSS_COLUMNS[4:7])
     v = sv = None
     have = [c in df.columns for c in GNSS_VEL_COLUMNS]
     if any(have):
-        _require(path, df, GNSS_VEL_COLUMNS, " (velocity needs all six velocity columns)")
-        b = _numeric(path, df, GNSS_VEL_COLUMNS)
+        require_columns(path, df, GNSS_VEL_COLUMNS, " (velocity needs all six velocity columns)")
+        b = numeric_columns(path, df, GNSS_VEL_COLUMNS)
         _check_positive(path, df, b[:, 3:], GNSS_VEL_COLUMNS[3:])
         v, sv = b[:, :3], b[:, 3:]
     lla = np.column_stack([a[:, 1] * DEG, a[:, 2] * DEG, a[:, 3]])
@@ -238,7 +238,7 @@ def _check_positive(path, df, a, columns):
 
 
 def write_gnss(path, gnss: GnssData, *, overwrite=False):
-    path = _writable(path, overwrite)
+    path = check_writable(path, overwrite)
     cols = {
         "time_s": gnss.time,
         "lat_deg": gnss.lla[:, 0] / DEG,
@@ -263,15 +263,15 @@ def read_solution(path) -> NavSolution:
     roll_deg, pitch_deg, yaw_deg``; any further numeric columns are kept in
     ``NavSolution.extra`` under their own names.
     """
-    path, df = _read_table(path)
-    _require(path, df, SOLUTION_COLUMNS)
-    a = _numeric(path, df, SOLUTION_COLUMNS)
-    _check_time(path, a[:, 0])
+    path, df = read_table(path)
+    require_columns(path, df, SOLUTION_COLUMNS)
+    a = numeric_columns(path, df, SOLUTION_COLUMNS)
+    check_time_column(path, a[:, 0])
     _check_latlon(path, a[:, 1], a[:, 2])
     extra = {}
     for c in df.columns:
         if c not in SOLUTION_COLUMNS:
-            extra[c] = _numeric(path, df, [c])[:, 0]
+            extra[c] = numeric_columns(path, df, [c])[:, 0]
     lla = np.column_stack([a[:, 1] * DEG, a[:, 2] * DEG, a[:, 3]])
     rpy = a[:, 7:10] * DEG
     return NavSolution(a[:, 0], lla, a[:, 4:7], rot.quat_from_euler(rpy), extra)
@@ -282,7 +282,7 @@ def write_solution(path, sol: NavSolution, *, overwrite=False):
 
     Refuses to write a NaN (a solution with NaN is a bug upstream).
     """
-    path = _writable(path, overwrite)
+    path = check_writable(path, overwrite)
     rpy = sol.euler / DEG
     cols = {
         "time_s": sol.time,

@@ -17,7 +17,7 @@ from .. import rotations as rot
 from ..errors import InputError
 from ..types import GnssData, ImuData
 from ..units import DEG, G0
-from .csv_formats import _check_imu_units, _check_time, _numeric, _read_table, _require
+from .csv_formats import check_imu_units, check_time_column, numeric_columns, read_table, require_columns
 
 GPS_EPOCH = datetime(1980, 1, 6, tzinfo=timezone.utc)
 WEEK_S = 604800.0
@@ -164,18 +164,18 @@ def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0
         In body axes (forward-right-down).
     week0 : int
     """
-    path, df = _read_table(path)
+    path, df = read_table(path)
     cols = ["gps_week", "gps_sow_s", "acc_x_g", "acc_y_g", "acc_z_g", "gyro_x_dps", "gyro_y_dps", "gyro_z_dps"]
-    _require(path, df, cols)
-    a = _numeric(path, df, cols)
+    require_columns(path, df, cols)
+    a = numeric_columns(path, df, cols)
     week = a[:, 0].astype(int)
     if week0 is None:
         week0 = int(week[0])
     t = (week - week0) * WEEK_S + a[:, 1] + time_offset_s
-    _check_time(path, t, "gps_sow_s")
+    check_time_column(path, t, "gps_sow_s")
     C_bs = mount_dcm(mount_rpy)
     f = a[:, 2:5] * G0 @ C_bs.T
     w = a[:, 5:8] * DEG @ C_bs.T
     if check_units:
-        _check_imu_units(path, w, f, "gyro_x_dps", "acc_x_g", "deg_s", "g")
+        check_imu_units(path, w, f, "gyro_x_dps", "acc_x_g", "deg_s", "g")
     return ImuData.from_rates(t, w, f, sampled="average"), week0

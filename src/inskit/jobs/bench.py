@@ -45,7 +45,9 @@ def run_benchmarks(quick=False, progress=None):
     whole-array call including result construction), ``wander_epochs_per_s``,
     ``ecef_epochs_per_s``, ``inertial_epochs_per_s``, ``lc_epochs_per_s``
     (the whole closed-loop 21-state filter, IMU-rate covariance propagation,
-    1 Hz GNSS position updates, through the public ``run_filter``).
+    1 Hz GNSS position updates, through the public ``run_filter``),
+    ``gyrofree_epochs_per_s`` (ten-accelerometer closed-form solve plus the
+    source's inertial navigation, compiled).
     """
     rng = np.random.default_rng(0)
     duration = 600.0 if quick else 3600.0
@@ -66,6 +68,11 @@ def run_benchmarks(quick=False, progress=None):
     out["lc_gnss_rate_hz"] = 1.0
     if progress:
         progress("lc")
+    from .bench_gyrofree import gyrofree_rate
+
+    out["gyrofree_epochs_per_s"] = gyrofree_rate(quick)
+    if progress:
+        progress("gyrofree")
     return out
 
 

@@ -8,7 +8,9 @@ pitch) is a constant plus a sum of quintic smooth steps
 finite, and every derivative and integral is in closed form.  Heading is the
 integral of the heading rate; the velocity follows the heading and the
 flight-path angle; position is integrated on the ellipsoid (RK4 on a fine
-grid, cubic Hermite in between: millimetre-exact at any time).
+grid, cubic Hermite in between: millimetre-exact at any time).  The angular
+acceleration ``omega_dot_nb_b`` comes from the channels' exact second
+derivatives.
 """
 
 from __future__ import annotations
@@ -319,8 +321,10 @@ class SegmentTrajectory:
         dy = rhs(tg, y)
         self._pos = CubicHermiteSpline(tg, y, dy, axis=0)
 
-    def _state(self, t):
-        """Position, NED velocity and acceleration, Euler angles and rates."""
+    def _state(self, t, second=False):
+        """Position, NED velocity and acceleration, Euler angles and rates
+        (and, with ``second``, the Euler angles' second derivatives as a
+        seventh item)."""
         t = np.atleast_1d(np.asarray(t, dtype=float))
         if self._pos is None:
             self._integrate_position()
@@ -334,6 +338,7 @@ class SegmentTrajectory:
         dbank = (dv * rb + v * drb) / G_COORD / (1 + (v * rb / G_COORD) ** 2)
         rpy = np.column_stack([rl + bank, g + pt, psi])
         drpy = np.column_stack([drl + dbank, dg + dpt, r])
+        ddrpy = self._euler_second_derivatives(t, v, dv, rb, drb) if second else None
         for o in self.osc:
             x, dx, ddx = o.eval(t)
             if o.target == "down":
@@ -345,11 +350,37 @@ class SegmentTrajectory:
                 j = ("roll", "pitch", "yaw").index(o.target)
                 rpy[:, j] += x
                 drpy[:, j] += dx
+                if second:
+                    ddrpy[:, j] += ddx
+        if second:
+            return t, lla, v_n, a_n, rpy, drpy, ddrpy
         return t, lla, v_n, a_n, rpy, drpy
 
+    def _euler_second_derivatives(self, t, v, dv, rb, drb):
+        """Second time derivatives of roll, pitch, yaw before the oscillations
+        (exact: every channel is a sum of quintic steps).
+
+        Roll holds the coordinated bank ``atan(u)``, ``u = v r_bank / g``:
+        ``d2/dt2 atan(u) = u'' / (1 + u^2) - 2 u u'^2 / (1 + u^2)^2``; yaw is the
+        integral of the heading rates, so its second derivative is their
+        first."""
+        _, _, ddv = self.speed.eval(t)
+        _, drf, _ = self.rate_flat.eval(t)
+        _, _, ddrb = self.rate_bank.eval(t)
+        _, _, ddg = self.gamma.eval(t)
+        _, _, ddrl = self.roll.eval(t)
+        _, _, ddpt = self.pitch.eval(t)
+        u = v * rb / G_COORD
+        du = (dv * rb + v * drb) / G_COORD
+        ddu = (ddv * rb + 2.0 * dv * drb + v * ddrb) / G_COORD
+        k = 1.0 + u * u
+        ddbank = ddu / k - 2.0 * u * du * du / (k * k)
+        return np.column_stack([ddrl + ddbank, ddg + ddpt, drf + drb])
+
     def kinematics(self, t):
-        """:class:`Kinematics` at times ``t`` (any rate, any order)."""
-        return _kinematics_from_ned(*self._state(t))
+        """:class:`Kinematics` at times ``t`` (any rate, any order), with the
+        exact angular acceleration ``omega_dot_nb_b``."""
+        return _kinematics_from_ned(*self._state(t, second=True))
 
     def rates(self, t):
         """True ``(omega_ib_b, f_b)`` at times ``t``: the compiled equivalent of
@@ -364,8 +395,9 @@ class SegmentTrajectory:
         return w, f
 
 
-def _kinematics_from_ned(t, lla, v_n, a_n, rpy, drpy):
-    """Kinematics from position, NED velocity/acceleration and Euler angles."""
+def _kinematics_from_ned(t, lla, v_n, a_n, rpy, drpy, ddrpy=None):
+    """Kinematics from position, NED velocity/acceleration and Euler angles
+    (with ``ddrpy``, their second derivatives, also the angular acceleration)."""
     z = np.zeros(len(t))
-    kin = kinematics_from_curvilinear(t, lla[:, 0], lla[:, 1], lla[:, 2], z, z, z, z, z, z, rpy, drpy)
-    return Kinematics(t, lla, v_n, a_n, kin.C_nb, kin.omega_nb_b)
+    kin = kinematics_from_curvilinear(t, lla[:, 0], lla[:, 1], lla[:, 2], z, z, z, z, z, z, rpy, drpy, ddrpy)
+    return Kinematics(t, lla, v_n, a_n, kin.C_nb, kin.omega_nb_b, kin.omega_dot_nb_b)

@@ -1,0 +1,505 @@
+"""Jobs of the gyro-free INS: simulate an array, navigate from array outputs,
+reproduce source 003.  They read files, write files and plot; the library
+(:mod:`inskit.gyrofree`) does not import them.  The CLI
+(:mod:`inskit.cli_gyrofree`) is a thin layer over these functions.
+
+Units at this edge: micro-g, micro-g/sqrt(Hz), ppm, mrad, degrees; converted
+to SI here.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InputError
+from ..units import DEG, MICRO_G, PPM
+
+SOURCE_SCENARIO = "source003"
+
+
+# --- helpers ---------------------------------------------------------------------------
+def layout_from_spec(spec, d=0.1):
+    """``"ten"``, ``"six"`` (with lever arm ``d`` [m]) or a layout file path."""
+    from ..gyrofree.files import read_layout
+    from ..gyrofree.layout import builtin_layout
+
+    if spec in ("ten", "six"):
+        return builtin_layout(spec, d)
+    p = Path(spec)
+    if not p.exists():
+        raise InputError(f"--layout: {spec!r} is neither 'ten', 'six' nor an existing layout file")
+    return read_layout(p)
+
+
+def _check_out(out_dir, names, overwrite):
+    out = Path(out_dir)
+    if not overwrite:
+        for n in names:
+            if (out / n).exists():
+                raise InputError(f"{out / n}: already exists; refusing to overwrite it (use --force)")
+    out.mkdir(parents=True, exist_ok=True)
+    return out
+
+
+def array_errors_from_datasheet(layout, rng, rate_hz, *, bias_ug=0.0, bias_sigma_ug=0.0, noise_ug_sqrt_hz=0.0,
+                                scale_sigma_ppm=0.0, misalignment_sigma_mrad=0.0, source_theta_deg=None):
+    """Array errors from datasheet units: fixed bias and random bias sigma
+    [micro-g], white noise [micro-g/sqrt(Hz)] (per-sample sigma
+    ``N sqrt(rate)``), scale-factor sigma [ppm], random axis misalignment sigma
+    [mrad], or the source's six angles of m1-m6 [deg]."""
+    from ..gyrofree.model import ArrayErrors, draw_errors, source_misaligned_axes
+
+    for name, v in (("bias sigma", bias_sigma_ug), ("noise", noise_ug_sqrt_hz), ("scale-factor sigma", scale_sigma_ppm),
+                    ("misalignment sigma", misalignment_sigma_mrad)):
+        if not (np.isfinite(v) and v >= 0):
+            raise InputError(f"the {name} must be >= 0, got {v}")
+    sigma = noise_ug_sqrt_hz * MICRO_G * np.sqrt(rate_hz)
+    e = draw_errors(layout, rng, bias_sigma=bias_sigma_ug * MICRO_G, bias_mean=bias_ug * MICRO_G,
+                    scale_sigma=scale_sigma_ppm * PPM, misalignment_sigma=misalignment_sigma_mrad * 1e-3,
+                    noise_sigma=sigma)
+    if source_theta_deg is not None:
+        if e.axes_true_b is not None:
+            raise InputError("give either the source's misalignment angles or a random misalignment sigma, not both")
+        e = ArrayErrors.build(len(layout), bias=e.bias, scale_factor=e.scale_factor, noise_sigma=sigma,
+                              axes_true_b=source_misaligned_axes(layout, np.asarray(source_theta_deg) * DEG))
+    return e
+
+
+# --- simulate ------------------------------------------------------------------------------
+def simulate_job(scenario, layout_spec, out_dir, *, d=0.1, rate_hz=None, duration=None, seed=0, overwrite=False,
+                 log=None, **errors):
+    """Simulate an accelerometer array on a scenario and write its files.
+
+    Parameters
+    ----------
+    scenario : str
+        ``"source003"`` (source 003's constant-rate motion, inertial frame, no
+        gravity, C(0) = I) or a scenario TOML file (``examples/*.toml``).
+    layout_spec : str
+        ``"ten"``, ``"six"`` or a layout file.
+    out_dir : path
+        Receives ``array.csv`` (raw outputs), ``layout.csv`` (the layout used)
+        and ``truth.csv`` (inertial format for ``source003``, the NED solution
+        format otherwise; both with the true rates ``wx_rad_s ..`` and specific
+        force ``fx_m_s2 ..``).
+    d : float
+        Lever arm of the built-in layouts [m].
+    rate_hz, duration : float, optional
+        Sampling rate [Hz] (default 1000 Hz for ``source003``, the scenario's
+        IMU rate otherwise) and length [s] (default: 10 s, or the scenario's).
+    seed : int
+        Seed of every random draw.
+    **errors
+        Datasheet-unit errors, see :func:`array_errors_from_datasheet`.
+
+    Returns
+    -------
+    dict
+        A JSON-able summary.
+    """
+    from .. import io
+    from ..gyrofree.files import write_array, write_inertial, write_layout
+    from ..gyrofree.model import simulate_array
+    from ..gyrofree.motion import ConstantRateMotion, motion_from_trajectory
+
+    log = log or (lambda s: None)
+    t0 = time.perf_counter()
+    layout = layout_from_spec(layout_spec, d)
+    out = _check_out(out_dir, ["array.csv", "layout.csv", "truth.csv"], overwrite)
+    rng = np.random.default_rng(seed)
+    if scenario == SOURCE_SCENARIO:
+        rate = 1000.0 if rate_hz is None else float(rate_hz)
+        T = 10.0 if duration is None else float(duration)
+        _check_rate(rate, T)
+        motion = ConstantRateMotion()
+        t = np.arange(0.0, T + 0.5 / rate, 1.0 / rate)
+        mot = motion.motion(t)
+        truth = motion.truth(t)
+        kind = "inertial (source 003: no gravity, C(0) = I)"
+    else:
+        from ..simulation.imu import truth_solution
+        from ..simulation.scenario import build_trajectory, load_scenario
+
+        sc = load_scenario(scenario)
+        tr = build_trajectory(sc, rng)
+        rate = sc.imu.rate_hz if rate_hz is None else float(rate_hz)
+        T = tr.duration if duration is None else min(float(duration), tr.duration)
+        _check_rate(rate, T)
+        t = np.arange(0.0, T + 1e-9, 1.0 / rate)
+        log(f"gyrofree simulate: {sc.name}, {len(t)} samples")
+        mot = motion_from_trajectory(tr, t)
+        truth = truth_solution(tr, t)
+        kind = f"Earth (scenario {sc.name})"
+    err = array_errors_from_datasheet(layout, rng, rate, **errors)
+    data = simulate_array(layout, mot, err, rng)
+    write_array(out / "array.csv", data, overwrite=True)
+    write_layout(out / "layout.csv", layout, overwrite=True)
+    extra = {}
+    for j, a in enumerate("xyz"):
+        extra[f"w{a}_rad_s"] = mot.omega_ib_b[:, j]
+    for j, a in enumerate("xyz"):
+        extra[f"f{a}_m_s2"] = mot.f_b[:, j]
+    if scenario == SOURCE_SCENARIO:
+        write_inertial(out / "truth.csv", truth, extra=extra, overwrite=True)
+    else:
+        from ..types import NavSolution
+
+        io.write_solution(out / "truth.csv", NavSolution(truth.time, truth.lla, truth.v_n, truth.q_nb, extra),
+                          overwrite=True)
+    files = [str(out / n) for n in ("array.csv", "layout.csv", "truth.csv")]
+    return {"scenario": scenario, "kind": kind, "layout": layout.label, "accelerometers": len(layout),
+            "d_m": layout.d, "rate_hz": rate, "samples": len(t), "duration_s": float(t[-1] - t[0]), "seed": seed,
+            "errors": {"bias_m_s2": err.bias, "scale_factor": err.scale_factor, "noise_sigma_m_s2": err.noise_sigma,
+                       "misaligned": err.axes_true_b is not None},
+            "elapsed_s": time.perf_counter() - t0, "files": files}
+
+
+def _check_rate(rate, T):
+    if not (np.isfinite(rate) and rate > 0):
+        raise InputError(f"--rate must be > 0 Hz, got {rate}")
+    if not (np.isfinite(T) and T * rate >= 2):
+        raise InputError(f"--duration must cover at least two samples, got {T} s at {rate} Hz")
+
+
+# --- navigate --------------------------------------------------------------------------------
+def _parse_vector(text, n, what):
+    parts = [p for p in str(text).replace(" ", "").split(",") if p]
+    try:
+        x = [float(p) for p in parts]
+    except ValueError:
+        raise InputError(f"{what}: not a number in {text!r}") from None
+    if len(x) != n or not np.isfinite(x).all():
+        raise InputError(f"{what}: expected {n} comma-separated finite numbers, got {text!r}")
+    return np.array(x)
+
+
+def _truth_rate(extra, k=0):
+    if all(f"w{a}_rad_s" in extra for a in "xyz"):
+        return np.array([extra[f"w{a}_rad_s"][k] for a in "xyz"])
+    return None
+
+
+def navigate_job(array_file, layout_spec, out_dir, *, d=0.1, solver="auto", frame="source", init=None, init_from=None,
+                 omega0=None, rate_filter_noise=None, sign_rule="robust", noise_sigma=0.0, truth_file=None,
+                 overwrite=False, log=None):
+    """Solve an array file and navigate; write ``rates.csv`` and ``solution.csv``.
+
+    Parameters
+    ----------
+    array_file : path
+        Raw outputs (``docs/formats.md``, array CSV).
+    layout_spec : str
+        ``"ten"``, ``"six"`` or a layout file.
+    out_dir : path
+    d : float
+        Lever arm of the built-in layouts [m].
+    solver : {"auto", "closed-form", "least-squares"}
+    frame : {"source", "ned", "wander", "ecef", "inertial"}
+        ``"source"``: source 003's inertial navigation (eq. 43-44, no
+        gravity, start C = I, r = v = 0 unless ``init_from`` gives an inertial
+        truth file); the others: the core mechanizations with an Earth
+        initial state from ``init`` or ``init_from``.
+    init : str, optional
+        ``lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg``.
+    init_from : path, optional
+        A truth file (from ``inskit gyrofree simulate``): initial state and,
+        when present, the initial rate.
+    omega0 : str, optional
+        ``p,q,r`` [rad/s]: initial rate (only its signs matter without a
+        filter); default from ``init_from`` or rest.
+    rate_filter_noise : float, optional
+        Per-sample accelerometer noise [m/s^2]: use the least-squares solver's
+        rate filter with it.
+    sign_rule : {"robust", "source"}
+        Closed form only.
+    noise_sigma : float
+        Per-sample noise [m/s^2] for the closed form's sign rule.
+    truth_file : path, optional
+        Add errors against it to the summary.
+
+    Returns
+    -------
+    dict
+        A JSON-able summary.
+    """
+    from .. import io
+    from ..gyrofree.files import read_array, read_inertial, write_inertial, write_rates
+    from ..gyrofree.navigation import navigate_earth, navigate_solution_inertial
+    from ..gyrofree.solvers import RateFilter, solve
+
+    log = log or (lambda s: None)
+    t0 = time.perf_counter()
+    frames = ("source", "ned", "wander", "ecef", "inertial")
+    if frame not in frames:
+        raise InputError(f"--frame must be one of {', '.join(frames)}, got {frame!r}")
+    if init and init_from:
+        raise InputError("give either --init or --init-from, not both")
+    layout = layout_from_spec(layout_spec, d)
+    out = _check_out(out_dir, ["rates.csv", "solution.csv"], overwrite)
+    data = read_array(array_file, layout)
+    log(f"gyrofree navigate: {len(data)} samples, layout {layout.label}")
+    w0 = None if omega0 is None else _parse_vector(omega0, 3, "--omega0")
+    initial = None
+    ref_inertial = None
+    if init_from:
+        if frame == "source":
+            ref_inertial, extra = read_inertial(init_from)
+            k = 0
+        else:
+            ref = io.read_solution(init_from)
+            initial = ref.interpolate(data.time[:1]).state(0)
+            extra = ref.extra
+            k = int(np.argmin(np.abs(ref.time - data.time[0])))
+        if w0 is None:
+            w0 = _truth_rate(extra, k)
+    elif init:
+        if frame == "source":
+            raise InputError("--init is for the Earth frames; the source frame starts at C = I, r = v = 0 "
+                             "(or use --init-from with an inertial truth file)")
+        from ..types import NavState
+
+        x = _parse_vector(init, 9, "--init")
+        initial = NavState.from_euler(data.time[0], [x[0] * DEG, x[1] * DEG, x[2]], x[3:6], x[6:9] * DEG)
+    elif frame != "source":
+        raise InputError(f"--frame {frame} needs an initial state: --init ... or --init-from TRUTH.csv")
+    opts = {"omega0": w0}
+    if solver in ("auto", "closed-form") and rate_filter_noise is None:
+        from ..gyrofree.layout import source_index
+
+        if solver == "closed-form" or source_index(layout) == "ten":
+            solver = "closed-form"
+            opts.update(sign_rule=sign_rule, noise_sigma=noise_sigma)
+    if rate_filter_noise is not None:
+        if solver == "closed-form":
+            raise InputError("--filter-noise uses the least-squares solver's rate filter; drop --solver closed-form")
+        solver = "least-squares"
+        opts["rate_filter"] = RateFilter(sensor_noise=rate_filter_noise)
+    sol = solve(data, layout, method="least-squares" if solver == "auto" else solver, **opts)
+    write_rates(out / "rates.csv", sol, overwrite=True)
+    summary = {"array_file": str(array_file), "layout": layout.label, "solver": sol.method, "frame": frame,
+               "samples": len(sol), "duration_s": float(sol.time[-1] - sol.time[0]),
+               "omega0_rad_s": None if w0 is None else w0}
+    if frame == "source":
+        kw = {}
+        if ref_inertial is not None:
+            kw = {"q_ib0": ref_inertial.q_ib[0], "v_i0": ref_inertial.v_i[0], "r_i0": ref_inertial.r_i[0]}
+        nav = navigate_solution_inertial(sol, **kw)
+        write_inertial(out / "solution.csv", nav, overwrite=True)
+        summary["final"] = {"time_s": float(nav.time[-1]), "r_i_m": nav.r_i[-1], "v_i_m_s": nav.v_i[-1]}
+    else:
+        nav = navigate_earth(sol, initial, frame=frame)
+        io.write_solution(out / "solution.csv", nav, overwrite=True)
+        end = nav.state(len(nav) - 1)
+        summary["final"] = {"time_s": end.time, "lat_deg": end.lla[0] / DEG, "lon_deg": end.lla[1] / DEG,
+                            "height_m": end.lla[2]}
+    if truth_file:
+        summary["truth_errors"] = _truth_errors(frame, nav, sol, truth_file)
+    summary["elapsed_s"] = time.perf_counter() - t0
+    summary["files"] = [str(out / "rates.csv"), str(out / "solution.csv")]
+    return summary
+
+
+def _truth_errors(frame, nav, sol, truth_file):
+    from .. import analysis, io
+    from ..gyrofree.files import read_inertial
+
+    if frame == "source":
+        tr, extra = read_inertial(truth_file)
+        if len(tr.time) != len(nav.time) or np.abs(tr.time - nav.time).max() > 1e-9:
+            raise InputError(f"{truth_file}: its times are not those of the array file")
+        e = np.linalg.norm(nav.r_i - tr.r_i, axis=1)
+        res = {"position_max_m": float(e.max()), "position_final_m": float(e[-1])}
+    else:
+        tr = io.read_solution(truth_file)
+        s = analysis.summarize(analysis.nav_error(nav, tr))
+        res = {"horizontal_max_m": s["horizontal_m"]["max"], "down_max_m": s["down_m"]["max"],
+               "3d_final_m": s["3d_m"]["final"]}
+        extra = tr.extra
+    if all(f"w{a}_rad_s" in extra for a in "xyz"):
+        tt = tr.time
+        w_true = np.column_stack([np.interp(sol.time, tt, extra[f"w{a}_rad_s"]) for a in "xyz"])
+        f_true = np.column_stack([np.interp(sol.time, tt, extra[f"f{a}_m_s2"]) for a in "xyz"])
+        res["rate_error_max_rad_s"] = float(np.abs(sol.omega_ib_b - w_true).max())
+        res["force_error_max_m_s2"] = float(np.abs(sol.f_b - f_true).max())
+        res["rate_sign_errors"] = int(np.sum((np.sign(sol.omega_ib_b) != np.sign(w_true)) & (np.abs(w_true) > 1e-3)))
+    return res
+
+
+# --- reproduce ----------------------------------------------------------------------------------
+def reproduce_gyrofree(out_dir, *, quick=False, log=None):
+    """Source 003: the table of published against ours, figures like the
+    source's 11-14, the sensitivity figure and the 60 s comparison (plot and
+    ``growth_60s.csv``), all in ``out_dir``.
+
+    Returns
+    -------
+    dict
+        JSON-able: ``entries`` (each with ``item``, ``published``, ``ours``,
+        ``note``), ``growth_60s`` (the table), ``figures``, ``closest_reading``.
+    """
+    from .reproduce_gyrofree import run
+
+    log = log or (lambda s: None)
+    res = run(log, quick=quick)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    log("reproduce gyrofree: figures")
+    figs = _plots(out, res)
+    comp = res["comparison"]
+    rows = comp["table"]
+    keys = [k for k in rows[0] if k != "unit"]
+    lines = ["unit," + ",".join(keys)] + [f"\"{r['unit']}\"," + ",".join(f"{r[k]:.6g}" for k in keys) for r in rows]
+    (out / "growth_60s.csv").write_text("\n".join(lines) + "\n")
+    (out / "entries.json").write_text(json.dumps(res["entries"], indent=1))
+    return {"experiment": "gyrofree", "source": "003", "entries": res["entries"],
+            "truth_check": _jsonable(res["truth_check"]), "growth_60s": rows, "growth_grades": comp["grades_text"],
+            "closest_reading": res["closest_reading"], "random_misalignment": res["random_misalignment"],
+            "figures": [str(p) for p in figs], "tables": [str(out / "growth_60s.csv"), str(out / "entries.json")]}
+
+
+def _jsonable(x):
+    if isinstance(x, dict):
+        return {k: _jsonable(v) for k, v in x.items()}
+    if isinstance(x, np.ndarray):
+        return x.tolist()
+    if isinstance(x, np.generic):
+        return x.item()
+    return x
+
+
+def _plots(out, res):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from .reproduce_gyrofree import PUBLISHED_ANALYTIC, PUBLISHED_SIMULATED
+
+    paths = []
+    f14 = res["fig14"]
+    truth, nav, t = f14["truth"], f14["navigated"], f14["time"]
+    step = max(1, len(t) // 2000)
+    ax_names = ("X", "Y", "Z")
+
+    def save(fig, name):
+        fig.tight_layout()
+        p = out / name
+        fig.savefig(p, dpi=110)
+        plt.close(fig)
+        paths.append(p)
+
+    # fig. 11: Euler angles
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    e_t, e_n = np.degrees(truth.euler[::step]), np.degrees(nav.euler[::step])
+    for j, nme in enumerate(("roll", "pitch", "yaw")):
+        ax.plot(t[::step], e_t[:, j], color=f"C{j}", lw=1.2, label=f"{nme} (truth)")
+        ax.plot(t[::step], e_n[:, j], "--", color="k", lw=0.6, label="array, errors of fig. 14" if j == 0 else None)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("Euler angle of C_ib (ZYX) [deg]")
+    ax.set_title("fig. 11: Euler angles, rate [1, 2, 3] rad/s")
+    ax.legend(fontsize=7, ncol=2)
+    ax.grid(alpha=0.3)
+    save(fig, "fig11_euler_angles.png")
+    # fig. 12: position per axis
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    for j in range(3):
+        ax.plot(t[::step], truth.r_i[::step, j], color=f"C{j}", lw=1.2, label=f"{ax_names[j]} (truth)")
+        ax.plot(t[::step], nav.r_i[::step, j], "--", color="k", lw=0.6,
+                label="array, errors of fig. 14" if j == 0 else None)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("inertial position [m]")
+    ax.set_title("fig. 12: position along each inertial axis")
+    ax.legend(fontsize=8, ncol=2)
+    ax.grid(alpha=0.3)
+    save(fig, "fig12_position.png")
+    # fig. 13: trajectory
+    fig = plt.figure(figsize=(7, 6))
+    ax3 = fig.add_subplot(111, projection="3d")
+    ax3.plot(*truth.r_i[::step].T, lw=1.2, label="truth")
+    ax3.plot(*nav.r_i[::step].T, "--", lw=0.9, label="array (errors of fig. 14)")
+    ax3.set_xlabel("X [m]")
+    ax3.set_ylabel("Y [m]")
+    ax3.set_zlabel("Z [m]")
+    ax3.set_title("fig. 13: path in the inertial frame")
+    ax3.legend(fontsize=8)
+    save(fig, "fig13_trajectory.png")
+    # fig. 14: position error
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    colors = ("C0", "C1", "C2")
+    for j in range(3):
+        ax.plot(t[::step], f14["simulated_m"][::step, j], color=colors[j], lw=1.3, label=f"{ax_names[j]} simulated")
+        ax.plot(t[::step], f14["analytic_exact_m"][::step, j], ":", color="k", lw=0.8)
+        ax.plot(t[::step], f14["analytic_linear_m"][::step, j], "--", color=colors[j], lw=0.7)
+        ax.plot([10.0], [PUBLISHED_ANALYTIC[j]], "x", color=colors[j], ms=8)
+        ax.plot([10.0], [PUBLISHED_SIMULATED[j]], "o", mfc="none", color=colors[j], ms=8)
+    ax.plot([], [], ":", color="k", label="analytic (exact)")
+    ax.plot([], [], "--", color="0.4", label="analytic (linearised eq. 25)")
+    ax.plot([], [], "x", color="0.3", label="published analytic")
+    ax.plot([], [], "o", mfc="none", color="0.3", label="published simulated")
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("position error [m]")
+    ax.set_title("fig. 14: position error, misalignment -0.1 deg on m1-m6 + bias 1e-6 m/s^2")
+    ax.legend(fontsize=7, ncol=2)
+    ax.grid(alpha=0.3)
+    save(fig, "fig14_position_error.png")
+    # sensitivity
+    s = res["sensitivity"]
+    fig, axs = plt.subplots(1, 3, figsize=(16, 4.8))
+    styles = ("-", "--", "-.", ":")
+    for (name, cur), ls in zip(s["curves"].items(), styles):
+        for j in range(3):
+            axs[0].semilogx(s["d"], cur[:, j], ls, color=colors[j], lw=1.1)
+        axs[0].plot([], [], ls, color="0.3", label=name)
+    for j in range(3):
+        axs[0].axhline(PUBLISHED_ANALYTIC[j], color=colors[j], lw=0.6, alpha=0.6)
+        axs[0].plot([], [], color=colors[j], label=f"{ax_names[j]} (thin: published)")
+    axs[0].set_ylim(-5, 1)
+    axs[0].set_xlabel("lever arm d [m]")
+    axs[0].set_ylabel("position error at 10 s [m]")
+    axs[0].set_title("sensitivity to d")
+    axs[0].legend(fontsize=6)
+    axs[0].grid(alpha=0.3)
+    allx = np.concatenate([s["pattern_dp"][dd][:, 0] for dd in s["pattern_dp"]])
+    lim = float(np.abs(allx).max())
+    for dd, mk in zip(sorted(s["pattern_dp"]), ("o", "^")):
+        p = s["pattern_dp"][dd]
+        sc = axs[1].scatter(p[:, 1], p[:, 2], c=p[:, 0], cmap="coolwarm", vmin=-lim, vmax=lim, marker=mk, s=18,
+                            label=f"64 sign patterns, d = {dd:g} m")
+    fig.colorbar(sc, ax=axs[1], label="X error at 10 s [m]")
+    axs[1].plot(PUBLISHED_ANALYTIC[1], PUBLISHED_ANALYTIC[2], "k*", ms=12, label="published (-0.45, -2.04, -2.98)")
+    axs[1].set_xscale("symlog", linthresh=1)
+    axs[1].set_yscale("symlog", linthresh=1)
+    axs[1].set_xlabel("Y error at 10 s [m] (colour: X)")
+    axs[1].set_ylabel("Z error at 10 s [m]")
+    axs[1].set_title("angle signs: +-0.1 deg on m1-m6")
+    axs[1].legend(fontsize=7)
+    axs[1].grid(alpha=0.3)
+    axs[2].loglog(s["bias"], s["bias_equal_m"], label="equal biases (rate errors cancel)")
+    axs[2].loglog(s["bias"], s["bias_worst_m"], label="worst sign pattern, d = 0.1 m")
+    axs[2].axhline(float(np.linalg.norm(PUBLISHED_ANALYTIC)), color="k", ls="--", lw=0.8, label="|published| = 3.64 m")
+    axs[2].axvline(1e-6, color="0.5", ls=":", lw=0.8, label="printed bias 1e-6 m/s^2")
+    axs[2].set_xlabel("bias F [m/s^2]")
+    axs[2].set_ylabel("|position error| at 10 s [m]")
+    axs[2].set_title("sensitivity to the bias")
+    axs[2].legend(fontsize=7)
+    axs[2].grid(alpha=0.3, which="both")
+    save(fig, "sensitivity.png")
+    # 60 s growth
+    c = res["comparison"]
+    fig, ax = plt.subplots(figsize=(8, 4.8))
+    for u, v in c["rms_m"].items():
+        ax.semilogy(c["time"][1:], v[1:], label=u)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel(f"RMS |position error| over {c['runs']} runs [m]")
+    ax.set_title("60 s on the source's motion: ten-accelerometer unit vs conventional IMU")
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3, which="both")
+    save(fig, "growth_60s.png")
+    return paths
+
+
+__all__ = ["array_errors_from_datasheet", "layout_from_spec", "navigate_job", "reproduce_gyrofree", "simulate_job"]

@@ -1,0 +1,101 @@
+"""Command line and jobs of the gyro-free INS (inskit.cli_gyrofree, inskit.jobs.gyrofree).
+
+The commands are mounted here the way ``inskit.cli`` registers them
+(:func:`inskit.cli_gyrofree.register`); the subprocess cases run them through
+``inskit.cli.main`` to check the one-line errors and exit codes.
+"""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+from click.testing import CliRunner
+
+from inskit.cli_gyrofree import gyrofree, reproduce_gyrofree
+from inskit.errors import InputError
+
+EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+HARNESS = ("import sys\nfrom inskit import cli as C\nfrom inskit.cli_gyrofree import register\n"
+           "register(C.cli, C.reproduce)\nC.main(sys.argv[1:])\n")
+
+
+def inskit(*args):
+    return subprocess.run([sys.executable, "-c", HARNESS, *map(str, args)], capture_output=True, text=True,
+                          check=False)
+
+
+def invoke(cmd, *args):
+    return CliRunner().invoke(cmd, [str(a) for a in args])
+
+
+def test_simulate_and_navigate_the_source_scenario(tmp_path):
+    r = invoke(gyrofree, "simulate", "source003", "--out", tmp_path / "sim", "--rate", 500,
+               "--source-theta-deg=-0.1,-0.1,-0.1,-0.1,-0.1,-0.1", "--json")
+    assert r.exit_code == 0, r.output
+    s = json.loads(r.stdout)
+    assert s["samples"] == 5001 and s["accelerometers"] == 10
+    header = (tmp_path / "sim" / "array.csv").read_text().splitlines()[0]
+    assert header == "time_s," + ",".join(f"m{k}_m_s2" for k in range(1, 11))
+    r = invoke(gyrofree, "navigate", tmp_path / "sim" / "array.csv", "--layout", tmp_path / "sim" / "layout.csv",
+               "--out", tmp_path / "nav", "--init-from", tmp_path / "sim" / "truth.csv", "--truth",
+               tmp_path / "sim" / "truth.csv", "--json")
+    assert r.exit_code == 0, r.output
+    n = json.loads(r.stdout)
+    assert n["solver"] == "closed-form/robust" and n["frame"] == "source"
+    # SOURCES-NOTES 1.8: -0.1 deg on m1-m6 gives |dP| = |[-0.06, -1.86, -2.26]| = 2.93 m at 10 s
+    assert abs(n["truth_errors"]["position_final_m"] - 2.93) < 0.02
+    assert n["truth_errors"]["rate_sign_errors"] == 0
+    assert (tmp_path / "nav" / "rates.csv").exists() and (tmp_path / "nav" / "solution.csv").exists()
+
+
+def test_earth_scenario_with_the_core_mechanization(tmp_path):
+    r = invoke(gyrofree, "simulate", EXAMPLES / "car.toml", "--out", tmp_path / "car", "--duration", 30,
+               "--rate", 400, "--json")
+    assert r.exit_code == 0, r.output
+    r = invoke(gyrofree, "navigate", tmp_path / "car" / "array.csv", "--out", tmp_path / "nav", "--frame", "ned",
+               "--solver", "least-squares", "--init-from", tmp_path / "car" / "truth.csv", "--truth",
+               tmp_path / "car" / "truth.csv", "--json")
+    assert r.exit_code == 0, r.output
+    e = json.loads(r.stdout)["truth_errors"]
+    assert e["horizontal_max_m"] < 0.01 and e["rate_error_max_rad_s"] < 1e-6
+
+
+def test_rank_deficient_layout_and_bad_inputs(tmp_path):
+    r = invoke(gyrofree, "simulate", "source003", "--layout", "six", "--out", tmp_path / "six", "--rate", 100)
+    assert r.exit_code == 0, r.output
+    r = invoke(gyrofree, "navigate", tmp_path / "six" / "array.csv", "--layout", "six", "--out", tmp_path / "n")
+    assert isinstance(r.exception, InputError) and "cannot observe the sign" in str(r.exception)
+    bad = tmp_path / "bad.csv"
+    bad.write_text("name,x_m,y_m,z_m,axis_x,axis_y,axis_z\nm1,0.1,0,0,2,0,0\n")
+    r = invoke(gyrofree, "navigate", tmp_path / "six" / "array.csv", "--layout", bad, "--out", tmp_path / "n")
+    assert isinstance(r.exception, InputError) and "bad.csv: line 2" in str(r.exception)
+    r = invoke(gyrofree, "simulate", "source003", "--out", tmp_path / "six")
+    assert isinstance(r.exception, InputError) and "already exists" in str(r.exception)
+
+
+def test_errors_through_main_are_one_line(tmp_path):
+    """Through inskit.cli.main: one line on stderr, exit 2, nothing on stdout."""
+    r = inskit("gyrofree", "simulate", "source003", "--layout", "six", "--out", tmp_path / "six", "--rate", 100)
+    assert r.returncode == 0, r.stderr
+    r = inskit("gyrofree", "navigate", tmp_path / "six" / "array.csv", "--layout", "six", "--out", tmp_path / "n",
+               "--json")
+    assert r.returncode == 2 and r.stdout == ""
+    lines = r.stderr.strip().splitlines()
+    assert lines[-1].startswith("inskit: error: layout 'six'") and "sign" in lines[-1]
+    assert "Traceback" not in r.stderr
+
+
+def test_reproduce_gyrofree_json(tmp_path):
+    r = invoke(reproduce_gyrofree, "--out", tmp_path, "--quick", "--json")
+    assert r.exit_code == 0, r.output
+    d = json.loads(r.stdout)  # exactly one JSON object on stdout
+    assert d["experiment"] == "gyrofree"
+    assert all("published" in e and "ours" in e and e["note"] for e in d["entries"])
+    assert len(d["growth_60s"]) == 4
+    names = {Path(f).name for f in d["figures"]}
+    assert names == {"fig11_euler_angles.png", "fig12_position.png", "fig13_trajectory.png",
+                     "fig14_position_error.png", "sensitivity.png", "growth_60s.png"}
+    assert all(Path(f).stat().st_size > 10_000 for f in d["figures"])
+    rows = (tmp_path / "growth_60s.csv").read_text().splitlines()
+    assert rows[0] == "unit,rms_10s_m,rms_30s_m,rms_60s_m" and len(rows) == 5

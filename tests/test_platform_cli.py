@@ -1,0 +1,130 @@
+"""The platform jobs and commands (issue 10, parts 4-5): files, one JSON
+object on stdout, the reproduction's entries and figures."""
+
+import json
+
+import pytest
+from click.testing import CliRunner
+
+from inskit import io
+from inskit.cli_platform import platform, reproduce_integration_filters
+from inskit.errors import InputError
+from inskit.jobs.platform import TABLE1
+
+SCENARIO = """
+name = "north"
+[start]
+lat_deg = 50.0
+lon_deg = 30.0
+speed_m_s = 10.0
+[imu]
+grade = "navigation"
+[gnss]
+rate_hz = 1.0
+white_h_m = 5.0
+velocity_sigma_m_s = 0.1
+outages_s = [[1200.0, 1500.0]]
+[[segment]]
+type = "cruise"
+duration_s = 900.0
+[[segment]]
+type = "turn"
+angle_deg = 90.0
+rate_deg_s = 0.5
+[[segment]]
+type = "cruise"
+duration_s = 900.0
+"""
+
+
+@pytest.fixture(scope="module")
+def scenario(tmp_path_factory):
+    p = tmp_path_factory.mktemp("sc") / "north.toml"
+    p.write_text(SCENARIO)
+    return p
+
+
+def run(cmd, args):
+    r = CliRunner().invoke(cmd, [str(a) for a in args], catch_exceptions=False)
+    return r
+
+
+@pytest.mark.parametrize("kind", ["semi-analytical", "analytical", "geometric"])
+def test_platform_simulate_json(scenario, tmp_path, kind):
+    ideal = tmp_path / "ideal.toml"
+    ideal.write_text(SCENARIO.replace('grade = "navigation"', 'grade = "ideal"'))
+    r = run(platform, ["simulate", ideal, "--kind", kind, "--out", tmp_path, "--json", "--no-plots"])
+    assert r.exit_code == 0, r.stderr
+    s = json.loads(r.stdout)  # exactly one JSON object
+    assert s["kind"] == kind and s["epochs"] > 1800
+    assert s["errors"]["horizontal_m"]["max"] < 1.0  # perfect instruments
+    sol = io.read_solution(tmp_path / "solution.csv")
+    assert "tilt_e_rad" in sol.extra and "gimbal_yaw_rad" in sol.extra
+    # the scenario's navigation grade: its turn-on biases and white noise drive the platform
+    r = run(platform, ["simulate", scenario, "--kind", kind, "--out", tmp_path / "nav", "--json"])
+    s = json.loads(r.stdout)
+    assert 1.0 < s["errors"]["horizontal_m"]["max"] < 5000.0
+    assert (tmp_path / "nav" / "platform.png").exists() and (tmp_path / "nav" / "errors.png").exists()
+
+
+def test_platform_integrate_json_and_files(scenario, tmp_path):
+    r = run(platform, ["integrate", scenario, "--scheme", "closed", "--filter", "second-order", "--out", tmp_path,
+                       "--json", "--gyro-drift-deg-h", "0.01,0.01,0.01"])
+    assert r.exit_code == 0, r.stderr
+    s = json.loads(r.stdout)
+    assert s["filter"] == "second-order" and s["fixes"] < s["epochs"]  # the outage removed fixes
+    for f in ("solution.csv", "ins.csv", "truth.csv", "estimates.csv", "errors.png"):
+        assert (tmp_path / f).exists()
+    assert s["errors"]["horizontal_m"]["rms"] < 50.0
+    # refuses to overwrite, names the file
+    with pytest.raises(InputError, match="already exists"):
+        run(platform, ["integrate", scenario, "--out", tmp_path])
+    r = run(platform, ["integrate", scenario, "--out", tmp_path, "--force", "--filter", "kalman", "--scheme", "open",
+                       "--no-plots"])
+    assert r.exit_code == 0 and "open loop, kalman" in r.stdout
+
+
+def test_bad_input(scenario, tmp_path):
+    with pytest.raises(InputError, match="no such scenario"):
+        run(platform, ["simulate", tmp_path / "missing.toml", "--out", tmp_path])
+    with pytest.raises(InputError, match="three finite numbers"):
+        run(platform, ["simulate", scenario, "--out", tmp_path, "--gyro-drift-deg-h", "1,2"])
+    with pytest.raises(InputError, match="--duration"):
+        run(platform, ["simulate", scenario, "--out", tmp_path, "--duration", "1e6"])
+    r = CliRunner().invoke(platform, ["simulate", str(scenario), "--out", str(tmp_path), "--kind", "strapdown"])
+    assert r.exit_code == 2  # click rejects the choice
+
+
+def test_reproduce_quick(tmp_path):
+    """The reproduction's JSON: every published table-1 figure appears with
+    ours beside it, with the compute-time ratio measured; the figures exist."""
+    r = run(reproduce_integration_filters, ["--out", tmp_path, "--json", "--quick"])
+    assert r.exit_code == 0, r.stderr
+    res = json.loads(r.stdout)
+    items = {e["item"]: e for e in res["entries"]}
+    for e in res["entries"]:
+        assert {"published", "ours", "note"} <= set(e)
+    n_table = sum(1 for f in TABLE1.values() for k in f if k != "time_s")
+    assert sum(1 for i in items if "steady-state" in i) == n_table
+    ratio = items["compute time, Kalman / 1st order"]
+    assert ratio["published"] == pytest.approx(2.33) and ratio["ours"] > 1.0
+    assert "rank 9/12" in items["observability: azimuth error"]["ours"]
+    for f in res["figures"]:
+        assert (tmp_path / f.split("/")[-1]).stat().st_size > 10_000
+    assert {r_["scheme"] for r_ in res["outage"]} == {"open", "closed"}
+    assert (tmp_path / "table1.csv").exists() and (tmp_path / "results.json").exists()
+
+
+@pytest.mark.slow
+def test_reproduce_full(tmp_path):
+    """The full 8 h reproduction (about a minute): the source's ordering and
+    the closed loop's outage memory."""
+    r = run(reproduce_integration_filters, ["--out", tmp_path, "--json"])
+    assert r.exit_code == 0, r.stderr
+    res = json.loads(r.stdout)
+    items = {e["item"]: e for e in res["entries"]}
+    assert items["Kalman best on absolute velocity"]["ours"] == "yes"
+    assert items["Kalman best on horizontal tilt"]["ours"] == "yes"
+    g = {(o["filter"], o["scheme"]): o["growth_m"] for o in res["outage"]}
+    assert g["first-order", "closed"] < 0.5 * g["first-order", "open"]
+    assert g["second-order", "closed"] < 0.5 * g["second-order", "open"]
