@@ -17,9 +17,10 @@ LAYERS = {
     "integration": 5, "gyrofree": 5, "platform": 5,
     "alignment": 6,
     "jobs": 7,
-    "cli_gyrofree": 8, "cli_platform": 8,
-    "cli": 9,
-    "__init__": 10, "__main__": 10,
+    "cli_output": 8,
+    "cli_gyrofree": 9, "cli_platform": 9,
+    "cli": 10,
+    "__init__": 11, "__main__": 11,
 }
 
 

@@ -45,7 +45,7 @@ def _step(lla, v, q, aux, dt):
     """One filter propagation step of the navigation state (the filter's own code)."""
     dth_raw, dv_raw = _raw(dt)
     dth, dv, w, f = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
-    K.correct_increments(LAY.kernel_index(), aux, dth_raw, dv_raw, dt, dth, dv, w, f)
+    K.correct_increments(K.sensor_corrections(LAY.kernel_index(), aux), dth_raw, dv_raw, dt, dth, dv, w, f)
     lla, v, q = lla.copy(), v.copy(), q.copy()
     ned_step(dth, dv, dt, lla, v, q, np.zeros(11), True, 0, 0.0, np.zeros(2))
     return lla, v, q
@@ -94,7 +94,8 @@ def _f_fd(lla0, h=1e-2):
 
 def _f_model(lla0):
     F = np.zeros((LAY.size, LAY.size))
-    K.fill_transition(F, LAY.kernel_index(), lla0, V_N, rot.dcm_from_quat(Q_NB), F_B, W_B, AUX)
+    K.fill_transition(F, LAY.kernel_index(), lla0, V_N, rot.dcm_from_quat(Q_NB), F_B, W_B,
+                      K.sensor_corrections(LAY.kernel_index(), AUX))
     return F[:9]
 
 
@@ -192,7 +193,8 @@ def test_sparse_covariance_step_equals_dense(rng, gm, second_order):
     if not second_order:
         ref -= F @ P @ F.T * dt * dt
     got = P.copy()
-    K.propagate_covariance(got, F, rows, cols, active, dt, q, np.zeros((n, n)), np.zeros((n, n)), second_order)
+    K.propagate_covariance(got, F, rows, cols, active, dt, q, np.zeros((n, n)), np.zeros((n, n)),
+                           np.zeros((n, len(active))), second_order)
     assert np.allclose(got, ref, rtol=1e-12, atol=1e-12)
     assert np.array_equal(got, got.T)
 
@@ -208,7 +210,8 @@ def test_transition_pattern_covers_every_nonzero_of_F(rng):
         C = np.linalg.qr(rng.normal(size=(3, 3)))[0]
         aux = rng.normal(0, 1e-3, lay.aux_size)
         K.fill_transition(F, lay.kernel_index(), np.array([0.7, 0.1, 300.0]), np.array([10.0, -5.0, 0.3]), C,
-                          np.array([0.5, -0.2, -9.8]), np.array([0.01, 0.02, -0.03]), aux)
+                          np.array([0.5, -0.2, -9.8]), np.array([0.01, 0.02, -0.03]),
+                          K.sensor_corrections(lay.kernel_index(), aux))
         rows, cols = lay.transition_pattern()
         mask = np.zeros((n, n), bool)
         mask[rows, cols] = True

@@ -68,3 +68,21 @@ def test_time_offset_state_recovers_a_wrong_offset():
     assert abs(s["estimated_time_offset_s"] - 0.06) < 0.02
     assert s["outage_end_horizontal_rms_m"] <= 3.0
     assert s["gnss_on_horizontal_rms_m"] < 0.03
+
+
+def test_calibration_reads_the_files_once(monkeypatch):
+    """The time-offset search shifts the IMU time tags of one reading."""
+    from inskit.jobs import navigate as N
+
+    calls = []
+    real = N.load_inputs
+
+    def counting(*a, **k):
+        calls.append(1)
+        return real(*a, **k)
+
+    monkeypatch.setattr(N, "load_inputs", counting)
+    cfg = load_config(EXAMPLE, {"output": {"plots": False}})
+    best, evals = N.calibrate_time_offset(cfg, bounds=(-0.4, -0.1), tol=0.05)
+    assert len(calls) == 1 and len(evals) >= 3
+    assert -0.4 <= best <= -0.1

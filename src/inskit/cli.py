@@ -7,7 +7,6 @@ one line ``inskit: error: ...`` and exit with status 2.
 
 from __future__ import annotations
 
-import json
 import os
 import sys
 import time
@@ -17,29 +16,16 @@ import click
 import numpy as np
 
 from . import __version__
+from .cli_output import emit as _emit
+from .cli_output import log as _log
 from .errors import InputError, InskitError
 from .units import DEG
 
 
-def _log(msg):
-    click.echo(msg, err=True)
 
 
-def _emit(obj, as_json, table=None):
-    if as_json:
-        click.echo(json.dumps(obj, indent=None, sort_keys=False, default=_jsonable))
-    elif table is not None:
-        click.echo(table)
 
 
-def _jsonable(x):
-    if isinstance(x, (np.floating, np.integer)):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    if isinstance(x, Path):
-        return str(x)
-    raise TypeError(type(x))
 
 
 def _progress(total, desc):

@@ -16,34 +16,19 @@ stdout, logs go to stderr, user errors raise :class:`~inskit.errors.InputError`
 
 from __future__ import annotations
 
-import json
-from pathlib import Path
 
 import click
-import numpy as np
+
+from .cli_output import emit as _emit
+from .cli_output import log as _log
 
 from .errors import InputError
 
 
-def _log(msg):
-    click.echo(msg, err=True)
 
 
-def _jsonable(x):
-    if isinstance(x, (np.floating, np.integer)):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    if isinstance(x, Path):
-        return str(x)
-    raise TypeError(type(x))
 
 
-def _emit(obj, as_json, text):
-    if as_json:
-        click.echo(json.dumps(obj, default=_jsonable))
-    else:
-        click.echo(text)
 
 
 def _fmt3(v):

@@ -12,10 +12,12 @@ stdout, progress and logs go to stderr, bad input raises
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import click
+
+from .cli_output import emit as _emit
+from .cli_output import log as _log
 import numpy as np
 
 from .errors import InputError
@@ -23,27 +25,10 @@ from .errors import InputError
 __all__ = ["platform", "reproduce_integration_filters"]
 
 
-def _log(msg):
-    click.echo(msg, err=True)
 
 
-def _jsonable(x):
-    if isinstance(x, (np.floating, np.integer, np.bool_)):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    if isinstance(x, Path):
-        return str(x)
-    if isinstance(x, float) and not np.isfinite(x):
-        return None
-    raise TypeError(type(x))
 
 
-def _emit(obj, as_json, text):
-    if as_json:
-        click.echo(json.dumps(obj, default=_jsonable))
-    else:
-        click.echo(text)
 
 
 def _triple(name, text):

@@ -105,19 +105,16 @@ def gravity_north_dh(lat, h):
 
 
 @register_jitable
-def radii_and_gravity_gradient(lat, h):
-    """``R_N + h``, ``R_E + h`` (:func:`principal_radii`) and the height
-    derivatives of :func:`gravity_north` and :func:`gravity_down` [1/s^2], with
-    one sine and one square root (the error model needs all four per epoch)."""
-    sl = np.sin(lat)
-    s2 = sl * sl
+def radii_and_gravity_gradient(sin_lat, h):
+    """``R_N + h``, ``R_E + h`` (:func:`principal_radii`) and ``d gamma_d / d h``
+    (:func:`gravity_down_dh`) [1/s^2] from the sine of the latitude, with one
+    square root (the error model needs all three at every epoch)."""
+    s2 = sin_lat * sin_lat
     w = np.sqrt(1.0 - E2 * s2)
     rn = A * (1.0 - E2) / (w * w * w) + h
     re = A / w + h
     gamma = GAMMA_E * (1.0 + K_SOMIGLIANA * s2) / w
-    dgd = gamma * (-2.0 / A * (1.0 + F + M_RATIO - 2.0 * F * s2) + 6.0 * h / (A * A))
-    dgn = GAMMA_N_PER_M * 2.0 * sl * np.cos(lat)
-    return rn, re, dgn, dgd
+    return rn, re, gamma * (-2.0 / A * (1.0 + F + M_RATIO - 2.0 * F * s2) + 6.0 * h / (A * A))
 
 
 @register_jitable

@@ -103,13 +103,20 @@ def joseph_update(P, innovation, H, R, *, gate_probability=None):
 def gate_rows(P, innovation, H, R, probability):
     """Per-row gate: True for each row whose own NIS ``nu_i^2 / S_ii`` is
     within the one-degree-of-freedom chi-square quantile of ``probability``
-    (one satellite among several, say, is rejected alone)."""
+    (one satellite among several, say, is rejected alone).
+
+    Returns
+    -------
+    keep : (m,) bool ndarray
+    s : (m,) ndarray
+        The rows' innovation variances ``S_ii``.
+    """
     H = np.asarray(H, dtype=float)
     nu = np.asarray(innovation, dtype=float)
     s = np.einsum("ij,jk,ik->i", H, P, H) + np.diag(R)
     if not np.isfinite(nu).all() or not (s > 0).all():
         raise FilterDivergence("the innovation or its variance is not finite and positive: the filter diverged")
-    return nu * nu / s <= chi2_threshold(1, probability)
+    return nu * nu / s <= chi2_threshold(1, probability), s
 
 
 def check_covariance(P, where=""):

@@ -70,7 +70,7 @@ def dcm_into(q, C):
 
 
 @njit(cache=True)
-def fill_transition(F, kidx, lla, v_n, C, f_b, w_b, aux):
+def fill_transition(F, kidx, lla, v_n, C, f_b, w_b, sc):
     """Write the epoch-dependent entries of the continuous-time F.
 
     Parameters
@@ -86,14 +86,14 @@ def fill_transition(F, kidx, lla, v_n, C, f_b, w_b, aux):
         ``C_nb``.
     f_b, w_b : (3,) ndarray
         Corrected specific force [m/s^2] and angular rate [rad/s].
-    aux : (aux_size,) ndarray
-        Current estimates: the corrections ``(raw - b dt) / (1 + s)`` make a
-        bias error enter as ``-1 / (1 + s)`` and a scale-factor error as
-        ``-f / (1 + s)``.
+    sc : (12,) ndarray
+        :func:`sensor_corrections` of the current estimates: the corrections
+        ``(raw - b dt) / (1 + s)`` make a bias error enter as ``-1 / (1 + s)``
+        and a scale-factor error as ``-f / (1 + s)``.
     """
     lat, h = lla[0], lla[2]
-    rn, re, _, dgd_dh = radii_and_gravity_gradient(lat, h)
     sl, cl = math.sin(lat), math.cos(lat)
+    rn, re, dgd_dh = radii_and_gravity_gradient(sl, h)
     tl = sl / cl
     vn, ve = v_n[0], v_n[1]
     wie0, wie2 = W_IE * cl, -W_IE * sl
@@ -134,10 +134,9 @@ def fill_transition(F, kidx, lla, v_n, C, f_b, w_b, aux):
     F[a + 1, v + 0] = -1.0 / rn
     F[a + 2, v + 1] = -tl / re
     ba, bg, sa, sg = kidx[X_BA], kidx[X_BG], kidx[X_SA], kidx[X_SG]
-    asa, asg = kidx[A_SA], kidx[A_SG]
     for j in range(3):
-        ia = 1.0 / (1.0 + aux[asa + j]) if asa >= 0 else 1.0
-        ig = 1.0 / (1.0 + aux[asg + j]) if asg >= 0 else 1.0
+        ig = sc[6 + j]
+        ia = sc[9 + j]
         for i in range(3):
             if ba >= 0:
                 F[v + i, ba + j] = -C[i, j] * ia
@@ -150,7 +149,7 @@ def fill_transition(F, kidx, lla, v_n, C, f_b, w_b, aux):
 
 
 @njit(cache=True, fastmath={"contract"})
-def propagate_covariance(P, F, rows, cols, active, dt, q_psd, A, B, second_order):
+def propagate_covariance(P, F, rows, cols, active, dt, q_psd, A, B, T, second_order):
     """``P <- (I + F dt) P (I + F dt)^T + diag(q_psd) dt`` over F's pattern.
 
     ``active`` lists the rows of F that hold any pattern entry.  ``A = F P``
@@ -160,7 +159,8 @@ def propagate_covariance(P, F, rows, cols, active, dt, q_psd, A, B, second_order
     ``dt^2 F P F^T`` term is dropped (Euler integration of the Riccati
     equation): cheaper, but not guaranteed positive semi-definite when
     uncertainties are large (a MEMS car run lost positiveness at 177 s), so the
-    filter keeps it.
+    filter keeps it.  ``A`` (n, n), ``B`` (n, n) and ``T`` (n, len(active))
+    are scratch.
     """
     n = P.shape[0]
     na = active.shape[0]
@@ -181,22 +181,25 @@ def propagate_covariance(P, F, rows, cols, active, dt, q_psd, A, B, second_order
             P[i, m] += val
             P[m, i] += val
     if second_order:
-        # dt^2 F P F^T = dt^2 F A^T on the active block
+        # dt^2 F P F^T = dt^2 F A^T on the active block; B[i, c] for active
+        # column c, from At[j, c] = A[active[c], j] so the inner loop is contiguous
+        for j in range(n):
+            for c in range(na):
+                T[j, c] = A[active[c], j]
         for r in range(na):
             i = active[r]
             for c in range(na):
-                B[i, active[c]] = 0.0
+                B[i, c] = 0.0
+        dt2 = dt * dt
         for e in range(rows.shape[0]):
             i, j = rows[e], cols[e]
-            fij = F[i, j] * dt * dt
+            fij = F[i, j] * dt2
             for c in range(na):
-                m = active[c]
-                B[i, m] += fij * A[m, j]
+                B[i, c] += fij * T[j, c]
         for r in range(na):
             i = active[r]
             for c in range(na):
-                m = active[c]
-                P[i, m] += B[i, m]
+                P[i, active[c]] += B[i, c]
     # keep the active block exactly symmetric against rounding
     for r in range(na):
         i = active[r]
@@ -240,20 +243,33 @@ def apply_correction(lla, v_n, q_nb, x, sign, out_lla, out_v, out_q):
     store_unit(out_q, r0, r1, r2, r3)
 
 
-@njit(cache=True, inline="always")
-def correct_increments(kidx, aux, dth_raw, dv_raw, dt, dth, dv, w_b, f_b):
-    """Sensor corrections of one interval: ``(raw - bias dt) / (1 + scale)``,
-    and the corrected rate and specific force."""
+@njit(cache=True)
+def sensor_corrections(kidx, aux):
+    """(12,) ``[b_g, b_a, 1 / (1 + s_g), 1 / (1 + s_a)]`` from the estimates
+    (zeros and ones for absent blocks): constant between updates, so made once
+    per propagation call."""
+    sc = np.zeros(12)
     abg, aba, asg, asa = kidx[A_BG], kidx[A_BA], kidx[A_SG], kidx[A_SA]
     for i in range(3):
-        g_sf = 1.0 + aux[asg + i] if asg >= 0 else 1.0
-        a_sf = 1.0 + aux[asa + i] if asa >= 0 else 1.0
-        bg = aux[abg + i] if abg >= 0 else 0.0
-        ba = aux[aba + i] if aba >= 0 else 0.0
-        dth[i] = (dth_raw[i] - bg * dt) / g_sf
-        dv[i] = (dv_raw[i] - ba * dt) / a_sf
-        w_b[i] = dth[i] / dt
-        f_b[i] = dv[i] / dt
+        if abg >= 0:
+            sc[i] = aux[abg + i]
+        if aba >= 0:
+            sc[3 + i] = aux[aba + i]
+        sc[6 + i] = 1.0 / (1.0 + aux[asg + i]) if asg >= 0 else 1.0
+        sc[9 + i] = 1.0 / (1.0 + aux[asa + i]) if asa >= 0 else 1.0
+    return sc
+
+
+@njit(cache=True, inline="always")
+def correct_increments(sc, dth_raw, dv_raw, dt, dth, dv, w_b, f_b):
+    """Sensor corrections of one interval, ``(raw - bias dt) / (1 + scale)``,
+    and the corrected rate and specific force (``sc``: :func:`sensor_corrections`)."""
+    inv_dt = 1.0 / dt
+    for i in range(3):
+        dth[i] = (dth_raw[i] - sc[i] * dt) * sc[6 + i]
+        dv[i] = (dv_raw[i] - sc[3 + i] * dt) * sc[9 + i]
+        w_b[i] = dth[i] * inv_dt
+        f_b[i] = dv[i] * inv_dt
 
 
 @njit(cache=True)
@@ -291,6 +307,7 @@ def propagate(imu, nav, filt, model, out, k0, k1, flags):
         F[crow[e], ccol[e]] = cval[e]
     A = np.empty((n, n))
     B = np.zeros((n, n))
+    T = np.empty((n, active.shape[0]))
     tmp = np.empty((n, n))
     xt = np.empty((n, 1))
     xtmp = np.empty((n, 1))
@@ -303,14 +320,15 @@ def propagate(imu, nav, filt, model, out, k0, k1, flags):
     o_v = np.empty(3)
     o_q = np.empty(4)
     no_gains = np.zeros(2)
+    sc = sensor_corrections(kidx, aux)
     for k in range(k0, k1):
         dt = t[k] - carry[0]
-        correct_increments(kidx, aux, dth_all[k], dv_all[k], dt, dth, dv, w_b, f_b)
+        correct_increments(sc, dth_all[k], dv_all[k], dt, dth, dv, w_b, f_b)
         dcm_into(q_nb, C)
         ned_step(dth, dv, dt, lla, v_n, q_nb, carry, coning, 0, 0.0, no_gains)
         carry[0] = t[k]
-        fill_transition(F, kidx, lla, v_n, C, f_b, w_b, aux)
-        propagate_covariance(P, F, rows, cols, active, dt, q_psd, A, B, second_order)
+        fill_transition(F, kidx, lla, v_n, C, f_b, w_b, sc)
+        propagate_covariance(P, F, rows, cols, active, dt, q_psd, A, B, T, second_order)
         if open_loop:
             for i in range(n):
                 xt[i, 0] = x[i]

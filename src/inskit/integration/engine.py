@@ -105,7 +105,6 @@ class SmootherStore:
     dx: list = field(default_factory=list)
 
 
-@dataclass
 class Track:
     """A navigation solution with the filter's estimates, as arrays.
 
@@ -118,12 +117,23 @@ class Track:
     sigma : (N, layout.size) ndarray
         1-sigma of every state at every row.
     layout : StateLayout
+
+    ``aux`` and ``sigma`` may be given as functions that make them: they are
+    then made on first use (a filter run keeps the estimates per update and
+    the variances, and spreads or roots them only when asked).
     """
 
-    nav: NavSolution
-    aux: np.ndarray
-    sigma: np.ndarray
-    layout: StateLayout
+    def __init__(self, nav: NavSolution, aux, sigma, layout: StateLayout):
+        self.nav, self.layout = nav, layout
+        self._aux, self._sigma = aux, sigma
+
+    @cached_property
+    def aux(self) -> np.ndarray:
+        return self._aux() if callable(self._aux) else self._aux
+
+    @cached_property
+    def sigma(self) -> np.ndarray:
+        return self._sigma() if callable(self._sigma) else self._sigma
 
     def estimate(self, name):
         """(N, size) history of block ``name``'s estimate."""
@@ -141,7 +151,6 @@ class Track:
         return NavSolution._trusted(self.nav.time, self.nav.lla, self.nav.v_n, self.nav.q_nb, extra)
 
 
-@dataclass
 class FilterOutput(Track):
     """Result of a filter run: a :class:`Track` plus
 
@@ -157,10 +166,11 @@ class FilterOutput(Track):
     store : SmootherStore or None
     """
 
-    counts: dict = field(default_factory=dict)
-    innovations: dict = field(default_factory=dict)
-    settings: FilterSettings = None
-    store: SmootherStore | None = None
+    def __init__(self, nav, aux, sigma, layout, counts=None, innovations=None, settings=None, store=None):
+        super().__init__(nav, aux, sigma, layout)
+        self.counts = {} if counts is None else counts
+        self.innovations = {} if innovations is None else innovations
+        self.settings, self.store = settings, store
 
 
 def _nodes(imu, measurements, smoother_node_s, want_store):
@@ -326,20 +336,27 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             if settings.gate_max_consecutive is not None and streak >= settings.gate_max_consecutive:
                 gate = None
             rec = innov[meas.name]
+            nu_all = s_all = None
             if gate is not None and getattr(meas, "gating", "vector") == "row":
-                keep = gate_rows(P, nu, H, R, gate)
-                if not keep.all():
+                keep, s_rows = gate_rows(P, nu, H, R, gate)
+                if not keep.all():  # record the whole vector; update with the rows that pass
                     counts[meas.name]["rejected"] += 1
+                    nu_all, s_all = nu, s_rows
                     if not keep.any():
                         rejected_streak[meas.name] = streak + 1
+                        rec["t"].append(tm)
+                        rec["nu"].append(nu)
+                        rec["sigma"].append(np.sqrt(s_rows))
+                        rec["nis"].append(float(np.sum(nu * nu / s_rows)))
+                        rec["accepted"].append(False)
                         continue
                     nu, H, R = nu[keep], H[keep], R[np.ix_(keep, keep)]
                 gate = None
             res = joseph_update(P, nu, H, R, gate_probability=gate)
             rejected_streak[meas.name] = 0 if res.accepted else streak + 1
             rec["t"].append(tm)
-            rec["nu"].append(res.innovation)
-            rec["sigma"].append(np.sqrt(np.diag(res.S)))
+            rec["nu"].append(res.innovation if nu_all is None else nu_all)
+            rec["sigma"].append(np.sqrt(np.diag(res.S)) if s_all is None else np.sqrt(s_all))
             rec["nis"].append(res.nis)
             rec["accepted"].append(res.accepted)
             if not res.accepted:
@@ -374,11 +391,15 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     if open_loop:  # the open-loop estimate drifts with x between updates: record it at the end too
         node_rows.append(N - 1)
         node_aux.append(aux - x[aux_idx])
-    # every row holds the estimates of the last node at or before it (they change only at updates)
-    hold = np.searchsorted(np.asarray(node_rows), np.arange(N), side="right") - 1
-    out_aux = np.asarray(node_aux).reshape(-1, lay.aux_size)[hold]
-    sigma = np.sqrt(np.maximum(out_var, 0.0, out=out_var), out=out_var)
+
+    def spread_aux():  # every row holds the estimates of the last node at or before it (they change only at updates)
+        hold = np.searchsorted(np.asarray(node_rows), np.arange(N), side="right") - 1
+        return np.asarray(node_aux).reshape(-1, lay.aux_size)[hold]
+
+    def sigma():
+        return np.sqrt(np.maximum(out_var, 0.0, out=out_var), out=out_var)
+
     nav_sol = NavSolution._trusted(imu.time, out_lla, out_v, out_q)
     innovations = {k: {kk: np.asarray(vv) for kk, vv in v.items()} for k, v in innov.items()}
-    return FilterOutput(nav_sol, out_aux, sigma, lay, counts, innovations, settings, store)
+    return FilterOutput(nav_sol, spread_aux, sigma, lay, counts, innovations, settings, store)
 

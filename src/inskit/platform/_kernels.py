@@ -28,6 +28,9 @@ from .. import earth
 from ..earth import gravity_down as _gd
 from ..earth import gravity_north as _gn
 from ..earth import principal_radii as _radii_wgs
+from ..rotations import qmul as _qmul
+from ..rotations import quat_dcm as _quat_dcm
+from ..rotations import rotvec_quat as _rotvec_quat
 
 W = earth.OMEGA_IE
 GM = earth.GM
@@ -66,40 +69,28 @@ def gravity(lat, h, model):
 
 @njit(cache=True)
 def qmul(a, b):
+    """Hamilton product of two (4,) arrays (the package's scalar core)."""
     out = np.empty(4)
-    out[0] = a[0] * b[0] - a[1] * b[1] - a[2] * b[2] - a[3] * b[3]
-    out[1] = a[0] * b[1] + a[1] * b[0] + a[2] * b[3] - a[3] * b[2]
-    out[2] = a[0] * b[2] - a[1] * b[3] + a[2] * b[0] + a[3] * b[1]
-    out[3] = a[0] * b[3] + a[1] * b[2] - a[2] * b[1] + a[3] * b[0]
+    out[0], out[1], out[2], out[3] = _qmul(a[0], a[1], a[2], a[3], b[0], b[1], b[2], b[3])
     return out
 
 
 @njit(cache=True)
 def qdcm(q):
-    q0, q1, q2, q3 = q[0], q[1], q[2], q[3]
+    """DCM of a (4,) unit quaternion (the package's scalar core)."""
+    c = _quat_dcm(q[0], q[1], q[2], q[3])
     C = np.empty((3, 3))
-    C[0, 0] = q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3
-    C[0, 1] = 2.0 * (q1 * q2 - q0 * q3)
-    C[0, 2] = 2.0 * (q1 * q3 + q0 * q2)
-    C[1, 0] = 2.0 * (q1 * q2 + q0 * q3)
-    C[1, 1] = q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3
-    C[1, 2] = 2.0 * (q2 * q3 - q0 * q1)
-    C[2, 0] = 2.0 * (q1 * q3 - q0 * q2)
-    C[2, 1] = 2.0 * (q2 * q3 + q0 * q1)
-    C[2, 2] = q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3
+    C[0, 0], C[0, 1], C[0, 2] = c[0], c[1], c[2]
+    C[1, 0], C[1, 1], C[1, 2] = c[3], c[4], c[5]
+    C[2, 0], C[2, 1], C[2, 2] = c[6], c[7], c[8]
     return C
 
 
 @njit(cache=True)
 def qrotvec(x, y, z):
-    """Quaternion of a rotation vector (exact)."""
-    a = math.sqrt(x * x + y * y + z * z)
+    """Quaternion of a rotation vector (exact; the package's scalar core)."""
     q = np.empty(4)
-    q[0] = math.cos(0.5 * a)
-    k = 0.5 if a < 1e-12 else math.sin(0.5 * a) / a
-    q[1] = k * x
-    q[2] = k * y
-    q[3] = k * z
+    q[0], q[1], q[2], q[3] = _rotvec_quat(x, y, z)
     return q
 
 
