@@ -86,3 +86,92 @@ def test_calibration_reads_the_files_once(monkeypatch):
     best, evals = N.calibrate_time_offset(cfg, bounds=(-0.4, -0.1), tol=0.05)
     assert len(calls) == 1 and len(evals) >= 3
     assert -0.4 <= best <= -0.1
+
+
+def _shifted(gnss, t_from, n, east_m):
+    """GNSS with ``n`` fixes from ``t_from`` (or all after it, n=None) moved east."""
+    from inskit import earth
+    from inskit.types import GnssData
+
+    lla = gnss.lla.copy()
+    i0 = int(np.searchsorted(gnss.time, t_from))
+    i1 = len(lla) if n is None else i0 + n
+    shift = np.zeros((i1 - i0, 3))
+    shift[:, 1] = east_m if np.ndim(east_m) == 0 else east_m[: i1 - i0]
+    lla[i0:i1] = [earth.ned_to_lla(d, p) for d, p in zip(shift, lla[i0:i1])]
+    return GnssData(gnss.time, lla, gnss.sigma_ned, gnss.v_n, gnss.sigma_v_ned)
+
+
+@pytest.fixture(scope="module")
+def drive_inputs():
+    from inskit.jobs.navigate import load_inputs
+
+    cfg = load_config(EXAMPLE, {"output": {"plots": False}})
+    imu, gnss = load_inputs(cfg)
+    clean = navigate(cfg, inputs=(imu, gnss))
+    return cfg, imu, gnss, clean
+
+
+@pytest.mark.parametrize("n,east_m", [(4, 1000.0), (10, 1000.0), (30, 1000.0), (30, 10.0)])
+def test_bursts_of_bad_fixes_cannot_hijack_the_filter(drive_inputs, n, east_m):
+    """Issue 12: 4 fixes 1 km off used to take the outage RMS from 2.77 m to
+    98 m (the fourth was accepted ungated).  Now exactly the bad fixes are
+    rejected and the outage figures stay within 10 % of the clean run."""
+    cfg, imu, gnss, clean = drive_inputs
+    r = navigate(cfg, inputs=(imu, _shifted(gnss, gnss.time[0] + 60.0, n, east_m)))
+    c0, c1 = clean.forward.counts["gnss_pos"], r.forward.counts["gnss_pos"]
+    assert c1["rejected"] == c0["rejected"] + n
+    assert not r.forward.recoveries
+    a = clean.score_forward.summary["outage_end_horizontal_rms_m"]
+    b = r.score_forward.summary["outage_end_horizontal_rms_m"]
+    assert abs(b / a - 1) < 0.10
+
+
+def test_recovery_needs_consistent_evidence_over_time(drive_inputs):
+    """A lasting 20 m jump (a datum change, a lost filter) is followed after
+    15 s of mutually consistent rejections; fixes alternating +-1 km (outliers
+    that disagree with each other) are never accepted."""
+    cfg, imu, gnss, clean = drive_inputs
+    t_jump = gnss.time[0] + 418.0  # between outages 8 (400-414.75 s) and 9 (445- s)
+    r = navigate(cfg, inputs=(imu, _shifted(gnss, t_jump, None, 20.0)))
+    rec = r.forward.recoveries
+    assert len(rec) >= 1 and 15.0 <= rec[0]["t"] - t_jump < 16.0 and rec[0]["rejected_for_s"] >= 15.0
+    alt = np.where(np.arange(200) % 2 == 0, 1000.0, -1000.0)
+    r2 = navigate(cfg, inputs=(imu, _shifted(gnss, gnss.time[0] + 180.0, 200, alt)))
+    assert not r2.forward.recoveries
+    i0 = int(np.searchsorted(gnss.time, gnss.time[0] + 180.0))
+    inn = r2.forward.innovations["gnss_pos"]
+    bad = (inn["t"] >= gnss.time[i0] - 1e-6) & (inn["t"] <= gnss.time[i0 + 199] + 1e-6)
+    assert bad.sum() == int(r2.used[i0:i0 + 200].sum()) > 100  # every outlier outside the outages was offered
+    assert not inn["accepted"][bad].any()                      # and none was accepted
+
+
+def test_health_verdict(drive_inputs):
+    """drive_0708 is healthy (its constraint pseudo-measurements are only
+    conservative, a warning); a run that had to recover from a lost state is not."""
+    from inskit.jobs.navigate import health
+
+    cfg, imu, gnss, clean = drive_inputs
+    h = health(clean.forward)
+    assert h["verdict"] == "healthy", h["reasons"]
+    assert h["measurements"]["gnss_pos"]["dof"] == 3 and h["measurements"]["gnss_pos"]["rejected_fraction"] < 0.01
+    r = navigate(cfg, inputs=(imu, _shifted(gnss, gnss.time[0] + 418.0, None, 20.0)))
+    h = health(r.forward)
+    assert h["verdict"] == "unhealthy" and any("recovered from a lost state" in x for x in h["reasons"])
+
+
+def test_strict_makes_an_unhealthy_run_fail(tmp_path):
+    """A wrong IMU time offset (+0.4 s instead of -0.26 s) rejects most fixes:
+    the verdict says so, and --strict exits with 3 after writing everything."""
+    import json
+    import subprocess
+    import sys
+
+    cmd = [sys.executable, "-m", "inskit.cli", "navigate", str(EXAMPLE), "--out", str(tmp_path / "o"), "--no-plots",
+           "--imu-time-offset", "0.4", "--strict", "--json"]
+    p = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
+    assert p.returncode == 3, p.stderr
+    s = json.loads(p.stdout)
+    assert s["health"]["verdict"] == "unhealthy"
+    assert "health: unhealthy" in p.stderr and "rejected" in p.stderr
+    assert (tmp_path / "o" / "summary.json").exists()

@@ -194,9 +194,10 @@ def bench(quick, as_json):
 @click.option("--no-plots", is_flag=True, help="Skip the PNG plots.")
 @click.option("--truth", "truth_file", type=click.Path(dir_okay=False),
               help="A truth file (e.g. from inskit simulate): add the errors against it to the summary.")
+@click.option("--strict", is_flag=True, help="Exit with status 3 when the run's health verdict is unhealthy.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_arm, imu_time_offset, scheme, outages,
-             smooth, calibrate_time_offset, out_dir, force, no_plots, truth_file, as_json):
+             smooth, calibrate_time_offset, out_dir, force, no_plots, truth_file, strict, as_json):
     """INS/GNSS integration from a TOML config file or flags."""
     from .jobs import config as C
     from .jobs import navigate as N
@@ -257,7 +258,15 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
     files = N.write_outputs(res, target, s)
     s["files"] = [str(f) for f in files]
     _log(f"wrote {len(files)} files to {target}/")
+    h = s["health"]
+    _log(f"health: {h['verdict']}")
+    for line in h["reasons"]:
+        _log(f"  unhealthy: {line}")
+    for line in h["warnings"]:
+        _log(f"  warning: {line}")
     _emit(s, as_json, N.outage_table_text(s) + text_extra)
+    if strict and h["verdict"] != "healthy":
+        sys.exit(3)
 
 
 @cli.command()

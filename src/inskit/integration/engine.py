@@ -53,9 +53,17 @@ class FilterSettings:
     gate_probability : float or None
         Chi-square gate of the innovations (None: no gating).
     gate_max_consecutive : int or None
-        After this many consecutive rejections of one measurement the next is
-        applied ungated: a run of rejections means the filter is lost (say
-        after an outage), not that every measurement is an outlier.
+        Recovery from a lost filter (say after an outage with too small a
+        covariance) needs consistent evidence: at least this many consecutive
+        rejections of one measurement, spanning at least ``recovery_after_s``,
+        whose innovations agree with each other (each pair within 4 sigma of
+        their noise and of the velocity uncertainty over the time between
+        them).  Then the navigation blocks' covariance is inflated just enough
+        for the newest measurement to pass the gate, and it is applied.  A
+        burst of outliers shorter than ``recovery_after_s``, or outliers that
+        disagree with each other, are never accepted.  ``None``: no recovery.
+    recovery_after_s : float
+        See ``gate_max_consecutive`` [s].
     coning : bool
     smoother_node_s : float
         Spacing of the extra smoother nodes between updates [s].
@@ -69,6 +77,7 @@ class FilterSettings:
     scheme: str = "closed"
     gate_probability: float | None = 0.9999
     gate_max_consecutive: int | None = 3
+    recovery_after_s: float = 15.0
     coning: bool = True
     smoother_node_s: float = 0.25
     covariance_second_order: bool = True
@@ -78,6 +87,8 @@ class FilterSettings:
             raise InputError("the uncoupled scheme has no filter: use inskit.integration.run_uncoupled")
         if self.scheme not in SCHEMES:
             raise InputError(f"filter scheme must be one of {SCHEMES}, got {self.scheme!r}")
+        if not self.recovery_after_s >= 0:
+            raise InputError(f"recovery_after_s must be >= 0 s, got {self.recovery_after_s}")
         if not isinstance(self.layout, StateLayout):
             raise InputError(f"FilterSettings.layout must be a StateLayout, got {type(self.layout).__name__}")
 
@@ -164,10 +175,14 @@ class FilterOutput(Track):
         ``nis``, ``accepted``.
     settings : FilterSettings
     store : SmootherStore or None
+    recoveries : list of dict
+        Each recovery from a lost state: ``measurement``, ``t``,
+        ``after_rejections``, ``rejected_for_s``.
     """
 
     def __init__(self, nav, aux, sigma, layout, counts=None, innovations=None, settings=None, store=None):
         super().__init__(nav, aux, sigma, layout)
+        self.recoveries = []
         self.counts = {} if counts is None else counts
         self.innovations = {} if innovations is None else innovations
         self.settings, self.store = settings, store
@@ -294,6 +309,9 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     counts = {m.name: {"used": 0, "rejected": 0, "skipped": skipped[m.name]} for m in measurements}
     innov = {m.name: {"t": [], "nu": [], "sigma": [], "nis": [], "accepted": []} for m in measurements}
     rejected_streak = {}
+    rejected_recent = {}  # per measurement: (t, innovation, R) of the current run of rejections
+    first_rejection = {}
+    recoveries = []
     k_done = 1
     i = 0
     n_items = len(items)
@@ -333,8 +351,14 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             nu, H, R = lin
             gate = settings.gate_probability
             streak = rejected_streak.get(meas.name, 0)
-            if settings.gate_max_consecutive is not None and streak >= settings.gate_max_consecutive:
-                gate = None
+            rej = rejected_recent.setdefault(meas.name, [])
+            if (gate is not None and settings.gate_max_consecutive is not None
+                    and streak >= settings.gate_max_consecutive
+                    and tm - first_rejection[meas.name] >= settings.recovery_after_s
+                    and _consistent(rej[-settings.gate_max_consecutive:] + [(tm, nu, R)], P)):
+                P = _inflate_to_pass(P, nu, H, R, gate)
+                recoveries.append({"measurement": meas.name, "t": float(tm), "after_rejections": streak,
+                                   "rejected_for_s": float(tm - first_rejection[meas.name])})
             rec = innov[meas.name]
             nu_all = s_all = None
             if gate is not None and getattr(meas, "gating", "vector") == "row":
@@ -354,6 +378,13 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
                 gate = None
             res = joseph_update(P, nu, H, R, gate_probability=gate)
             rejected_streak[meas.name] = 0 if res.accepted else streak + 1
+            if res.accepted:
+                rej.clear()
+            else:
+                if not rej:
+                    first_rejection[meas.name] = tm
+                rej.append((tm, nu, R))
+                del rej[:-max(8, (settings.gate_max_consecutive or 0) + 1)]  # bounded memory
             rec["t"].append(tm)
             rec["nu"].append(res.innovation if nu_all is None else nu_all)
             rec["sigma"].append(np.sqrt(np.diag(res.S)) if s_all is None else np.sqrt(s_all))
@@ -401,5 +432,53 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
 
     nav_sol = NavSolution._trusted(imu.time, out_lla, out_v, out_q)
     innovations = {k: {kk: np.asarray(vv) for kk, vv in v.items()} for k, v in innov.items()}
-    return FilterOutput(nav_sol, spread_aux, sigma, lay, counts, innovations, settings, store)
+    out = FilterOutput(nav_sol, spread_aux, sigma, lay, counts, innovations, settings, store)
+    out.recoveries = recoveries
+    return out
+
+
+def _consistent(rejected, P):
+    """Do the rejected innovations ``[(t, nu, R), ...]`` agree with each other?
+
+    Each pair must differ by less than 4 sigma of their two noises plus the
+    growth a velocity error of the filter's own sigma could cause between them
+    (the innovations of a lost filter drift with its velocity error; random
+    outliers, or a fix that disagrees with its neighbours, do not agree).
+    """
+    if len(rejected) < 2:
+        return False
+    sv2 = float(np.max(P.diagonal()[3:6]))
+    for a in range(len(rejected)):
+        ta, na, Ra = rejected[a]
+        for b in range(a + 1, len(rejected)):
+            tb, nb, Rb = rejected[b]
+            if len(na) != len(nb):
+                return False
+            tol2 = 16.0 * (np.diag(Ra) + np.diag(Rb) + (tb - ta) ** 2 * sv2)
+            if np.any((na - nb) ** 2 > tol2):
+                return False
+    return True
+
+
+def _inflate_to_pass(P, nu, H, R, probability):
+    """Scale the navigation blocks' covariance (rows and columns 0..8) by the
+    smallest ``alpha`` of 2, 8, 32, ... for which the innovation passes
+    the gate; sensor-error blocks keep their variances."""
+    from ..filters.kalman import chi2_threshold
+
+    thr = chi2_threshold(len(nu), probability)
+
+    def nis(alpha):
+        d = np.ones(P.shape[0])
+        d[:9] = np.sqrt(alpha)
+        Pa = P * d[:, None] * d[None, :]
+        S = H @ Pa @ H.T + R
+        return float(nu @ np.linalg.solve(S, nu)), Pa
+
+    alpha = 2.0
+    v, Pa = nis(alpha)
+    while v > thr and alpha < 1e16:
+        alpha *= 4.0
+        v, Pa = nis(alpha)
+    return Pa
 

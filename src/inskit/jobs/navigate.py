@@ -265,10 +265,69 @@ def summary(res: NavigateResult) -> dict:
         "gyro_deg_s": [float(v) for v in fw.estimate("bg")[-1] / DEG],
         "accel_m_s2": [float(v) for v in fw.estimate("ba")[-1]],
     }
+    out["health"] = health(fw)
     out["final_estimates"] = {b.name: {"values": [float(v) for v in fw.estimate(b.name)[-1]],
                                        "sigma": [float(v) for v in fw.sigma_of(b.name)[-1]], "unit": b.unit}
                               for b in fw.layout.blocks if b.has_estimate}
     return out
+
+
+#: the health verdict's limits (docs in :func:`health`)
+HEALTH_MAX_REJECTED_FRACTION = 0.05
+HEALTH_MAX_MEAN_NIS_PER_DOF = 3.0
+HEALTH_MAX_PRIOR_SIGMAS = 5.0
+HEALTH_BIAS_BLOCKS = ("bg", "ba")
+
+
+def health(out) -> dict:
+    """The verdict on a filter run: is the result to be trusted?
+
+    *Unhealthy* when any of these holds (each reason is listed):
+
+    * more than 5 % of a measurement's updates rejected;
+    * a measurement's mean NIS above 3 times its degrees of freedom (the
+      filter is overconfident by more than sqrt(3) in sigma; a consistent
+      filter averages 1 per degree of freedom);
+    * a sensor-bias estimate (gyro, accelerometer) more than 5 initial sigmas
+      from its initial value (the filter absorbs something it does not model);
+    * a recovery from a lost state happened.
+
+    *Warnings*, listed without changing the verdict: other blocks' estimates
+    beyond 5 initial sigmas (a scale factor soaking up a mounting error, say),
+    and a mean NIS below a third of the degrees of freedom (conservative
+    noise, common for constraint pseudo-measurements).
+    """
+    reasons, warnings, per = [], [], {}
+    for name, c in out.counts.items():
+        inn = out.innovations.get(name, {})
+        nis = np.asarray(inn.get("nis", []), float)
+        n_upd = c["used"] + c["rejected"]
+        dof = int(np.asarray(inn["nu"]).shape[1]) if len(nis) and np.ndim(inn["nu"]) == 2 else None
+        frac = c["rejected"] / n_upd if n_upd else 0.0
+        mean_nis = float(nis.mean()) if len(nis) else None
+        per[name] = {"updates": n_upd, "rejected_fraction": frac, "mean_nis": mean_nis, "dof": dof}
+        if frac > HEALTH_MAX_REJECTED_FRACTION:
+            reasons.append(f"{name}: {c['rejected']} of {n_upd} updates rejected ({frac:.0%})")
+        if mean_nis is not None and dof:
+            if mean_nis > HEALTH_MAX_MEAN_NIS_PER_DOF * dof:
+                reasons.append(f"{name}: mean NIS {mean_nis:.2f} for {dof} degrees of freedom (filter overconfident)")
+            elif mean_nis < dof / 3.0:
+                warnings.append(f"{name}: mean NIS {mean_nis:.2f} for {dof} degrees of freedom (noise set conservatively)")
+    lay = out.layout
+    for b in lay.blocks:
+        if not b.has_estimate or np.all(np.isnan(out.sigma[-1, lay.slice(b.name)])):
+            continue
+        dev = np.abs(out.estimate(b.name)[-1] - b.estimate0) / b.sigma0
+        for axis, d, v in zip(b.axes, dev, out.estimate(b.name)[-1]):
+            if d > HEALTH_MAX_PRIOR_SIGMAS:
+                unit = f" {b.unit}" if b.unit else ""
+                msg = f"{b.name}_{axis} estimate {v:.4g}{unit} is {d:.1f} initial sigmas from its start"
+                (reasons if b.name in HEALTH_BIAS_BLOCKS else warnings).append(msg)
+    for r in getattr(out, "recoveries", []):
+        reasons.append(f"{r['measurement']}: recovered from a lost state at t = {r['t']:.2f} s after "
+                       f"{r['after_rejections']} consecutive rejections over {r['rejected_for_s']:.1f} s")
+    return {"verdict": "unhealthy" if reasons else "healthy", "reasons": reasons, "warnings": warnings,
+            "measurements": per}
 
 
 def outage_table_text(s: dict) -> str:
