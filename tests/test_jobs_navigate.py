@@ -175,3 +175,42 @@ def test_strict_makes_an_unhealthy_run_fail(tmp_path):
     assert s["health"]["verdict"] == "unhealthy"
     assert "health: unhealthy" in p.stderr and "rejected" in p.stderr
     assert (tmp_path / "o" / "summary.json").exists()
+
+
+def test_date_line_crossing():
+    """Issue 12: a drive across 180 deg with an ideal IMU had 34,000 km of
+    error; the GNSS difference is now taken the short way round."""
+    from inskit import earth
+    from inskit.integration import FilterSettings, GnssPosition, run_filter
+    from inskit.simulation import ideal_imu, truth_solution
+    from inskit.simulation.gnss import GnssErrors, simulate_gnss
+    from inskit.simulation.segments import SegmentTrajectory
+
+    tr = SegmentTrajectory((np.radians(10.0), np.radians(179.999), 50.0), yaw0=np.pi / 2, speed0=20.0)
+    tr.cruise(60)
+    t = np.arange(0.0, tr.duration, 0.01)
+    truth = truth_solution(tr, t)
+    g, _ = simulate_gnss(tr, 0.0, tr.duration, GnssErrors(rate_hz=1.0, white_h_m=0.5, white_v_m=1.0,
+                                                          velocity_sigma_m_s=0.0), np.random.default_rng(1))
+    assert g.lla[0, 1] > 0 > g.lla[-1, 1]  # the fixes do cross
+    out = run_filter(ideal_imu(tr, t, nodes=3), truth.state(0), [GnssPosition(g)], FilterSettings.standard())
+    d = earth.lla_to_ned(out.nav.lla, truth.lla)
+    assert np.hypot(d[:, 0], d[:, 1]).max() < 3.0 and out.counts["gnss_pos"]["rejected"] == 0
+
+
+def test_force_clears_only_the_earlier_runs_files(tmp_path):
+    """A smoothed run then an unsmoothed one into the same folder with --force:
+    no stale solution_smoothed.csv; a user's own file stays."""
+    import json
+    import subprocess
+    import sys
+
+    out = tmp_path / "o"
+    base = [sys.executable, "-m", "inskit.cli", "navigate", str(EXAMPLE), "--out", str(out), "--no-plots"]
+    assert subprocess.run(base + ["--smooth"], capture_output=True, timeout=300).returncode == 0
+    assert (out / "solution_smoothed.csv").exists()
+    (out / "notes.txt").write_text("mine")
+    p = subprocess.run(base + ["--force", "--json"], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    assert not (out / "solution_smoothed.csv").exists() and (out / "notes.txt").read_text() == "mine"
+    assert json.loads((out / "summary.json").read_text())["files"] == json.loads(p.stdout)["files"]

@@ -76,8 +76,14 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
     from .strapdown import mechanize as run_mech
     from .types import NavState
 
+    from .io.files import check_folder_writable, same_file
+
     if out_file and Path(out_file).exists() and not force:
         raise InputError(f"{out_file}: already exists; refusing to overwrite it (use --force)")
+    if out_file and (same_file(out_file, imu_file) or (init_from and same_file(out_file, init_from))):
+        raise InputError(f"{out_file}: is an input of this command; refusing to overwrite it")
+    if out_file:
+        check_folder_writable(Path(out_file).resolve().parent)
     imu = io.read_imu(imu_file, check_units=not no_unit_check)
     if init_text and init_from:
         raise InputError("give either --init or --init-from, not both")
@@ -233,9 +239,16 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
         if not (imu_file and gnss_file):
             raise InputError("give a config file, or at least --imu and --gnss")
         cfg = C.config_from_dict({}, base_dir=Path.cwd(), source="flags", overrides=over)
+    from .io.files import check_folder_writable, same_file
+
     target = Path(out_dir) if out_dir else (Path(cfg.output.dir) if cfg.output.dir else Path("out") / cfg.name)
     if target.exists() and any(target.iterdir()) and not force:
         raise InputError(f"{target}: already holds results; refusing to overwrite them (use --force or --out)")
+    for name in ("solution_forward.csv", "solution_smoothed.csv", "summary.json"):
+        for inp in (cfg.resolve(cfg.imu.file), cfg.resolve(cfg.gnss.file)) + ((Path(config_file),) if config_file else ()):
+            if same_file(target / name, inp):
+                raise InputError(f"{target / name}: would overwrite an input of this run; choose another --out")
+    check_folder_writable(target)  # before the computation, not after it
     extra = {}
     if calibrate_time_offset:
         best, evals = N.calibrate_time_offset(cfg, log=_log)
@@ -255,8 +268,9 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
     if truth is not None:
         s["truth_errors"] = N.truth_errors(res, truth)
         text_extra = N.truth_errors_text(s["truth_errors"])
+    if force:
+        N.clear_previous_run(target)
     files = N.write_outputs(res, target, s)
-    s["files"] = [str(f) for f in files]
     _log(f"wrote {len(files)} files to {target}/")
     h = s["health"]
     _log(f"health: {h['verdict']}")

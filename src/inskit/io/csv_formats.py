@@ -17,6 +17,7 @@ import pandas as pd
 
 from .. import rotations as rot
 from ..errors import InputError
+from .files import atomic_write
 from ..types import GnssData, ImuData, NavSolution
 from ..units import DEG, DEG_PER_HOUR, G0
 
@@ -184,7 +185,8 @@ def write_imu(path, imu: ImuData, *, overwrite=False):
         data[f"dtheta_{a}_rad"] = imu.dtheta_b[:, i]
     for i, a in enumerate(AXES):
         data[f"dv_{a}_m_s"] = imu.dv_b[:, i]
-    pd.DataFrame(data).to_csv(path, index=False, float_format="%.17g")
+    with atomic_write(path) as tmp:
+        pd.DataFrame(data).to_csv(tmp, index=False, float_format="%.17g")
 
 
 def check_writable(path, overwrite):
@@ -242,7 +244,7 @@ def write_gnss(path, gnss: GnssData, *, overwrite=False):
     cols = {
         "time_s": gnss.time,
         "lat_deg": gnss.lla[:, 0] / DEG,
-        "lon_deg": gnss.lla[:, 1] / DEG,
+        "lon_deg": -((-gnss.lla[:, 1] + np.pi) % (2.0 * np.pi) - np.pi) / DEG,  # wrapped into (-180, 180]
         "height_m": gnss.lla[:, 2],
         "sigma_n_m": gnss.sigma_ned[:, 0],
         "sigma_e_m": gnss.sigma_ned[:, 1],
@@ -253,7 +255,8 @@ def write_gnss(path, gnss: GnssData, *, overwrite=False):
             cols[c] = gnss.v_n[:, i]
         for i, c in enumerate(GNSS_VEL_COLUMNS[3:]):
             cols[c] = gnss.sigma_v_ned[:, i]
-    pd.DataFrame(cols).to_csv(path, index=False, float_format="%.15g")
+    with atomic_write(path) as tmp:
+        pd.DataFrame(cols).to_csv(tmp, index=False, float_format="%.15g")
 
 
 def read_solution(path) -> NavSolution:
@@ -283,11 +286,16 @@ def write_solution(path, sol: NavSolution, *, overwrite=False):
     Refuses to write a NaN (a solution with NaN is a bug upstream).
     """
     path = check_writable(path, overwrite)
+    lat = sol.lla[:, 0]
+    bad = np.nonzero(~(np.abs(lat) <= np.pi / 2 + 1e-12))[0]
+    if len(bad):
+        raise InputError(f"{path}: refusing to write latitude {np.degrees(lat[bad[0]]):.6f} deg at row {bad[0]} "
+                         "(outside [-90, 90]: the solution passed a pole in a frame that cannot)")
     rpy = sol.euler / DEG
     cols = {
         "time_s": sol.time,
-        "lat_deg": sol.lla[:, 0] / DEG,
-        "lon_deg": sol.lla[:, 1] / DEG,
+        "lat_deg": lat / DEG,
+        "lon_deg": -((-sol.lla[:, 1] + np.pi) % (2.0 * np.pi) - np.pi) / DEG,  # wrapped into (-180, 180]
         "height_m": sol.lla[:, 2],
         "vn_m_s": sol.v_n[:, 0],
         "ve_m_s": sol.v_n[:, 1],
@@ -307,4 +315,5 @@ def write_solution(path, sol: NavSolution, *, overwrite=False):
     if df.isna().any().any():
         c = df.columns[df.isna().any()][0]
         raise InputError(f"{path}: refusing to write a NaN (column '{c}'); the solution is invalid")
-    df.to_csv(path, index=False, float_format="%.15g")
+    with atomic_write(path) as tmp:
+        df.to_csv(tmp, index=False, float_format="%.15g")

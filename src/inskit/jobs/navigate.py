@@ -353,8 +353,33 @@ def outage_table_text(s: dict) -> str:
     return "\n".join(lines)
 
 
+def clear_previous_run(out_dir: Path) -> list:
+    """Remove the files an earlier run listed in its ``summary.json`` (only
+    those, and only inside ``out_dir``), so that a ``--force`` run leaves no
+    stale result beside its own.  Returns the files removed."""
+    summary_path = Path(out_dir) / "summary.json"
+    if not summary_path.exists():
+        return []
+    try:
+        listed = json.loads(summary_path.read_text()).get("files", [])
+    except (OSError, ValueError):
+        listed = []
+    removed = []
+    root = Path(out_dir).resolve()
+    for name in list(listed) + ["summary.json"]:
+        f = (Path(out_dir) / Path(name).name)
+        if f.resolve().parent == root and f.exists():
+            f.unlink()
+            removed.append(f)
+    return removed
+
+
 def write_outputs(res: NavigateResult, out_dir: Path, s: dict) -> list:
-    """Solution CSVs, summary JSON and plots into ``out_dir``."""
+    """Solution CSVs and plots into ``out_dir``, each written whole or not at
+    all, then ``summary.json`` last (with the list of files), as the mark of a
+    complete run."""
+    from ..io.files import atomic_write
+
     out_dir.mkdir(parents=True, exist_ok=True)
     files = []
     io.write_solution(out_dir / "solution_forward.csv", res.forward.solution, overwrite=True)
@@ -362,10 +387,12 @@ def write_outputs(res: NavigateResult, out_dir: Path, s: dict) -> list:
     if res.smoothed is not None:
         io.write_solution(out_dir / "solution_smoothed.csv", res.smoothed.solution, overwrite=True)
         files.append(out_dir / "solution_smoothed.csv")
-    (out_dir / "summary.json").write_text(json.dumps(s, indent=2, default=float))
-    files.append(out_dir / "summary.json")
     if res.config.output.plots:
         from .plots import plot_all
 
         files += plot_all(res, out_dir)
+    files.append(out_dir / "summary.json")
+    s["files"] = [str(f) for f in files]
+    with atomic_write(out_dir / "summary.json") as tmp:
+        tmp.write_text(json.dumps(s, indent=2, default=float))
     return files

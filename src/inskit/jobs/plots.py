@@ -19,6 +19,14 @@ def _plt():
     return plt
 
 
+def _save(fig, path):
+    """Write a figure whole or not at all."""
+    from ..io.files import atomic_write
+
+    with atomic_write(path) as tmp:
+        fig.savefig(tmp, dpi=110)
+
+
 def _shade(ax, windows, t0):
     for a, b in windows:
         ax.axvspan(a - t0, b - t0, color="0.85", zorder=0)
@@ -53,7 +61,7 @@ def plot_all(res, out_dir):
     ax.set_title(f"{res.config.name}: track")
     fig.tight_layout()
     files.append(out_dir / "track.png")
-    fig.savefig(files[-1], dpi=110)
+    _save(fig, files[-1])
     plt.close(fig)
 
     # errors against every GNSS fix, with the filter's 3-sigma envelope
@@ -80,7 +88,7 @@ def plot_all(res, out_dir):
     axes[-1].set_xlabel("time after first GNSS fix [s]")
     fig.tight_layout()
     files.append(out_dir / "errors.png")
-    fig.savefig(files[-1], dpi=110)
+    _save(fig, files[-1])
     plt.close(fig)
 
     # innovations
@@ -103,7 +111,7 @@ def plot_all(res, out_dir):
     axes[-1, 0].set_xlabel("time after first GNSS fix [s]")
     fig.tight_layout()
     files.append(out_dir / "innovations.png")
-    fig.savefig(files[-1], dpi=110)
+    _save(fig, files[-1])
     plt.close(fig)
 
     # sensor-error estimates
@@ -122,6 +130,6 @@ def plot_all(res, out_dir):
     axes[0].set_title("sensor bias estimates (forward filter)")
     fig.tight_layout()
     files.append(out_dir / "biases.png")
-    fig.savefig(files[-1], dpi=110)
+    _save(fig, files[-1])
     plt.close(fig)
     return files

@@ -1,0 +1,87 @@
+"""Files are written whole or not at all; writers emit only what readers take."""
+
+import os
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from inskit import io
+from inskit.errors import InputError
+from inskit.io.files import atomic_write, check_folder_writable
+from inskit.types import NavSolution
+
+
+def _sol(n=5, lon_deg=179.999, dlon_deg=0.01, lat_deg=10.0):
+    t = np.arange(n, dtype=float)
+    lla = np.column_stack([np.full(n, np.radians(lat_deg)), np.radians(lon_deg + dlon_deg * t), np.zeros(n)])
+    return NavSolution.from_euler(t, lla, np.zeros((n, 3)), np.zeros((n, 3)))
+
+
+def test_interrupted_write_leaves_nothing_under_the_final_name(tmp_path, monkeypatch):
+    path = tmp_path / "sol.csv"
+
+    def boom(self, *a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(pd.DataFrame, "to_csv", boom)
+    with pytest.raises(KeyboardInterrupt):
+        io.write_solution(path, _sol())
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_failed_write_names_the_file(tmp_path):
+    path = tmp_path / "x.txt"
+    with pytest.raises(InputError, match="x.txt: could not be written"):
+        with atomic_write(path) as tmp:
+            raise OSError(28, "No space left on device")
+    assert not path.exists() and list(tmp_path.iterdir()) == []
+
+
+def test_read_only_folder_is_found_before_the_work(tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    os.chmod(ro, 0o500)
+    try:
+        if os.access(ro, os.W_OK):  # root ignores permissions: nothing to test here
+            pytest.skip("running as a user who can write anywhere")
+        with pytest.raises(InputError, match="not writable"):
+            check_folder_writable(ro / "out")
+    finally:
+        os.chmod(ro, 0o700)
+
+
+def test_writers_wrap_longitude_across_the_date_line(tmp_path):
+    sol = _sol()  # 179.999 .. 180.039 deg
+    io.write_solution(tmp_path / "s.csv", sol)
+    lon = pd.read_csv(tmp_path / "s.csv")["lon_deg"].to_numpy()
+    assert np.all((lon > -180) & (lon <= 180))
+    assert lon[0] == pytest.approx(179.999) and lon[-1] == pytest.approx(-179.961)
+    back = io.read_solution(tmp_path / "s.csv")
+    assert np.allclose(np.cos(back.lla[:, 1]), np.cos(sol.lla[:, 1]))
+
+
+def test_writer_refuses_an_invalid_latitude(tmp_path):
+    sol = _sol(lat_deg=89.9999)
+    lla = sol.lla.copy()
+    lla[3, 0] = np.radians(90.5)
+    bad = NavSolution._trusted(sol.time, lla, sol.v_n, sol.q_nb)
+    with pytest.raises(InputError, match="latitude 90.5.*row 3"):
+        io.write_solution(tmp_path / "s.csv", bad)
+    assert not (tmp_path / "s.csv").exists()
+
+
+def test_mechanize_refuses_to_overwrite_its_input(tmp_path):
+    import subprocess
+    import sys
+
+    from inskit.simulation import StationaryTrajectory, ideal_imu
+
+    t = np.arange(0.0, 2.0, 0.01)
+    f = tmp_path / "imu.csv"
+    io.write_imu(f, ideal_imu(StationaryTrajectory((0.7, 0.1, 10.0)), t, nodes=1))
+    before = f.read_bytes()
+    p = subprocess.run([sys.executable, "-m", "inskit.cli", "mechanize", str(f), "--init", "40,0,10,0,0,0,0,0,0",
+                        "--out", str(f), "--force"], capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2 and "is an input of this command" in p.stderr
+    assert f.read_bytes() == before
