@@ -34,6 +34,7 @@ def test_failed_write_names_the_file(tmp_path):
     path = tmp_path / "x.txt"
     with pytest.raises(InputError, match="x.txt: could not be written"):
         with atomic_write(path) as tmp:
+            tmp.write_text("half")
             raise OSError(28, "No space left on device")
     assert not path.exists() and list(tmp_path.iterdir()) == []
 

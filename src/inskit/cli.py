@@ -101,6 +101,12 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
     if frame == "ned":
         opts["height"] = height
     href = None if height == "free" else (init.lla[2] if height_ref is None else height_ref)
+    from .integration.gaps import find_gaps
+
+    gaps = find_gaps(imu)
+    for g in gaps:
+        _log(f"warning: {imu_file}: a gap of {g.length_s:.3f} s at t = {g.start_s:.3f} s (row {g.row}); the "
+             "mechanization integrates one sample's increments over it")
     t0 = time.perf_counter()
     with _progress(len(imu), f"mechanize ({frame})") as bar:
         sol = run_mech(imu, init, frame=frame, height_ref=href, progress=bar.update, chunk_size=200_000, **opts)
@@ -121,6 +127,7 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
             "roll_deg": rpy[0], "pitch_deg": rpy[1], "yaw_deg": rpy[2],
         },
         "out": out_file,
+        "imu_gaps": [{"row": g.row, "start_s": g.start_s, "length_s": g.length_s} for g in gaps],
     }
     f = summary["final"]
     table = (
@@ -261,7 +268,7 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
 
         truth = io.read_solution(truth_file)
     with _progress(None, "navigate") as bar:
-        res = N.navigate(cfg, smooth=smooth, progress=bar.update)
+        res = N.navigate(cfg, smooth=smooth, progress=bar.update, log=_log)
     s = N.summary(res)
     s.update(extra)
     text_extra = ""

@@ -188,16 +188,19 @@ class FilterOutput(Track):
         self.settings, self.store = settings, store
 
 
-def _nodes(imu, measurements, smoother_node_s, want_store):
+def _nodes(imu, measurements, smoother_node_s, want_store, extra_rows=()):
     """Update epochs grouped by the IMU row that precedes them."""
     t = imu.time
-    items = []
+    items = [(int(k), float(t[k]), None, -1) for k in extra_rows]
     skipped = {}
+    # a measurement inside a gap of the IMU log has no INS state near it: skipped, not extrapolated
+    max_ahead = 2.0 * float(np.median(np.diff(t))) if len(t) > 1 else np.inf
     for m in measurements:
         tm = np.asarray(m.times(), float)
         rows = np.asarray(m.rows())
         k = np.searchsorted(t, tm, side="right") - 1
         ok = (k >= 1) & (tm <= t[-1])
+        ok &= (tm - t[np.clip(k, 0, len(t) - 1)]) <= max_ahead
         skipped[m.name] = int((~ok).sum())
         for kk, tt, r in zip(k[ok].tolist(), tm[ok].tolist(), rows[ok].tolist()):
             items.append((kk, tt, m, r))
@@ -227,7 +230,7 @@ def _check_measurements(measurements):
 
 
 def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSettings, *,
-               smoother=False, progress=None) -> FilterOutput:
+               smoother=False, progress=None, extra_noise=None) -> FilterOutput:
     """Run the integration filter forward over the IMU data.
 
     Parameters
@@ -242,6 +245,10 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         Keep what the RTS smoother needs (closed loop only).
     progress : callable, optional
         Called with the number of IMU rows done since the last call.
+    extra_noise : dict, optional
+        ``{row: (layout.size,) variances}`` added to the covariance's
+        diagonal right after propagating through that IMU row (a gap bridged
+        in the IMU log, say: see :mod:`.gaps`).
 
     Returns
     -------
@@ -305,7 +312,13 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
                     (settings.coning, want_phi, open_loop, settings.covariance_second_order))
 
     write_row(0)
-    items, skipped = _nodes(imu, measurements, settings.smoother_node_s, want_store)
+    extra_noise = {int(k): np.asarray(v, float) for k, v in (extra_noise or {}).items()}
+    for k, v in extra_noise.items():
+        if v.shape != (n,) or not (np.isfinite(v).all() and (v >= 0).all()):
+            raise InputError(f"extra_noise at row {k} must be {n} finite variances >= 0")
+        if not 1 <= k < len(imu):
+            raise InputError(f"extra_noise row {k} is outside the IMU rows 1..{len(imu) - 1}")
+    items, skipped = _nodes(imu, measurements, settings.smoother_node_s, want_store, sorted(extra_noise))
     counts = {m.name: {"used": 0, "rejected": 0, "skipped": skipped[m.name]} for m in measurements}
     innov = {m.name: {"t": [], "nu": [], "sigma": [], "nis": [], "accepted": []} for m in measurements}
     rejected_streak = {}
@@ -327,6 +340,8 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
                 progress(k_end + 1 - k_done)
             k_done = k_end + 1
             w_raw[:] = (imu.dtheta_b[k_end]) / (t_imu[k_end] - t_imu[k_end - 1])
+        if k_end in extra_noise:
+            P[np.diag_indices(n)] += extra_noise[k_end]
         if want_store:
             store.k.append(k_end)
             store.P_minus.append(P.copy())

@@ -28,6 +28,9 @@ class ImuSection(_Strict):
     mount_rpy_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)
     check_units: bool = True
     start_s: float | None = Field(None, description="ignore IMU data before this time")
+    gap_factor: float = Field(5.0, gt=1.0, description="an interval longer than this many median intervals is a gap")
+    gap_rate_sigma_deg_s: float = Field(5.0, gt=0, description="unknown rate change assumed over a bridged gap")
+    gap_accel_sigma_m_s2: float = Field(1.0, gt=0, description="unknown acceleration change over a bridged gap")
 
 
 class GnssSection(_Strict):

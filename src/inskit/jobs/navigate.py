@@ -37,6 +37,7 @@ class NavigateResult:
     score_smoothed: OutageScore | None
     elapsed_s: float
     measured_noise: dict
+    gaps: list = None
 
 
 def load_inputs(cfg: NavigateConfig, time_offset_s=None):
@@ -135,8 +136,16 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     the time offset applied): calibration loops pass it to read the files
     once.
     """
+    from ..integration.gaps import bridge_gaps, find_gaps, gap_process_noise
+
     t_start = time.perf_counter()
     imu, gnss = load_inputs(cfg, time_offset_s) if inputs is None else inputs
+    gaps = find_gaps(imu, cfg.imu.gap_factor)
+    for g in gaps:
+        if log:
+            log(f"warning: the IMU log has a gap of {g.length_s:.3f} s at t = {g.start_s:.3f} s (row {g.row}): "
+                "bridged on the last rates, covariance inflated")
+    imu, gaps = bridge_gaps(imu, gaps)
     windows = outage_windows(cfg, gnss)
     used = ~withheld_mask(gnss.time, windows)
     if used.sum() < 2:
@@ -173,12 +182,14 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
             meas.append(ZeroVelocity(static_intervals(gnss_used), c.rate_hz, c.zupt_sigma_m_s))
         if c.nhc:
             meas.append(NonHolonomic([(imu.time[0], imu.time[-1])], c.rate_hz, c.nhc_sigma_m_s))
-        out = run_filter(imu, initial, meas, settings, smoother=smooth, progress=progress)
+        extra = {g.row: gap_process_noise(settings.layout, g.length_s, np.radians(cfg.imu.gap_rate_sigma_deg_s),
+                                          cfg.imu.gap_accel_sigma_m_s2) for g in gaps}
+        out = run_filter(imu, initial, meas, settings, smoother=smooth, progress=progress, extra_noise=extra)
         sm = rts_smooth(out) if smooth else None
     score_f = score_outages(out.solution, gnss, windows, lever)
     score_s = score_outages(sm.solution, gnss, windows, lever) if sm is not None else None
     return NavigateResult(cfg, imu, gnss, windows, used, startup, settings, out, sm, score_f, score_s,
-                          time.perf_counter() - t_start, measured)
+                          time.perf_counter() - t_start, measured, gaps)
 
 
 def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, log=None):
@@ -265,7 +276,8 @@ def summary(res: NavigateResult) -> dict:
         "gyro_deg_s": [float(v) for v in fw.estimate("bg")[-1] / DEG],
         "accel_m_s2": [float(v) for v in fw.estimate("ba")[-1]],
     }
-    out["health"] = health(fw)
+    out["health"] = health(fw, res.gaps or ())
+    out["imu_gaps"] = [{"row": g.row, "start_s": g.start_s, "length_s": g.length_s} for g in (res.gaps or ())]
     out["final_estimates"] = {b.name: {"values": [float(v) for v in fw.estimate(b.name)[-1]],
                                        "sigma": [float(v) for v in fw.sigma_of(b.name)[-1]], "unit": b.unit}
                               for b in fw.layout.blocks if b.has_estimate}
@@ -279,7 +291,7 @@ HEALTH_MAX_PRIOR_SIGMAS = 5.0
 HEALTH_BIAS_BLOCKS = ("bg", "ba")
 
 
-def health(out) -> dict:
+def health(out, gaps=()) -> dict:
     """The verdict on a filter run: is the result to be trusted?
 
     *Unhealthy* when any of these holds (each reason is listed):
@@ -290,7 +302,9 @@ def health(out) -> dict:
       filter averages 1 per degree of freedom);
     * a sensor-bias estimate (gyro, accelerometer) more than 5 initial sigmas
       from its initial value (the filter absorbs something it does not model);
-    * a recovery from a lost state happened.
+    * a recovery from a lost state happened;
+    * the IMU log had a gap (bridged on the last rates: the solution over it
+      is an extrapolation).
 
     *Warnings*, listed without changing the verdict: other blocks' estimates
     beyond 5 initial sigmas (a scale factor soaking up a mounting error, say),
@@ -326,6 +340,8 @@ def health(out) -> dict:
     for r in getattr(out, "recoveries", []):
         reasons.append(f"{r['measurement']}: recovered from a lost state at t = {r['t']:.2f} s after "
                        f"{r['after_rejections']} consecutive rejections over {r['rejected_for_s']:.1f} s")
+    for g in gaps:
+        reasons.append(f"IMU gap of {g.length_s:.3f} s at t = {g.start_s:.3f} s, bridged on the last rates")
     return {"verdict": "unhealthy" if reasons else "healthy", "reasons": reasons, "warnings": warnings,
             "measurements": per}
 

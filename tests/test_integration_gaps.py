@@ -1,0 +1,75 @@
+"""IMU gaps: found, bridged on the last rates, paid for in covariance,
+recovered from GNSS, and reported."""
+
+import numpy as np
+import pytest
+
+from inskit import earth
+from inskit import rotations as rot
+from inskit.integration.gaps import bridge_gaps, find_gaps, gap_process_noise
+from inskit.integration import StateLayout, ins_blocks
+from inskit.jobs.config import config_from_dict
+from inskit.jobs.navigate import navigate
+from inskit.simulation import ideal_imu, truth_solution
+from inskit.simulation.gnss import GnssErrors, simulate_gnss
+from inskit.simulation.segments import SegmentTrajectory
+from inskit.types import ImuData
+
+
+@pytest.fixture(scope="module")
+def turn_with_gap():
+    tr = SegmentTrajectory((np.radians(45.0), np.radians(7.0), 100.0), yaw0=0.2, speed0=12.0)
+    tr.cruise(30).turn(np.radians(90), rate=np.radians(6.0)).cruise(60)   # the turn lasts 15 s from t = 30 s
+    t = np.arange(0.0, tr.duration, 0.01)
+    imu = ideal_imu(tr, t, nodes=3)
+    keep = ~((t > 33.0) & (t <= 43.0))  # 10 s of rows lost in the middle of the turn
+    gappy = ImuData(t[keep], imu.dtheta_b[keep], imu.dv_b[keep])
+    gnss, _ = simulate_gnss(tr, 0.0, tr.duration, GnssErrors(rate_hz=1.0, white_h_m=0.3, white_v_m=0.5,
+                                                              velocity_sigma_m_s=0.0), np.random.default_rng(3))
+    return tr, t, gappy, gnss, truth_solution(tr, t)
+
+
+def test_find_and_bridge(turn_with_gap):
+    tr, t, gappy, gnss, truth = turn_with_gap
+    gaps = find_gaps(gappy)
+    assert len(gaps) == 1 and gaps[0].length_s == pytest.approx(10.01, abs=1e-6)
+    b, bg = bridge_gaps(gappy, gaps)
+    k = bg[0].row
+    assert len(b) == len(t) and np.allclose(b.time, t)  # the rows are back on the grid
+    assert np.diff(b.time).max() < 0.0101
+    # the inserted rows turn at the last rate for the whole gap: 6 deg/s x 10 s
+    turned = np.degrees(np.linalg.norm(b.dtheta_b[k:k + 1000].sum(axis=0)))
+    assert turned == pytest.approx(60.0, rel=0.01)
+    q = gap_process_noise(StateLayout(ins_blocks()), 10.0)
+    assert np.sqrt(q[8]) == pytest.approx(np.radians(50.0)) and np.sqrt(q[3]) == pytest.approx(10.0)
+
+
+def test_navigate_bridges_warns_and_recovers(turn_with_gap):
+    tr, t, gappy, gnss, truth = turn_with_gap
+    s0 = truth.state(0)
+    cfg = config_from_dict({
+        "imu": {"file": "unused.csv"}, "gnss": {"file": "unused.csv"},
+        "init": {"mode": "given", "lat_deg": float(np.degrees(s0.lla[0])), "lon_deg": float(np.degrees(s0.lla[1])),
+                 "height_m": float(s0.lla[2]), "v_ned_m_s": [float(x) for x in s0.v_n],
+                 "rpy_deg": [float(x) for x in np.degrees(s0.euler)], "sigma_pos_m": 0.5, "sigma_vel_m_s": 0.1,
+                 "sigma_roll_pitch_deg": 0.1, "sigma_yaw_deg": 0.5},
+        "noise": {"from_static": False, "gyro_arw_deg_sqrt_h": 0.05, "accel_vrw_m_s_sqrt_h": 0.03,
+                  "gyro_bias_sigma_deg_h": 1.0, "accel_bias_sigma_ug": 100.0},
+        "constraints": {"zupt": False, "nhc": False}, "filter": {"scale_factors": False},
+    })
+    logs = []
+    res = navigate(cfg, inputs=(gappy, gnss), log=logs.append)
+    assert any("gap of 10.010 s" in m for m in logs)
+    c = res.forward.counts["gnss_pos"]
+    assert c["rejected"] <= 0.05 * (c["used"] + c["rejected"])
+    from inskit.jobs.navigate import health
+
+    h = health(res.forward, res.gaps)
+    assert h["verdict"] == "unhealthy" and any("IMU gap" in r for r in h["reasons"])
+    # 20 s after the gap the GNSS has brought position and heading back
+    sol = res.forward.nav
+    k = np.searchsorted(sol.time, 63.0)
+    kt = np.searchsorted(truth.time, sol.time[k])
+    d = earth.lla_to_ned(sol.lla[k], truth.lla[kt])
+    yaw = np.degrees(rot.attitude_error(sol.C_nb[k], truth.C_nb[kt])[2])
+    assert np.hypot(d[0], d[1]) < 2.0 and abs(yaw) < 1.0
