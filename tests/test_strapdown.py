@@ -182,3 +182,16 @@ def test_streaming_rejects_overlap_and_bad_options():
         mechanize(imu, truth_solution(traj, t[:1]).state(0), height="hold")
     with pytest.raises(InputError, match="frame"):
         mechanize(imu, truth_solution(traj, t[:1]).state(0), frame="body")
+
+
+def test_ned_refuses_the_poles_and_wander_carries_on():
+    """Issue 12: mechanize from lat 90 wrote latitudes above 90 deg."""
+    tr = StationaryTrajectory((np.radians(89.95), 0.3, 10.0))
+    t = np.arange(0.0, 20.0, 0.01)
+    imu = ideal_imu(tr, t, nodes=1)
+    s0 = truth_solution(tr, t[:1]).state(0)
+    with pytest.raises(InputError, match="within 0.1 deg of a pole.*wander"):
+        mechanize(imu, s0)
+    sol = mechanize(imu, s0, frame="wander")
+    assert np.all(np.abs(sol.lla[:, 0]) <= np.pi / 2)
+    assert abs(sol.lla[-1, 0] - s0.lla[0]) * 6.4e6 < 1e-3

@@ -257,6 +257,9 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     if abs(initial.time - imu.time[0]) > 1e-6:
         raise InputError(f"the initial state ({initial.time:.3f} s) must be at the first IMU sample "
                          f"({imu.time[0]:.3f} s)")
+    if not abs(initial.lla[0]) < np.radians(89.9):
+        raise InputError(f"the initial latitude {np.degrees(initial.lla[0]):.4f} deg is within 0.1 deg of a pole, "
+                         "where the filter's NED error model is singular")
     if smoother and settings.scheme != "closed":
         raise InputError("the RTS smoother works on the closed-loop filter only")
     _check_measurements(measurements)
@@ -434,6 +437,10 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     check_covariance(P, "at the end of the run")
     if not (np.isfinite(out_lla).all() and np.isfinite(out_v).all() and np.isfinite(out_q).all()):
         raise FilterDivergence("the navigation solution became NaN: the filter diverged")
+    near = np.nonzero(~(np.abs(out_lla[:, 0]) < np.radians(89.9)))[0]
+    if len(near):
+        raise InputError(f"the solution reaches latitude {np.degrees(out_lla[near[0], 0]):.4f} deg at t = "
+                         f"{imu.time[near[0]]:.3f} s, within 0.1 deg of a pole, where the NED filter is singular")
     if open_loop:  # the open-loop estimate drifts with x between updates: record it at the end too
         node_rows.append(N - 1)
         node_aux.append(aux - x[aux_idx])

@@ -45,6 +45,17 @@ __all__ = [
 _HEIGHT_MODES = {"free": K.HEIGHT_FREE, "hold": K.HEIGHT_HOLD, "aid": K.HEIGHT_AID}
 
 
+#: the NED mechanization's limit: closer than this to a pole its transport
+#: rate (tan(lat)) is singular; the wander-azimuth and ECEF frames carry on
+POLE_LIMIT = np.radians(89.9)
+
+
+def _check_off_pole(lat, what):
+    if not abs(lat) < POLE_LIMIT:
+        raise InputError(f"{what} is at latitude {np.degrees(lat):.4f} deg, within 0.1 deg of a pole, where the "
+                         "NED mechanization is singular: use the wander-azimuth or ECEF frame (--frame wander|ecef)")
+
+
 def _qz(angle):
     """Quaternion(s) of a rotation by ``angle`` about the z (down) axis."""
     angle = np.asarray(angle, dtype=float)
@@ -120,6 +131,7 @@ class NedIntegrator(_Integrator):
         self._lla = initial.lla.copy()
         self._v = initial.v_n.copy()
         self._q = initial.q_nb.copy()
+        _check_off_pole(initial.lla[0], "the initial state")
 
     def run(self, imu: ImuData, height_ref=None) -> NavSolution:
         """Integrate one chunk; return the solution at its sample times.
@@ -146,6 +158,9 @@ class NedIntegrator(_Integrator):
         q = np.empty((n, 4))
         K.ned_kernel(imu.time, imu.dtheta_b, imu.dv_b, start, self._lla, self._v, self._q, self._carry,
                      self.coning, self.height_mode, h_ref, self._gains, lla, v, q)
+        near = np.nonzero(~(np.abs(lla[:, 0]) < POLE_LIMIT))[0]
+        if len(near):
+            _check_off_pole(lla[near[0], 0], f"the solution at t = {imu.time[near[0]]:.3f} s")
         return NavSolution._trusted(imu.time, lla, v, q)
 
     @property
