@@ -56,3 +56,39 @@ def test_fit_reports_rate_random_walk_when_present():
     f = fit_allan(tau, a)
     assert f.rate_random_walk == pytest.approx(K, rel=0.1)
     assert f.white == pytest.approx(1e-3, rel=0.1)
+
+
+def test_pure_white_noise_invents_no_bias_instability():
+    """Issue 12: one million samples of white noise gave an invented bias
+    instability; now the white level is right and the bias is flagged as an
+    unresolved upper bound."""
+    from inskit.analysis.allan import allan_imu
+    from inskit.types import ImuData
+
+    rng = np.random.default_rng(0)
+    n, dt = 400_000, 0.01
+    t = np.arange(n) * dt
+    N = 102e-6 * 9.80665
+    dv = np.tile([0.0, 0.0, -9.80665 * dt], (n, 1)) + rng.normal(0, N * np.sqrt(dt), (n, 3))
+    dth = rng.normal(0, 1e-4 * np.sqrt(dt), (n, 3))
+    dth[0] = dv[0] = 0.0
+    r = allan_imu(ImuData(t, dth, dv))
+    for f in r["accel_fit"]:
+        assert f.white == pytest.approx(N, rel=0.05)
+        assert not f.bias_resolved
+
+
+def test_short_and_moving_logs_are_refused():
+    from inskit.analysis.allan import allan_imu
+    from inskit.errors import InputError
+    from inskit.types import ImuData
+
+    t = np.arange(0.0, 0.5, 0.01)
+    z = np.zeros((len(t), 3))
+    with pytest.raises(InputError, match="at least 100 s"):
+        allan_imu(ImuData(t, z, z))
+    t = np.arange(0.0, 300.0, 0.01)
+    dv = np.tile([0.0, 0.0, -0.0980665], (len(t), 1))
+    dv[len(t) // 2:, 0] += 0.02  # 2 m/s^2 forward from half way: driving off
+    with pytest.raises(InputError, match="not static"):
+        allan_imu(ImuData(t, np.zeros_like(dv), dv))

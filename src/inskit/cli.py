@@ -359,6 +359,7 @@ def allan(imu_file, plot_file, force, no_unit_check, as_json):
         lines.append(f"{g['axis']:<6}{g['arw_deg_sqrt_h']:>15.4f}{g['bias_instability_deg_h']:>10.3f}{g['gm_tau_s']:>8.0f}   "
                      f"{a['vrw_ug_sqrt_hz']:>14.2f}{a['bias_instability_ug']:>9.2f}{a['gm_tau_s']:>8.0f}")
     lines.append("[noise] for inskit navigate: " + ", ".join(f"{k} = {v:.4g}" for k, v in noise.items()))
+    lines += [f"note: {n}" for n in rep["notes"]]
     _emit(res, as_json, "\n".join(lines))
 
 

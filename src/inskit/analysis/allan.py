@@ -68,6 +68,28 @@ def allan_deviation(increments, dt, taus_per_decade=10, min_clusters=9):
 
 
 GM_PEAK = 0.6174
+#: shortest log the Allan analysis accepts [s]
+MIN_DURATION_S = 100.0
+
+
+def _check_static(imu: ImuData, dt):
+    """Refuse a log that moves: 1 s window means of the specific force must
+    stay within 0.2 m/s^2 and of the rates within 1 deg/s of their median
+    (vibration averages out, motion does not)."""
+    w, f = imu.rates()
+    k = max(1, int(round(1.0 / dt)))
+    n = (len(imu) - 1) // k
+    if n < 2:
+        return
+    fw = f[1:n * k + 1].reshape(n, k, 3).mean(axis=1)
+    ww = w[1:n * k + 1].reshape(n, k, 3).mean(axis=1)
+    df = np.abs(fw - np.median(fw, axis=0)).max()
+    dw = np.abs(ww - np.median(ww, axis=0)).max()
+    if df > 0.2 or dw > np.radians(1.0):
+        i = int(np.argmax(np.abs(fw - np.median(fw, axis=0)).max(axis=1)))
+        raise InputError(f"the log is not static (around t = {imu.time[1 + i * k]:.1f} s its 1 s mean specific "
+                         f"force moves {df:.2f} m/s^2, its rate {np.degrees(dw):.2f} deg/s from the median): an "
+                         "Allan deviation needs the IMU at rest")
 
 
 def gm_avar(tau, sigma, tc):
@@ -94,6 +116,10 @@ class AllanFit:
         The Gauss-Markov bias model [unit], [s], ready for a filter.
     rate_random_walk : float or None
         K [unit/s/sqrt(Hz)]; None when the curve shows none.
+    bias_resolved : bool
+        False when the curve shows no bias-instability bump within the log
+        (white noise all the way): ``bias_instability`` and ``gm_sigma`` are
+        then upper bounds (the curve's floor), ``gm_tau`` the log's reach.
     """
 
     white: float
@@ -101,6 +127,7 @@ class AllanFit:
     gm_sigma: float
     gm_tau: float
     rate_random_walk: float | None
+    bias_resolved: bool = True
 
 
 def fit_allan(tau, adev):
@@ -127,6 +154,21 @@ def fit_allan(tau, adev):
     # first without rate random walk: a Gauss-Markov bias rises like one below
     # its correlation time, and a free K would trade off against it
     r3 = least_squares(lambda p: np.log(model_adev(tau, *np.exp(p), 0.0)) - la, p0[:3], bounds=(lo[:3], hi[:3]))
+    # white noise alone: is the bump there at all?  It must halve the misfit
+    # and peak inside the log, else it is white noise read as a bias (a
+    # Gauss-Markov term with a tiny or huge tau mimics white noise or nothing)
+    r1 = least_squares(lambda p: np.log(model_adev(tau, np.exp(p[0]), 0.0, 1.0, 0.0)) - la, p0[:1],
+                       bounds=(lo[:1], hi[:1]))
+    tc3 = float(np.exp(r3.x[2]))
+    if not (2 * r3.cost < 0.5 * 2 * r1.cost and 1.89 * tc3 <= tau[-1] and tc3 >= 2 * tau[0]):
+        w = float(np.exp(r1.x[0]))
+        k_rep = None
+        r2 = least_squares(lambda p: np.log(model_adev(tau, np.exp(p[0]), 0.0, 1.0, np.exp(p[1]))) - la,
+                           [r1.x[0], p0[3]], bounds=([lo[0], lo[3]], [hi[0], hi[3]]))
+        if 2 * r2.cost < 0.5 * 2 * r1.cost:  # rate random walk without a bias bump
+            w, k_rep = float(np.exp(r2.x[0])), float(np.exp(r2.x[1]))
+        floor = float(np.min(a))
+        return AllanFit(w, floor / 0.664, floor / GM_PEAK, float(tau[-1] / 1.89), k_rep, bias_resolved=False)
     r4 = least_squares(lambda p: np.log(model_adev(tau, *np.exp(p))) - la, np.r_[r3.x, p0[3]], bounds=(lo, hi))
     if 2 * r4.cost < 0.5 * 2 * r3.cost:  # the RRW term must halve the misfit to be kept
         w, sg, tc, k = np.exp(r4.x)
@@ -149,6 +191,11 @@ def allan_imu(imu: ImuData):
     if np.ptp(dt) > 0.01 * np.median(dt):
         raise InputError("the Allan deviation needs a regularly sampled log (the time steps vary by more than 1 %)")
     dtm = float(np.median(dt))
+    duration = float(imu.time[-1] - imu.time[0])
+    if duration < MIN_DURATION_S:
+        raise InputError(f"the log lasts {duration:.1f} s; an Allan deviation needs a static log of at least "
+                         f"{MIN_DURATION_S:.0f} s (hours to see the bias instability)")
+    _check_static(imu, dtm)
     tau, ga = allan_deviation(imu.dtheta_b[1:], dtm)
     _, aa = allan_deviation(imu.dv_b[1:], dtm)
     return {

@@ -22,12 +22,14 @@ def allan_report(imu):
     r = allan_imu(imu)
     gyro = [{"axis": a, "arw_deg_sqrt_h": f.white / DEG * 60, "bias_instability_deg_h": f.bias_instability / DEG_PER_HOUR,
              "gm_sigma_deg_h": f.gm_sigma / DEG_PER_HOUR, "gm_tau_s": f.gm_tau,
-             "rrw_deg_h_sqrt_h": None if f.rate_random_walk is None else f.rate_random_walk / DEG_PER_HOUR * 60}
+             "rrw_deg_h_sqrt_h": None if f.rate_random_walk is None else f.rate_random_walk / DEG_PER_HOUR * 60,
+             "bias_instability_resolved": f.bias_resolved}
             for a, f in zip("xyz", r["gyro_fit"])]
     acc = [{"axis": a, "vrw_ug_sqrt_hz": f.white / MICRO_G, "vrw_m_s_sqrt_h": f.white * 60,
             "bias_instability_ug": f.bias_instability / MICRO_G, "gm_sigma_ug": f.gm_sigma / MICRO_G,
             "gm_tau_s": f.gm_tau,
-            "rrw_ug_sqrt_h": None if f.rate_random_walk is None else f.rate_random_walk / MICRO_G * 60}
+            "rrw_ug_sqrt_h": None if f.rate_random_walk is None else f.rate_random_walk / MICRO_G * 60,
+            "bias_instability_resolved": f.bias_resolved}
            for a, f in zip("xyz", r["accel_fit"])]
 
     def rms(rows, k):
@@ -40,4 +42,8 @@ def allan_report(imu):
         "accel_bias_sigma_ug": rms(acc, "gm_sigma_ug"),
         "bias_tau_s": float(np.exp(np.mean(np.log([x["gm_tau_s"] for x in gyro + acc])))),
     }
-    return r, {"gyro": gyro, "accel": acc, "navigate_noise_section": noise}
+    notes = []
+    if not all(x["bias_instability_resolved"] for x in gyro + acc):
+        notes.append("no bias-instability bump within the log on some axes: their bias sigma is an upper bound "
+                     "(the curve's floor) and their correlation time the log's reach; record a longer static log")
+    return r, {"gyro": gyro, "accel": acc, "navigate_noise_section": noise, "notes": notes}
