@@ -168,19 +168,25 @@ def ned_step(dth, dv, dt, lla, v_n, q_nb, carry, coning, height_mode, h_ref, h_g
     remember(d0, d1, d2, u0, u1, u2, n0 - v0, n1 - v1, n2 - v2, carry)
 
 
+@njit(cache=True, inline="always")
+def start_rows(start, t0, a, b, q, a_out, b_out, q_out, carry):
+    """Row 0 is the initial state when ``start`` is 1: write it, reset the carry."""
+    if start == 1:
+        for i in range(3):
+            a_out[0, i] = a[i]
+            b_out[0, i] = b[i]
+        for i in range(4):
+            q_out[0, i] = q[i]
+        carry[0] = t0
+        carry[1] = 0.0
+
+
 @njit(cache=True)
 def ned_kernel(t, dth_all, dv_all, start, lla, v_n, q_nb, carry, coning,
                height_mode, h_ref, h_gains, lla_out, v_out, q_out):
     """Local-level NED mechanization (SYSTEM.md §1.4, source 000 eq. 1-37..42)."""
     n = t.shape[0]
-    if start == 1:
-        for i in range(3):
-            lla_out[0, i] = lla[i]
-            v_out[0, i] = v_n[i]
-        for i in range(4):
-            q_out[0, i] = q_nb[i]
-        carry[0] = t[0]
-        carry[1] = 0.0
+    start_rows(start, t[0], lla, v_n, q_nb, lla_out, v_out, q_out, carry)
     for k in range(start, n):
         dt = t[k] - carry[0]
         href = h_ref[k] if height_mode != HEIGHT_FREE else 0.0
@@ -302,14 +308,7 @@ def cartesian_kernel(t, dth_all, dv_all, start, rotating, t0, r, v, q, carry, co
     Gravity at the midpoint position, trapezoidal position.
     """
     n = t.shape[0]
-    if start == 1:
-        for i in range(3):
-            r_out[0, i] = r[i]
-            v_out[0, i] = v[i]
-        for i in range(4):
-            q_out[0, i] = q[i]
-        carry[0] = t[0]
-        carry[1] = 0.0
+    start_rows(start, t[0], r, v, q, r_out, v_out, q_out, carry)
     w2 = W_IE * W_IE
     for k in range(start, n):
         dt = t[k] - carry[0]
