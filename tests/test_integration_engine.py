@@ -197,3 +197,21 @@ def test_open_and_closed_loop_agree_on_a_short_static_run():
 
     d = earth.lla_to_ned(o.nav.lla, c.nav.lla)
     assert np.abs(d).max() < 0.05
+
+
+def test_nan_in_a_toml_value_names_the_field(tmp_path):
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('[imu]\nfile = "a.csv"\n[gnss]\nfile = "b.csv"\n[noise]\ngyro_arw_deg_sqrt_h = nan\n')
+    with pytest.raises(ConfigError, match="noise.gyro_arw_deg_sqrt_h.*not a finite number"):
+        load_config(cfg)
+
+
+def test_unsupported_plot_format_is_a_user_error(tmp_path):
+    imu, truth, g = _static_setup()
+    from inskit import io
+
+    io.write_solution(tmp_path / "s.csv", truth)
+    p = subprocess.run([sys.executable, "-m", "inskit.cli", "evaluate", str(tmp_path / "s.csv"),
+                        str(tmp_path / "s.csv"), "--plot", str(tmp_path / "e.xyz")], capture_output=True, text=True,
+                       timeout=120)
+    assert p.returncode == 2 and "unsupported plot format '.xyz'" in p.stderr

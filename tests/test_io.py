@@ -150,3 +150,24 @@ def test_solution_missing_columns(tmp_path):
     p = write(tmp_path, "s.csv", "time_s,lat_deg,lon_deg\n0,1,2\n")
     with pytest.raises(InputError, match=r"s\.csv: missing column\(s\) height_m, vn_m_s"):
         io.read_solution(p)
+
+
+def test_gzip_data_is_read_whatever_the_name(tmp_path):
+    import gzip
+
+    from inskit.simulation import StationaryTrajectory, ideal_imu
+
+    imu = ideal_imu(StationaryTrajectory((0.7, 0.1, 10.0)), np.arange(0.0, 1.0, 0.01), nodes=1)
+    plain = tmp_path / "imu.csv"
+    io.write_imu(plain, imu)
+    disguised = tmp_path / "imu_gz.csv"
+    disguised.write_bytes(gzip.compress(plain.read_bytes()))
+    back = io.read_imu(disguised)
+    assert np.allclose(back.dv_b, imu.dv_b)
+
+
+def test_semicolon_separated_file_gets_a_hint(tmp_path):
+    f = tmp_path / "g.csv"
+    f.write_text("time_s;lat_deg;lon_deg\n0;1;2\n")
+    with pytest.raises(InputError, match="separated by ';'"):
+        io.read_gnss(f)

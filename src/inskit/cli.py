@@ -139,6 +139,20 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
     _emit(summary, as_json, table)
 
 
+PLOT_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
+
+
+def _check_plot_file(plot_file, force):
+    """A plot path the plotting library can write, checked before the work."""
+    if not plot_file:
+        return
+    if Path(plot_file).suffix.lower() not in PLOT_SUFFIXES:
+        raise InputError(f"{plot_file}: unsupported plot format {Path(plot_file).suffix or '(none)'!r}; use one of "
+                         f"{', '.join(PLOT_SUFFIXES)}")
+    if Path(plot_file).exists() and not force:
+        raise InputError(f"{plot_file}: already exists; refusing to overwrite it (use --force)")
+
+
 # --- evaluate ----------------------------------------------------------------------
 def _summary_table(s):
     rows = [("north_m", "m"), ("east_m", "m"), ("down_m", "m"), ("horizontal_m", "m"), ("3d_m", "m"),
@@ -162,8 +176,7 @@ def evaluate(solution_file, truth_file, plot_file, force, as_json):
     """Errors of a navigation solution against a truth file."""
     from . import analysis, io
 
-    if plot_file and Path(plot_file).exists() and not force:
-        raise InputError(f"{plot_file}: already exists; refusing to overwrite it (use --force)")
+    _check_plot_file(plot_file, force)
     sol = io.read_solution(solution_file)
     truth = io.read_solution(truth_file)
     err = analysis.nav_error(sol, truth)
@@ -345,8 +358,7 @@ def allan(imu_file, plot_file, force, no_unit_check, as_json):
     from .analysis.allan import plot_allan
     from .jobs.allan import allan_report
 
-    if plot_file and Path(plot_file).exists() and not force:
-        raise InputError(f"{plot_file}: already exists; refusing to overwrite it (use --force)")
+    _check_plot_file(plot_file, force)
     imu = io.read_imu(imu_file, check_units=not no_unit_check)
     r, rep = allan_report(imu)
     gyro, acc, noise = rep["gyro"], rep["accel"], rep["navigate_noise_section"]
@@ -532,6 +544,11 @@ reproduce.add_command(_reproduce_integration_filters, "integration-filters")
 def main(argv=None):
     """Entry point: run the CLI, turning user errors into one line and exit 2."""
     debug = os.environ.get("INSKIT_DEBUG")
+    if not debug:  # library warnings are not the user's messages: stderr carries ours only
+        import warnings
+
+        warnings.simplefilter("ignore")
+        np.seterr(all="ignore")
     try:
         cli.main(args=argv, prog_name="inskit", standalone_mode=False)
     except click.exceptions.Abort:

@@ -5,6 +5,7 @@ Shared by the ``navigate`` configuration and the simulation scenarios.
 
 from __future__ import annotations
 
+import math
 import tomllib
 from pathlib import Path
 
@@ -19,9 +20,23 @@ def read_toml(path, kind="config"):
     if not path.is_file():
         raise ConfigError(f"{path}: no such {kind} file")
     try:
-        return tomllib.loads(path.read_text())
+        data = tomllib.loads(path.read_text())
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: not valid TOML ({exc})") from None
+    _refuse_non_finite(data, path, "")
+    return data
+
+
+def _refuse_non_finite(node, path, where):
+    """TOML allows nan and inf; no setting of ours means either."""
+    if isinstance(node, dict):
+        for k, v in node.items():
+            _refuse_non_finite(v, path, f"{where}.{k}" if where else str(k))
+    elif isinstance(node, list):
+        for i, v in enumerate(node):
+            _refuse_non_finite(v, path, f"{where}[{i}]")
+    elif isinstance(node, float) and not math.isfinite(node):
+        raise ConfigError(f"{path}: field '{where}': {node} is not a finite number")
 
 
 def validation_message(source, exc: ValidationError):

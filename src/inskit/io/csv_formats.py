@@ -40,16 +40,24 @@ _GYRO_RAD_MEDIAN = 1.0    # median |w| in rad/s above this looks like deg/s
 
 
 def read_table(path) -> tuple[Path, pd.DataFrame]:
+    """Read a comma-separated table with one header line; gzip data is
+    recognised by its content whatever the file is called."""
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: no such file")
+    with open(path, "rb") as fh:
+        gz = fh.read(2) == b"\x1f\x8b"
     try:
-        df = pd.read_csv(path, skipinitialspace=True)
+        df = pd.read_csv(path, skipinitialspace=True, compression="gzip" if gz else "infer")
     except pd.errors.EmptyDataError:
         raise InputError(f"{path}: the file is empty; expected a header line and data rows") from None
-    except (pd.errors.ParserError, UnicodeDecodeError) as exc:
+    except (pd.errors.ParserError, UnicodeDecodeError, EOFError, OSError) as exc:
         raise InputError(f"{path}: not a readable CSV file ({str(exc).splitlines()[0]})") from None
     df.columns = [str(c).strip() for c in df.columns]
+    if len(df.columns) == 1 and any(sep in df.columns[0] for sep in (";", "\t")):
+        sep = ";" if ";" in df.columns[0] else "tab"
+        raise InputError(f"{path}: the header {df.columns[0]!r} is one column: the file seems separated by "
+                         f"{sep!r}, not by commas; convert it to comma-separated values")
     if len(df) == 0:
         raise InputError(f"{path}: has a header but no data rows")
     return path, df
