@@ -11,7 +11,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "inskit"
 LAYERS = {
     "errors": 0, "units": 0,
     "earth": 1, "rotations": 1,
-    "types": 2, "config_files": 2,
+    "types": 2, "config_files": 2, "files": 2,
     "filters": 3,
     "io": 4, "analysis": 4, "simulation": 4, "strapdown": 4,
     "integration": 5, "gyrofree": 5, "platform": 5,

@@ -76,7 +76,7 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
     from .strapdown import mechanize as run_mech
     from .types import NavState
 
-    from .io.files import check_folder_writable, same_file
+    from .files import check_folder_writable, same_file
 
     if out_file and Path(out_file).exists() and not force:
         raise InputError(f"{out_file}: already exists; refusing to overwrite it (use --force)")
@@ -259,7 +259,7 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
         if not (imu_file and gnss_file):
             raise InputError("give a config file, or at least --imu and --gnss")
         cfg = C.config_from_dict({}, base_dir=Path.cwd(), source="flags", overrides=over)
-    from .io.files import check_folder_writable, same_file
+    from .files import check_folder_writable, same_file
 
     target = Path(out_dir) if out_dir else (Path(cfg.output.dir) if cfg.output.dir else Path("out") / cfg.name)
     if target.exists() and any(target.iterdir()) and not force:

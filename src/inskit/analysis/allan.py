@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..files import save_figure
 from ..errors import InputError
 from ..types import ImuData
 
@@ -235,6 +236,5 @@ def plot_allan(res, path, title="Allan deviation"):
     axes[0].set_title(f"{title}: gyros (dotted: white, dashed: Gauss-Markov, dash-dot: RRW)")
     axes[1].set_title("accelerometers")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return path

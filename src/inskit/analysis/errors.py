@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..files import save_figure
 from .. import earth
 from .. import rotations as rot
 from ..errors import InputError
@@ -129,6 +130,5 @@ def plot_errors(err: NavError, path, *, title="Navigation error", sigma=None):
     axes[-1].set_xlabel("time since start [s]")
     axes[0].set_title(title)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return path

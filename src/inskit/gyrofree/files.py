@@ -27,6 +27,7 @@ import numpy as np
 import pandas as pd
 
 from ..errors import InputError
+from ..files import write_csv, write_text
 from ..io.csv_formats import check_time_column, numeric_columns, read_table, require_columns, check_writable
 from ..units import G0
 from .layout import ArrayLayout
@@ -121,8 +122,7 @@ def write_layout(path, layout: ArrayLayout, *, overwrite=False):
              ",".join(LAYOUT_COLUMNS)]
     for n, p, e in zip(layout.names, layout.positions_b, layout.axes_b):
         lines.append(",".join([n] + [f"{x:.17g}" for x in (*p, *e)]))
-    path.write_text("\n".join(lines) + "\n")
-    return path
+    return write_text(path, "\n".join(lines) + "\n")
 
 
 def read_array(path, layout: ArrayLayout | None = None) -> ArrayData:
@@ -183,8 +183,7 @@ def write_array(path, data: ArrayData, *, overwrite=False):
     cols = {"time_s": data.time}
     for j, n in enumerate(data.names):
         cols[f"{n}_m_s2"] = data.outputs[:, j]
-    pd.DataFrame(cols).to_csv(path, index=False, float_format="%.17g")
-    return path
+    return write_csv(path, cols, "%.17g")
 
 
 def write_inertial(path, sol: InertialSolution, *, extra=None, overwrite=False):
@@ -202,8 +201,7 @@ def write_inertial(path, sol: InertialSolution, *, extra=None, overwrite=False):
     df = pd.DataFrame(cols)
     if df.isna().any().any():
         raise InputError(f"{path}: refusing to write a NaN (column '{df.columns[df.isna().any()][0]}')")
-    df.to_csv(path, index=False, float_format="%.15g")
-    return path
+    return write_csv(path, df, "%.15g")
 
 
 def read_inertial(path):
@@ -237,8 +235,7 @@ def write_rates(path, sol: ArraySolution, *, overwrite=False):
     df = pd.DataFrame(cols)
     if df.isna().any().any():
         raise InputError(f"{path}: refusing to write a NaN (column '{df.columns[df.isna().any()][0]}')")
-    df.to_csv(path, index=False, float_format="%.17g")
-    return path
+    return write_csv(path, df, "%.17g")
 
 
 __all__ = ["LAYOUT_COLUMNS", "read_array", "read_inertial", "read_layout", "write_array", "write_inertial",

@@ -38,7 +38,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from .. import earth
-from ..rotations import skew
+from ..rotations import dcm_from_quat, quat_from_dcm, skew
 from ..types import GnssData
 from . import _kernel as K
 from .layout import StateLayout
@@ -124,8 +124,6 @@ def perturbed_context(ctx: UpdateContext, dx) -> UpdateContext:
     checks of H: ``innovation(perturbed) - innovation(ctx) ~ H dx``."""
     dx = np.asarray(dx, dtype=float)
     lla, v, q = np.empty(3), np.empty(3), np.empty(4)
-    from ..rotations import dcm_from_quat, quat_from_dcm
-
     K.apply_correction(ctx.lla, ctx.v_n, quat_from_dcm(ctx.C_nb), dx, -1.0, lla, v, q)
     aux = ctx.aux + dx[ctx.layout.aux_state_index]
     return UpdateContext(ctx.t, ctx.dt, lla, v, dcm_from_quat(q), ctx.omega_raw_b, ctx.layout, aux)
@@ -154,10 +152,11 @@ def _cross(a, b):
 
 
 def _template(layout, rows, block):
-    """H with an identity on ``block`` (cached per layout and size)."""
-    key = (id(layout), rows, block)
+    """H with an identity on the navigation ``block`` ("pos" or "vel"),
+    cached by state size (the navigation blocks sit at fixed places)."""
+    key = (layout.size, rows, block)
     H = _TEMPLATES.get(key)
-    if H is None or H.shape[1] != layout.size:
+    if H is None:
         H = np.zeros((rows, layout.size))
         H[:, layout.slice(block)] = np.eye(rows, 3)
         _TEMPLATES[key] = H

@@ -17,7 +17,7 @@ import pandas as pd
 
 from .. import rotations as rot
 from ..errors import InputError
-from .files import atomic_write
+from ..files import write_csv
 from ..types import GnssData, ImuData, NavSolution
 from ..units import DEG, DEG_PER_HOUR, G0
 
@@ -193,8 +193,7 @@ def write_imu(path, imu: ImuData, *, overwrite=False):
         data[f"dtheta_{a}_rad"] = imu.dtheta_b[:, i]
     for i, a in enumerate(AXES):
         data[f"dv_{a}_m_s"] = imu.dv_b[:, i]
-    with atomic_write(path) as tmp:
-        pd.DataFrame(data).to_csv(tmp, index=False, float_format="%.17g")
+    write_csv(path, data, "%.17g")
 
 
 def check_writable(path, overwrite):
@@ -263,8 +262,7 @@ def write_gnss(path, gnss: GnssData, *, overwrite=False):
             cols[c] = gnss.v_n[:, i]
         for i, c in enumerate(GNSS_VEL_COLUMNS[3:]):
             cols[c] = gnss.sigma_v_ned[:, i]
-    with atomic_write(path) as tmp:
-        pd.DataFrame(cols).to_csv(tmp, index=False, float_format="%.15g")
+    write_csv(path, cols, "%.15g")
 
 
 def read_solution(path) -> NavSolution:
@@ -323,5 +321,4 @@ def write_solution(path, sol: NavSolution, *, overwrite=False):
     if df.isna().any().any():
         c = df.columns[df.isna().any()][0]
         raise InputError(f"{path}: refusing to write a NaN (column '{c}'); the solution is invalid")
-    with atomic_write(path) as tmp:
-        df.to_csv(tmp, index=False, float_format="%.15g")
+    write_csv(path, df, "%.15g")

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..files import save_figure
 from ..errors import InputError
 from ..units import DEG, MICRO_G, PPM
 
@@ -388,8 +389,7 @@ def _plots(out, res):
     def save(fig, name):
         fig.tight_layout()
         p = out / name
-        fig.savefig(p, dpi=110)
-        plt.close(fig)
+        save_figure(fig, p, dpi=110)
         paths.append(p)
 
     # fig. 11: Euler angles

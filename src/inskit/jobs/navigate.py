@@ -12,6 +12,7 @@ import numpy as np
 from .. import io
 from ..alignment.coarse import Startup, startup_state, static_intervals
 from ..errors import InputError
+from ..files import write_text
 from ..io.rtklib import read_pos, read_rtklibexplorer_imu
 from ..types import GnssData, ImuData, NavState
 from ..units import DEG, DEG_PER_HOUR, MICRO_G
@@ -312,6 +313,9 @@ def health(out, gaps=()) -> dict:
     noise, common for constraint pseudo-measurements).
     """
     reasons, warnings, per = [], [], {}
+    if not any(len(v.get("nis", [])) for v in out.innovations.values()):
+        warnings.append("no filter statistics to judge (the uncoupled scheme, or no measurement used): the "
+                        "verdict covers only what follows")
     for name, c in out.counts.items():
         inn = out.innovations.get(name, {})
         nis = np.asarray(inn.get("nis", []), float)
@@ -394,8 +398,6 @@ def write_outputs(res: NavigateResult, out_dir: Path, s: dict) -> list:
     """Solution CSVs and plots into ``out_dir``, each written whole or not at
     all, then ``summary.json`` last (with the list of files), as the mark of a
     complete run."""
-    from ..io.files import atomic_write
-
     out_dir.mkdir(parents=True, exist_ok=True)
     files = []
     io.write_solution(out_dir / "solution_forward.csv", res.forward.solution, overwrite=True)
@@ -409,6 +411,5 @@ def write_outputs(res: NavigateResult, out_dir: Path, s: dict) -> list:
         files += plot_all(res, out_dir)
     files.append(out_dir / "summary.json")
     s["files"] = [str(f) for f in files]
-    with atomic_write(out_dir / "summary.json") as tmp:
-        tmp.write_text(json.dumps(s, indent=2, default=float))
+    write_text(out_dir / "summary.json", json.dumps(s, indent=2, default=float))
     return files

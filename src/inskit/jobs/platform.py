@@ -25,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..files import save_figure, write_csv
 from .. import analysis, earth, io
 from ..errors import InputError
 from ..platform import design as D
@@ -402,9 +403,8 @@ def _coarser(truth):
 
 
 def _write_table(path, rows):
-    import pandas as pd
 
-    pd.DataFrame(rows).to_csv(path, index=False, float_format="%.6g")
+    write_csv(path, rows, "%.6g")
 
 
 def _mpl():
@@ -436,8 +436,7 @@ def _plot_fig3(runs, path, e):
         a.legend(loc="upper right", fontsize=8)
         a.set_xlim(0, e["duration_s"] / HOUR)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return path
 
 
@@ -457,8 +456,7 @@ def _plot_tilts(runs, path, e):
         a.legend(loc="upper left", fontsize=8)
         a.set_xlim(0, e["duration_s"] / HOUR)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return path
 
 
@@ -478,8 +476,7 @@ def _plot_outage(outage_runs, path, e):
         ax[j].set_xlim(0, e["duration_s"] / HOUR)
     ax[-1].set_xlabel("time [h]")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return path
 
 
@@ -498,8 +495,7 @@ def _plot_stability(stab, path):
     ax.set_title("Largest Re(eigenvalue) of F + K_c (blue: stable; black line: 0)")
     fig.colorbar(im, ax=ax, label="sign * log10(1 + |Re| / 1e-9)")
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return path
 
 
@@ -528,8 +524,7 @@ def _plot_design(report, path, e):
         ax[j].grid(alpha=0.3, which="both")
         ax[j].legend(fontsize=7, ncol=2)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+    save_figure(fig, path, dpi=110)
     return path
 
 
@@ -668,7 +663,6 @@ def _refuse(files, overwrite):
 
 
 def _write_estimates(path, run):
-    import pandas as pd
 
     from ..platform.error_model import INPUT_NAMES, STATE_NAMES
 
@@ -680,7 +674,7 @@ def _write_estimates(path, run):
     else:
         for j, n in enumerate(("d_phi_rad", "d_lambda_rad", "dv_n_m_s", "dv_e_m_s")):
             cols[n] = run.estimates[:, j]
-    pd.DataFrame(cols).to_csv(path, index=False, float_format="%.10g")
+    write_csv(path, cols, "%.10g")
 
 
 def _plot_platform(run, path, title):
@@ -700,6 +694,5 @@ def _plot_platform(run, path, title):
         a.grid(alpha=0.3)
         a.legend(fontsize=8, loc="upper left")
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    save_figure(fig, path, dpi=100)
     return path

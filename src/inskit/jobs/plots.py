@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 
 from .. import earth
+from ..files import save_figure
 from ..units import DEG
 from .outages import antenna_positions
 
@@ -17,14 +18,6 @@ def _plt():
     import matplotlib.pyplot as plt
 
     return plt
-
-
-def _save(fig, path):
-    """Write a figure whole or not at all."""
-    from ..io.files import atomic_write
-
-    with atomic_write(path) as tmp:
-        fig.savefig(tmp, dpi=110)
 
 
 def _shade(ax, windows, t0):
@@ -61,8 +54,7 @@ def plot_all(res, out_dir):
     ax.set_title(f"{res.config.name}: track")
     fig.tight_layout()
     files.append(out_dir / "track.png")
-    _save(fig, files[-1])
-    plt.close(fig)
+    save_figure(fig, files[-1])
 
     # errors against every GNSS fix, with the filter's 3-sigma envelope
     tg = g.time[inside]
@@ -88,8 +80,7 @@ def plot_all(res, out_dir):
     axes[-1].set_xlabel("time after first GNSS fix [s]")
     fig.tight_layout()
     files.append(out_dir / "errors.png")
-    _save(fig, files[-1])
-    plt.close(fig)
+    save_figure(fig, files[-1])
 
     # innovations
     inn = res.forward.innovations
@@ -111,8 +102,7 @@ def plot_all(res, out_dir):
     axes[-1, 0].set_xlabel("time after first GNSS fix [s]")
     fig.tight_layout()
     files.append(out_dir / "innovations.png")
-    _save(fig, files[-1])
-    plt.close(fig)
+    save_figure(fig, files[-1])
 
     # sensor-error estimates
     fig, axes = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
@@ -130,6 +120,5 @@ def plot_all(res, out_dir):
     axes[0].set_title("sensor bias estimates (forward filter)")
     fig.tight_layout()
     files.append(out_dir / "biases.png")
-    _save(fig, files[-1])
-    plt.close(fig)
+    save_figure(fig, files[-1])
     return files

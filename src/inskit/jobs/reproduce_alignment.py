@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..files import save_figure
 from .. import rotations as rot
 from ..units import ARCMIN, DEG, DEG_PER_HOUR, MILLI_G
 from ..earth import OMEGA_IE
@@ -285,8 +286,7 @@ def _plots(out_dir, s6, s7, surf):
             a.grid(alpha=0.3)
         fig.tight_layout()
         paths.append(out / name)
-        fig.savefig(paths[-1], dpi=110)
-        plt.close(fig)
+        save_figure(fig, paths[-1], dpi=110)
     B, D = np.meshgrid(surf["accel_mg"], surf["gyro_pct"], indexing="ij")
     for Z, name, title, label in ((surf["m"], "fig8_optimal_m.png", "fig. 8: optimal m", "m"),
                                   (surf["J_arcmin"], "fig9_criterion.png", "fig. 9: J at the optimal m",
@@ -304,6 +304,5 @@ def _plots(out_dir, s6, s7, surf):
         ax.set_title(title)
         fig.tight_layout()
         paths.append(out / name)
-        fig.savefig(paths[-1], dpi=110)
-        plt.close(fig)
+        save_figure(fig, paths[-1], dpi=110)
     return paths

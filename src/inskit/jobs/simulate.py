@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ..files import save_figure
 from .. import io
 from ..errors import InputError
 from ..simulation.imu import ideal_imu, truth_solution
@@ -63,8 +64,7 @@ def _plot(sim, path):
         a.grid(alpha=0.3)
     ax[0, 0].grid(alpha=0.3)
     fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    save_figure(fig, path, dpi=100)
     return path
 
 

@@ -1,4 +1,5 @@
-"""Files written whole or not at all."""
+"""Files written whole or not at all: the one place every writer goes through
+(CSV tables, text, figures), below every package that writes."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ import os
 from contextlib import contextmanager
 from pathlib import Path
 
-from ..errors import InputError
+from .errors import InputError
 
 
 @contextmanager
@@ -51,3 +52,31 @@ def same_file(a, b) -> bool:
         return Path(a).resolve() == Path(b).resolve()
     except OSError:
         return False
+
+
+def write_csv(path, columns, float_format="%.15g"):
+    """Write a table (a dict of columns or a DataFrame) as CSV, atomically
+    (pandas' vectorised writer)."""
+    import pandas as pd
+
+    df = columns if isinstance(columns, pd.DataFrame) else pd.DataFrame(columns)
+    with atomic_write(path) as tmp:
+        df.to_csv(tmp, index=False, float_format=float_format)
+    return Path(path)
+
+
+def write_text(path, text):
+    """Write text atomically."""
+    with atomic_write(path) as tmp:
+        Path(tmp).write_text(text)
+    return Path(path)
+
+
+def save_figure(fig, path, dpi=110):
+    """Save a matplotlib figure atomically and close it."""
+    import matplotlib.pyplot as plt
+
+    with atomic_write(path) as tmp:
+        fig.savefig(tmp, dpi=dpi)
+    plt.close(fig)
+    return Path(path)

@@ -8,7 +8,7 @@ import pytest
 
 from inskit import io
 from inskit.errors import InputError
-from inskit.io.files import atomic_write, check_folder_writable
+from inskit.files import atomic_write, check_folder_writable
 from inskit.types import NavSolution
 
 
@@ -86,3 +86,23 @@ def test_mechanize_refuses_to_overwrite_its_input(tmp_path):
                         "--out", str(f), "--force"], capture_output=True, text=True, timeout=120)
     assert p.returncode == 2 and "is an input of this command" in p.stderr
     assert f.read_bytes() == before
+
+
+def test_interrupted_figure_leaves_nothing(tmp_path, monkeypatch):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from inskit.files import save_figure
+
+    fig, ax = plt.subplots()
+    ax.plot([0, 1], [0, 1])
+
+    def boom(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(fig, "savefig", boom)
+    with pytest.raises(KeyboardInterrupt):
+        save_figure(fig, tmp_path / "f.png")
+    assert list(tmp_path.iterdir()) == []
