@@ -143,6 +143,8 @@ def quat_multiply(p, q):
     """Hamilton product ``p * q`` (so ``q_ac = quat_multiply(q_ab, q_bc)``)."""
     p = np.asarray(p, dtype=float)
     q = np.asarray(q, dtype=float)
+    if p.shape == (4,) and q.shape == (4,):
+        return np.array(qmul(*p.tolist(), *q.tolist()))
     return np.stack(np.broadcast_arrays(*qmul(p[..., 0], p[..., 1], p[..., 2], p[..., 3],
                                               q[..., 0], q[..., 1], q[..., 2], q[..., 3])), -1)
 

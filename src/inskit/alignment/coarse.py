@@ -11,6 +11,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from .. import earth
 from .. import rotations as rot
@@ -117,6 +118,17 @@ class Startup:
     heading_time: float
 
 
+@njit(cache=True)
+def _chain_rotations(q, dth):
+    """``q * q(dth_1) * q(dth_2) * ...`` (body-frame increments), compiled."""
+    q0, q1, q2, q3 = q[0], q[1], q[2], q[3]
+    for k in range(dth.shape[0]):
+        a0, a1, a2, a3 = rot.rotvec_quat(dth[k, 0], dth[k, 1], dth[k, 2])
+        q0, q1, q2, q3 = rot.qmul(q0, q1, q2, q3, a0, a1, a2, a3)
+    n = np.sqrt(q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3)
+    return np.array([q0 / n, q1 / n, q2 / n, q3 / n])
+
+
 def startup_state(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), *, min_static_s=5.0,
                   motion_threshold_m_s=0.3, heading_speed_m_s=3.0) -> Startup:
     """Initial state from data: level on the static start, heading from the track.
@@ -147,8 +159,7 @@ def startup_state(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), *, 
     k_head = int(np.searchsorted(imu.time, t_head))
     q = rot.quat_from_euler([roll, pitch, 0.0])
     dth = imu.dtheta_b[1:k_head + 1] - w_mean * np.diff(imu.time[:k_head + 1])[:, None]
-    for d in rot.quat_from_rotvec(dth):  # short (tens of seconds): attitude only, in Python
-        q = rot.quat_multiply(q, d)
+    q = _chain_rotations(q, np.ascontiguousarray(dth))
     yaw_at_head = rot.euler_from_quat(q)[2]
     yaw0 = rot.wrap_angle(course - yaw_at_head)
     rpy0 = np.array([roll, pitch, yaw0])

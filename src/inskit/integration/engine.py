@@ -351,7 +351,8 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             store.Phi.append(Phi.copy())
             Phi[:] = eye_n
         dx_total = np.zeros(n) if want_store else None
-        C_nb = dcm_from_quat(q_nb)
+        C_nb = np.empty((3, 3))
+        K.dcm_into(q_nb, C_nb)
         for _, tm, meas, row in items[i:j]:
             if meas is None:
                 continue
@@ -423,7 +424,8 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
                     b.feedback(aux[sa], dx[sx])
                 if want_store:
                     dx_total += dx
-                C_nb = dcm_from_quat(q_nb)
+                C_nb = np.empty((3, 3))  # a new array: an earlier context may still hold the old one
+                K.dcm_into(q_nb, C_nb)
         check_covariance(P, f"at t = {t_imu[k_end]:.3f} s")
         if want_store:
             store.P_plus.append(P.copy())
