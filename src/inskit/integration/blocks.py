@@ -77,6 +77,11 @@ class StateBlock:
         offset...).  ``None`` for the navigation blocks.
     entries : tuple, optional
         Extra constant entries of F: ``(row, column_block, column, value)``.
+    predict_estimate : bool
+        Carry the estimate between updates by the block's own dynamics
+        (``exp(F dt)`` over its entries), as for a receiver clock whose bias
+        runs on with its drift.  Otherwise the estimate is held (see
+        :meth:`StateLayout.estimate_dynamics`).
     """
 
     name: str
@@ -89,6 +94,7 @@ class StateBlock:
     estimate0: object = None
     entries: tuple = field(default=())
     description: str = ""
+    predict_estimate: bool = False
 
     def __post_init__(self):
         if not self.name or not isinstance(self.name, str):
@@ -363,3 +369,56 @@ def ins_blocks(noise: SensorNoise = SensorNoise(1e-3, 1e-2, 1e-5, 1e-4),
     if time_offset:
         out.append(TimeOffset(i.time_offset_s, n.time_offset_rw, time_offset0))
     return out
+
+
+# --- GNSS receiver blocks (tight coupling) ----------------------------------------------
+C_LIGHT = 299792458.0  #: speed of light [m/s] (IS-GPS-200)
+
+
+def oscillator_psd(h0=2e-19, h_2=2e-20):
+    """Process-noise PSDs of a receiver clock's (bias, drift) in range units,
+    from the oscillator's Allan-variance coefficients (white frequency
+    ``h0``, random-walk frequency ``h_2``): ``S_b = c^2 h0 / 2`` [m^2/s],
+    ``S_d = c^2 2 pi^2 h_2`` [m^2/s^3] (Brown & Hwang 2012 §9.3; Groves
+    2013 §9.4.2).  The defaults are a typical TCXO of a low-cost receiver."""
+    return C_LIGHT**2 * h0 / 2.0, C_LIGHT**2 * 2.0 * math.pi**2 * h_2
+
+
+class ReceiverClock(_Named):
+    """Receiver clock bias [m] and drift [m/s] (``c dt_rx`` and its rate),
+    ``d bias / dt = drift``, both driven by the oscillator's noise.
+
+    Its estimate runs on between updates (``predict_estimate``): the bias by
+    the drift estimate.  Pseudorange and range-rate measurements find it by
+    its name ``"clock"``.
+
+    Parameters
+    ----------
+    sigma0 : (2,) float
+        Initial sigma of bias [m] and drift [m/s].
+    h0, h_2 : float
+        Oscillator Allan coefficients (:func:`oscillator_psd`).
+    estimate0 : (2,) float
+        Initial bias [m] and drift [m/s] (from single-point positioning, or
+        from the first epoch's ranges at the initial position).
+    """
+
+    _est_names = ("clock_bias_m", "clock_drift_m_s")
+    _sig_names = ("sigma_clock_bias_m", "sigma_clock_drift_m_s")
+
+    def __init__(self, sigma0=(100.0, 10.0), h0=2e-19, h_2=2e-20, estimate0=(0.0, 0.0)):
+        super().__init__("clock", ("bias", "drift"), "", sigma0, oscillator_psd(h0, h_2), math.inf,
+                         estimate0=estimate0, entries=((0, "clock", 1, 1.0),), predict_estimate=True,
+                         description="receiver clock bias and drift")
+
+
+class SystemTimeOffset(_Named):
+    """Offset of one GNSS system's time from the receiver clock's reference
+    system [m] (the inter-system bias, e.g. Galileo against GPS), a random
+    walk."""
+
+    def __init__(self, system="E", sigma0=100.0, rw=0.01, estimate0=0.0):
+        object.__setattr__(self, "_est_names", (f"isb_{system}_m",))
+        object.__setattr__(self, "_sig_names", (f"sigma_isb_{system}_m",))
+        super().__init__(f"isb_{system}", ("bias",), "m", sigma0, rw**2, math.inf, estimate0=estimate0,
+                         description=f"system time offset of {system} against the clock's system")

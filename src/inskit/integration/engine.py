@@ -274,6 +274,20 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     x = np.zeros(n)
     aux = lay.initial_aux()
     aux_idx = lay.aux_state_index
+    dyn_idx, dyn_F = lay.estimate_dynamics()
+    t_aux = [float(imu.time[0])]
+
+    def predict_aux(t):
+        """Carry the evolving estimates (clock bias by its drift, Gauss-Markov
+        decay) from their last time to ``t``: ``exp(F dt)`` to third order
+        (exact for a clock, whose F is nilpotent; error (dt/tau)^4/24 for a
+        decay)."""
+        h = t - t_aux[0]
+        if h > 0 and len(dyn_idx):
+            A = dyn_F * h
+            A2 = A @ A
+            aux[dyn_idx] = (np.eye(len(dyn_idx)) + A + A2 / 2.0 + A2 @ A / 6.0) @ aux[dyn_idx]
+        t_aux[0] = t
     custom_feedback = [(lay.slice(b.name), lay.aux_slice(b.name), b) for b in lay.blocks
                        if b.has_estimate and type(b).feedback is not _default_feedback]
     default_aux = np.ones(lay.aux_size, bool)
@@ -343,6 +357,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
                 progress(k_end + 1 - k_done)
             k_done = k_end + 1
             w_raw[:] = (imu.dtheta_b[k_end]) / (t_imu[k_end] - t_imu[k_end - 1])
+            predict_aux(float(t_imu[k_end]))
         if k_end in extra_noise:
             P[np.diag_indices(n)] += extra_noise[k_end]
         if want_store:
@@ -436,6 +451,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         propagate(k_done, N, False)
         if progress is not None:
             progress(N - k_done)
+    predict_aux(float(t_imu[-1]))
     check_covariance(P, "at the end of the run")
     if not (np.isfinite(out_lla).all() and np.isfinite(out_v).all() and np.isfinite(out_q).all()):
         raise FilterDivergence("the navigation solution became NaN: the filter diverged")
@@ -443,9 +459,9 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     if len(near):
         raise InputError(f"the solution reaches latitude {np.degrees(out_lla[near[0], 0]):.4f} deg at t = "
                          f"{imu.time[near[0]]:.3f} s, within 0.1 deg of a pole, where the NED filter is singular")
-    if open_loop:  # the open-loop estimate drifts with x between updates: record it at the end too
+    if open_loop or len(dyn_idx):  # estimates that drift between updates: record them at the end too
         node_rows.append(N - 1)
-        node_aux.append(aux - x[aux_idx])
+        node_aux.append(aux - x[aux_idx] if open_loop else aux.copy())
 
     def spread_aux():  # every row holds the estimates of the last node at or before it (they change only at updates)
         hold = np.searchsorted(np.asarray(node_rows), np.arange(N), side="right") - 1
