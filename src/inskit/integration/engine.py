@@ -471,9 +471,27 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         return np.sqrt(np.maximum(out_var, 0.0, out=out_var), out=out_var)
 
     nav_sol = NavSolution._trusted(imu.time, out_lla, out_v, out_q)
-    innovations = {k: {kk: np.asarray(vv) for kk, vv in v.items()} for k, v in innov.items()}
+    innovations = {k: _innovation_arrays(v) for k, v in innov.items()}
     out = FilterOutput(nav_sol, spread_aux, sigma, lay, counts, innovations, settings, store)
     out.recoveries = recoveries
+    return out
+
+
+def _innovation_arrays(rec):
+    """A measurement's innovation record as arrays: ``nu`` and ``sigma`` are
+    (m, k) when every update has k rows, else object arrays of (k_i,) arrays
+    (one row per satellite in view, say); ``dof`` holds each update's k."""
+    out = {kk: np.asarray(rec[kk]) for kk in ("t", "nis", "accepted")}
+    dof = np.array([len(v) for v in rec["nu"]], dtype=np.int64)
+    out["dof"] = dof
+    for kk in ("nu", "sigma"):
+        if len(dof) and (dof == dof[0]).all():
+            out[kk] = np.asarray(rec[kk])
+        else:
+            a = np.empty(len(rec[kk]), dtype=object)
+            for i, v in enumerate(rec[kk]):
+                a[i] = np.asarray(v)
+            out[kk] = a
     return out
 
 

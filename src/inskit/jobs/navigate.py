@@ -320,7 +320,11 @@ def health(out, gaps=()) -> dict:
         inn = out.innovations.get(name, {})
         nis = np.asarray(inn.get("nis", []), float)
         n_upd = c["used"] + c["rejected"]
-        dof = int(np.asarray(inn["nu"]).shape[1]) if len(nis) and np.ndim(inn["nu"]) == 2 else None
+        # degrees of freedom per update (the mean when the number of rows varies, e.g. satellites in view)
+        dofs = np.asarray(inn.get("dof", []), float)
+        dof = (float(dofs.mean()) if len(dofs) else None) if len(nis) else None
+        if dof is not None and dof.is_integer():
+            dof = int(dof)
         frac = c["rejected"] / n_upd if n_upd else 0.0
         mean_nis = float(nis.mean()) if len(nis) else None
         per[name] = {"updates": n_upd, "rejected_fraction": frac, "mean_nis": mean_nis, "dof": dof}
@@ -328,9 +332,11 @@ def health(out, gaps=()) -> dict:
             reasons.append(f"{name}: {c['rejected']} of {n_upd} updates rejected ({frac:.0%})")
         if mean_nis is not None and dof:
             if mean_nis > HEALTH_MAX_MEAN_NIS_PER_DOF * dof:
-                reasons.append(f"{name}: mean NIS {mean_nis:.2f} for {dof} degrees of freedom (filter overconfident)")
+                reasons.append(f"{name}: mean NIS {mean_nis:.2f} for {dof:.3g} degrees of freedom (filter "
+                               "overconfident)")
             elif mean_nis < dof / 3.0:
-                warnings.append(f"{name}: mean NIS {mean_nis:.2f} for {dof} degrees of freedom (noise set conservatively)")
+                warnings.append(f"{name}: mean NIS {mean_nis:.2f} for {dof:.3g} degrees of freedom (noise set "
+                                "conservatively)")
     lay = out.layout
     for b in lay.blocks:
         if not b.has_estimate or np.all(np.isnan(out.sigma[-1, lay.slice(b.name)])):

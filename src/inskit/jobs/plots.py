@@ -88,14 +88,25 @@ def plot_all(res, out_dir):
     fig, axes = plt.subplots(len(names), 1, figsize=(10, 2.6 * len(names)), sharex=True, squeeze=False)
     for ax, k in zip(axes[:, 0], names):
         v = inn[k]
-        nu = np.asarray(v["nu"])
-        sg = np.asarray(v["sigma"])
-        for j in range(nu.shape[1]):
-            ax.plot(v["t"] - t0, nu[:, j] / sg[:, j], ".", ms=1.5, label=f"component {j}")
+        nu, sg = v["nu"], v["sigma"]
+        if nu.dtype == object:  # one row per satellite in view: all rows of an update at its time
+            tt = np.repeat(v["t"], v["dof"])
+            z = np.concatenate(list(nu)) / np.concatenate(list(sg)) if len(nu) else np.empty(0)
+            ax.plot(tt - t0, z, ".", ms=1.5, label="each row (satellite)")
+            zmax = float(np.abs(z).max()) if len(z) else 0.0
+        else:
+            z = nu / sg
+            for j in range(nu.shape[1]):
+                ax.plot(v["t"] - t0, z[:, j], ".", ms=1.5, label=f"component {j}")
+            zmax = float(np.abs(z).max()) if z.size else 0.0
         ax.axhline(3, color="k", lw=0.5, ls="--")
         ax.axhline(-3, color="k", lw=0.5, ls="--")
         ax.set_ylabel(f"{k}\nnu / sigma")
-        ax.set_ylim(-8, 8)
+        lim = max(8.0, 1.05 * zmax)  # the whole range, the worst case included
+        ax.set_ylim(-lim, lim)
+        if lim > 30:
+            ax.set_yscale("symlog", linthresh=3.0)
+        ax.legend(fontsize=7, loc="upper right")
         ax.grid(alpha=0.3)
         _shade(ax, res.windows, t0)
     axes[0, 0].set_title("normalised innovations (dashed: +-3)")
