@@ -265,7 +265,8 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
     if target.exists() and any(target.iterdir()) and not force:
         raise InputError(f"{target}: already holds results; refusing to overwrite them (use --force or --out)")
     for name in ("solution_forward.csv", "solution_smoothed.csv", "summary.json"):
-        for inp in (cfg.resolve(cfg.imu.file), cfg.resolve(cfg.gnss.file)) + ((Path(config_file),) if config_file else ()):
+        inputs = [cfg.resolve(f) for f in (cfg.imu.file, cfg.gnss.file, cfg.gnss.obs, cfg.gnss.nav) if f is not None]
+        for inp in inputs + ([Path(config_file)] if config_file else []):
             if same_file(target / name, inp):
                 raise InputError(f"{target / name}: would overwrite an input of this run; choose another --out")
     check_folder_writable(target)  # before the computation, not after it

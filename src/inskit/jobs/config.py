@@ -34,15 +34,42 @@ class ImuSection(_Strict):
 
 
 class GnssSection(_Strict):
-    file: Path
+    coupling: Literal["loose", "tight"] = Field(
+        "loose", description="loose: position (and velocity) fixes from `file` update the filter; tight: "
+        "pseudoranges and Doppler from the RINEX `obs` and `nav` files do, satellite by satellite")
+    file: Path | None = Field(None, description="GNSS fixes: the measurements of loose coupling; with tight "
+                              "coupling the reference for start-up and scoring (default there: our own "
+                              "single-point solution of the RINEX files)")
     format: Literal["inskit", "rtklib-pos"] = "inskit"
     time_offset_s: float = 0.0
     quality: list[int] = [1, 2]
+    height_offset_m: float = Field(0.0, description="added to the fixes' heights (e.g. the geoid separation, "
+                                   "-21.4 m on walk_0827, turns u-blox heights above sea level into ellipsoidal)")
     lever_arm_b_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
     use_velocity: bool = False
     velocity_delay_s: float = 0.0
     velocity_sigma_scale: float = Field(1.0, gt=0)
     sigma_floor_m: float = Field(0.0, ge=0)
+    obs: Path | None = Field(None, description="RINEX 2/3 observation file (tight coupling)")
+    nav: Path | None = Field(None, description="RINEX 2/3 navigation file with the broadcast ephemerides")
+    systems: list[Literal["G", "E"]] = Field(["G", "E"], description="satellite systems used (GPS, Galileo)")
+    mask_deg: float = Field(10.0, ge=0, lt=90, description="elevation mask [deg]")
+    iono: Literal["klobuchar", "iono-free", "none"] = "klobuchar"
+    tropo: Literal["saastamoinen", "none"] = "saastamoinen"
+    use_doppler: bool = Field(True, description="pseudorange-rate (Doppler) updates beside the pseudoranges")
+    pseudorange_sigma_scale: float = Field(1.0, gt=0, description="multiplies the elevation-dependent sigmas")
+    doppler_sigma_scale: float = Field(1.0, gt=0)
+    clock_h0: float = Field(2e-19, gt=0, description="receiver oscillator white-frequency Allan coefficient")
+    clock_h_2: float = Field(2e-20, gt=0, description="receiver oscillator random-walk-frequency coefficient")
+
+    @model_validator(mode="after")
+    def _inputs(self):
+        if self.coupling == "loose" and self.file is None:
+            raise ValueError("gnss.file is required with loose coupling (the fixes to fuse)")
+        if self.coupling == "tight" and (self.obs is None or self.nav is None):
+            raise ValueError("tight coupling needs gnss.obs and gnss.nav (RINEX observation and navigation "
+                             "files)")
+        return self
 
 
 class NoiseSection(_Strict):
@@ -109,6 +136,8 @@ class OutagesSection(_Strict):
     windows_s: list[tuple[float, float]] = Field(
         default_factory=list, description="[start, end] seconds after the first GNSS epoch"
     )
+    keep_satellites: int = Field(0, ge=0, le=12, description="tight coupling: satellites kept inside each "
+                                 "window (the highest ones), 0 for a full outage")
 
     @field_validator("windows_s")
     @classmethod

@@ -39,38 +39,192 @@ class NavigateResult:
     elapsed_s: float
     measured_noise: dict
     gaps: list = None
+    raw: RawGnss | None = None
+    clock_start: dict | None = None
 
 
-def load_inputs(cfg: NavigateConfig, time_offset_s=None):
-    """Read the IMU and GNSS files on one time base; check they overlap."""
+WEEK_S = 604800.0  #: seconds in a GPS week
+
+
+@dataclass
+class RawGnss:
+    """What tight coupling reads: the RINEX files, our single-point solution
+    of them and the corrected range table, on the IMU's seconds of week."""
+
+    obs: object
+    nav: object
+    spp: object
+    table: object
+    week: int
+    offset_s: float  #: subtracted from GPS seconds since 1980 to give seconds of week ``week``
+
+
+def load_raw_gnss(cfg: NavigateConfig, log=None) -> RawGnss:
+    """Read the RINEX files, solve them epoch by epoch (start-up and the
+    atmosphere corrections need a position) and build the range table."""
+    from ..gnss.ranges import range_table
+    from ..gnss.rinex import read_nav, read_obs
+    from ..gnss.spp import spp
+
+    g = cfg.gnss
+    systems = tuple(g.systems)
+    obs = read_obs(cfg.resolve(g.obs), systems=systems)
+    nav = read_nav(cfg.resolve(g.nav), systems=systems)
+    sol = spp(obs, nav, mask_deg=g.mask_deg, iono=g.iono, tropo=g.tropo, systems=systems)
+    solved = np.isfinite(sol.r_e).all(axis=1)
+    if not solved.any():
+        raise InputError(f"{g.obs}: no epoch could be solved by single-point positioning (needed for the "
+                         "atmosphere corrections and the start-up); check the navigation file covers the "
+                         "observations and the systems")
+    table = range_table(obs, nav, rx_e=np.where(solved[:, None], sol.r_e, np.nan), mask_deg=g.mask_deg,
+                        iono=g.iono, tropo=g.tropo, systems=systems)
+    week = int(np.floor(obs.time[0] / WEEK_S))
+    if log:
+        log(f"RINEX: {len(obs.time)} epochs, {len(table.time)} usable ranges; single-point solved "
+            f"{int(solved.sum())} epochs")
+    return RawGnss(obs, nav, sol, table, week, week * WEEK_S)
+
+
+def spp_fixes(raw: RawGnss) -> GnssData:
+    """Our single-point solution as GNSS fixes on the seconds of week."""
+    s = raw.spp
+    ok = np.isfinite(s.r_e).all(axis=1)
+    from .. import earth
+
+    lla = earth.ecef_to_lla(s.r_e[ok])
+    C = earth.dcm_en(lla[:, 0], lla[:, 1])
+    sig_enu = np.maximum(np.asarray(s.sigma_enu, float)[ok], 0.1)
+    sig_ned = np.where(np.isfinite(sig_enu), sig_enu, 10.0)[:, [1, 0, 2]]
+    v_n = None
+    if getattr(s, "v_e", None) is not None and np.isfinite(s.v_e[ok]).all():
+        v_n = np.einsum("nji,nj->ni", C, s.v_e[ok])
+    return GnssData(s.time[ok] - raw.offset_s, lla, sig_ned, v_n, None if v_n is None else np.full_like(v_n, 0.2))
+
+
+def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = None):
+    """Read the IMU and GNSS files on one time base; check they overlap.
+
+    With tight coupling the fixes (``gnss.file``, else our single-point
+    solution of ``raw``) serve the start-up and the scoring only."""
     imu_off = cfg.imu.time_offset_s if time_offset_s is None else time_offset_s
-    gpath, ipath = cfg.resolve(cfg.gnss.file), cfg.resolve(cfg.imu.file)
-    week0 = None
-    if cfg.gnss.format == "rtklib-pos":
-        gnss, week0 = read_pos(gpath, quality=cfg.gnss.quality, time_offset_s=cfg.gnss.time_offset_s)
+    ipath = cfg.resolve(cfg.imu.file)
+    week0 = None if raw is None else raw.week
+    if cfg.gnss.file is None:
+        gpath = cfg.resolve(cfg.gnss.obs)
+        gnss = spp_fixes(raw)
+    elif cfg.gnss.format == "rtklib-pos":
+        gpath = cfg.resolve(cfg.gnss.file)
+        gnss, week_pos = read_pos(gpath, quality=cfg.gnss.quality, time_offset_s=cfg.gnss.time_offset_s)
+        if week0 is not None and week_pos != week0:
+            raise InputError(f"{gpath.name} starts in GPS week {week_pos} but {cfg.gnss.obs} in week {week0}")
+        week0 = week_pos
     else:
+        gpath = cfg.resolve(cfg.gnss.file)
         g = io.read_gnss(gpath)
         gnss = GnssData(g.time + cfg.gnss.time_offset_s, g.lla, g.sigma_ned, g.v_n, g.sigma_v_ned)
+    if cfg.gnss.height_offset_m:
+        lla = gnss.lla.copy()
+        lla[:, 2] += cfg.gnss.height_offset_m
+        gnss = GnssData(gnss.time, lla, gnss.sigma_ned, gnss.v_n, gnss.sigma_v_ned)
     if cfg.imu.format == "rtklibexplorer":
         imu, _ = read_rtklibexplorer_imu(ipath, week0=week0, time_offset_s=imu_off,
                                          mount_rpy=np.radians(cfg.imu.mount_rpy_deg),
                                          check_units=cfg.imu.check_units)
     else:
-        raw = io.read_imu(ipath, check_units=cfg.imu.check_units)
+        raw_imu = io.read_imu(ipath, check_units=cfg.imu.check_units)
         from ..io.rtklib import mount_dcm
 
         C_bs = mount_dcm(np.radians(cfg.imu.mount_rpy_deg))
-        imu = ImuData(raw.time + imu_off, raw.dtheta_b @ C_bs.T, raw.dv_b @ C_bs.T)
+        imu = ImuData(raw_imu.time + imu_off, raw_imu.dtheta_b @ C_bs.T, raw_imu.dv_b @ C_bs.T)
     if gnss.time[-1] < imu.time[0] or gnss.time[0] > imu.time[-1]:
         raise InputError(
             f"GNSS ({gpath.name}: {gnss.time[0]:.3f}..{gnss.time[-1]:.3f} s) and IMU ({ipath.name}: "
             f"{imu.time[0]:.3f}..{imu.time[-1]:.3f} s) do not overlap: mismatched time bases?"
+            + (" With RINEX the IMU time must be GPS seconds of week." if raw is not None else "")
         )
     start = max(gnss.time[0], cfg.imu.start_s if cfg.imu.start_s is not None else -np.inf)
     k0 = int(np.searchsorted(imu.time, start))
     if len(imu) - k0 < 10:
         raise InputError(f"{ipath.name}: fewer than 10 IMU samples after the start time {start:.3f} s")
     return imu.slice(k0), gnss
+
+
+def tight_measurements(cfg: NavigateConfig, raw: RawGnss, windows, lever):
+    """Pseudorange (and Doppler) plug-ins over the range table; inside outage
+    windows only the ``keep_satellites`` highest satellites stay."""
+    from ..integration.tight import Pseudorange, PseudorangeRate
+
+    tb = raw.table
+    t = np.asarray(tb.time, float) - raw.offset_s
+    use = np.ones(len(t), bool)
+    keep = cfg.outages.keep_satellites
+    for a, b in windows:
+        inside = (t >= a) & (t <= b)
+        use[inside] = False
+        if keep:
+            ep = np.asarray(tb.epoch)[inside]
+            rows = np.nonzero(inside)[0]
+            el = np.asarray(tb.elevation_rad)[inside]
+            for e in np.unique(ep):
+                m = ep == e
+                best = rows[m][np.argsort(-el[m])[:keep]]
+                use[best] = True
+    g = cfg.gnss
+    meas = [Pseudorange(tb, time_offset_s=raw.offset_s, use=use, lever_arm_b=lever,
+                        sigma_scale=g.pseudorange_sigma_scale)]
+    if g.use_doppler and np.isfinite(np.asarray(tb.range_rate_m_s, float)).any():
+        meas.append(PseudorangeRate(tb, time_offset_s=raw.offset_s, use=use, lever_arm_b=lever,
+                                    sigma_scale=g.doppler_sigma_scale))
+    return meas, use
+
+
+def clock_blocks(cfg: NavigateConfig, raw: RawGnss, initial: NavState, lever, use):
+    """The receiver clock block, started from the first usable epoch's ranges
+    at the initial position (works with a single satellite), and one
+    system-offset block per further system."""
+    from .. import earth
+    from ..integration.blocks import ReceiverClock, SystemTimeOffset
+    from ..integration.tight import clock_from_ranges
+
+    tb = raw.table
+    t = np.asarray(tb.time, float) - raw.offset_s
+    ok = use & (t >= initial.time - 1.0)
+    if not ok.any():
+        raise InputError(f"{cfg.gnss.obs}: no pseudorange after the start of the run")
+    e0 = int(np.asarray(tb.epoch)[np.argmax(ok)])
+    C_nb = initial.C_nb
+    C_en = earth.dcm_en(initial.lla[0], initial.lla[1])
+    r_a = earth.lla_to_ecef(initial.lla) + C_en @ (C_nb @ lever)
+    v_a = C_en @ initial.v_n
+    sys = np.array([str(s)[:1] for s in np.asarray(tb.sat)])
+    ep = np.asarray(tb.epoch)
+    systems = [s for s in cfg.gnss.systems if (sys[use] == s).any()]
+    if not systems:
+        raise InputError(f"{cfg.gnss.obs}: no usable range of the systems {cfg.gnss.systems}")
+    ref = systems[0]
+    sub = _rows(tb, (ep == e0) & (sys == ref))
+    bias, drift, n = clock_from_ranges(sub, e0, r_a, v_a)
+    if not np.isfinite(bias):
+        bias, drift = 0.0, 0.0
+    drift = 0.0 if not np.isfinite(drift) else drift
+    blocks = [ReceiverClock(sigma0=(30.0 + 3.0 * float(max(cfg.init.sigma_pos_m, 1.0)), 2.0),
+                            h0=cfg.gnss.clock_h0, h_2=cfg.gnss.clock_h_2, estimate0=(bias, drift))]
+    for s in systems[1:]:
+        e_s = ep[use & (sys == s)]
+        b_s = np.nan
+        if len(e_s):
+            sub = _rows(tb, (ep == e_s[0]) & (sys == s))
+            b_s, _, _ = clock_from_ranges(sub, int(e_s[0]), r_a, v_a)
+        blocks.append(SystemTimeOffset(s, sigma0=100.0, estimate0=0.0 if not np.isfinite(b_s) else b_s - bias))
+    return blocks, {"bias_m": bias, "drift_m_s": drift, "satellites": n, "epoch_index": e0, "systems": systems}
+
+
+def _rows(tb, m):
+    """The rows ``m`` of a range table as a plain namespace (for clock_from_ranges)."""
+    from types import SimpleNamespace
+
+    return SimpleNamespace(**{k: np.asarray(getattr(tb, k))[m] for k in
+                              ("epoch", "travel_s", "sat_pos_e", "sat_vel_e", "pseudorange_m", "range_rate_m_s")})
 
 
 def outage_windows(cfg: NavigateConfig, gnss: GnssData):
@@ -93,7 +247,7 @@ def static_noise_density(imu: ImuData, t_end):
     return arw, vrw
 
 
-def build_settings(cfg: NavigateConfig, startup: Startup | None, measured=None) -> FilterSettings:
+def build_settings(cfg: NavigateConfig, startup: Startup | None, measured=None, extra_blocks=()) -> FilterSettings:
     n = cfg.noise
     arw = n.gyro_arw_deg_sqrt_h * DEG / 60.0
     vrw = n.accel_vrw_m_s_sqrt_h / 60.0
@@ -114,6 +268,7 @@ def build_settings(cfg: NavigateConfig, startup: Startup | None, measured=None) 
         accel_bias0=tuple(startup.accel_bias) if startup else (0.0, 0.0, 0.0),
         scheme="closed" if f.scheme == "uncoupled" else f.scheme, gate_probability=f.gate_probability,
         gate_max_consecutive=f.gate_max_consecutive, smoother_node_s=f.smoother_node_s,
+        extra_blocks=tuple(extra_blocks),
     )
 
 
@@ -140,7 +295,19 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     from ..integration.gaps import bridge_gaps, find_gaps, gap_process_noise
 
     t_start = time.perf_counter()
-    imu, gnss = load_inputs(cfg, time_offset_s) if inputs is None else inputs
+    tight = cfg.gnss.coupling == "tight"
+    if tight and cfg.filter.scheme == "uncoupled":
+        raise InputError("the uncoupled scheme resets the INS to position fixes: it has no tight form "
+                         "(use filter.scheme = \"closed\" or \"open\")")
+    raw = None
+    if inputs is None:
+        raw = load_raw_gnss(cfg, log) if tight else None
+        imu, gnss = load_inputs(cfg, time_offset_s, raw)
+    else:
+        imu, gnss = inputs[:2]
+        raw = inputs[2] if len(inputs) > 2 else None
+        if tight and raw is None:
+            raise InputError("tight coupling needs the RINEX inputs (inputs=(imu, gnss, raw))")
     gaps = find_gaps(imu, cfg.imu.gap_factor)
     for g in gaps:
         if log:
@@ -165,15 +332,24 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         i = cfg.init
         initial = NavState.from_euler(imu.time[0], [i.lat_deg * DEG, i.lon_deg * DEG, i.height_m], i.v_ned_m_s,
                                       np.radians(i.rpy_deg))
-    settings = build_settings(cfg, startup, measured)
+    clock_start = None
+    if tight:
+        meas_gnss, use_rows = tight_measurements(cfg, raw, windows, lever)
+        clk_blocks, clock_start = clock_blocks(cfg, raw, initial, lever, use_rows)
+        settings = build_settings(cfg, startup, measured, clk_blocks)
+    else:
+        settings = build_settings(cfg, startup, measured)
     if cfg.filter.scheme == "uncoupled":
         if smooth:
             raise InputError("the RTS smoother needs a filter: the uncoupled scheme has none")
         out = _uncoupled_track(imu, initial, gnss, used, lever, settings)
         sm = None
     else:
-        meas = [GnssPosition(gnss, used, cfg.gnss.sigma_floor_m, lever_arm_b=lever)]
-        if cfg.gnss.use_velocity:
+        if tight:
+            meas = list(meas_gnss)
+        else:
+            meas = [GnssPosition(gnss, used, cfg.gnss.sigma_floor_m, lever_arm_b=lever)]
+        if cfg.gnss.use_velocity and not tight:
             if not gnss.has_velocity:
                 raise InputError(f"{cfg.gnss.file}: use_velocity is set but the file has no velocity")
             meas.append(GnssVelocity(gnss, used, cfg.gnss.velocity_delay_s, cfg.gnss.velocity_sigma_scale,
@@ -190,7 +366,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     score_f = score_outages(out.solution, gnss, windows, lever)
     score_s = score_outages(sm.solution, gnss, windows, lever) if sm is not None else None
     return NavigateResult(cfg, imu, gnss, windows, used, startup, settings, out, sm, score_f, score_s,
-                          time.perf_counter() - t_start, measured, gaps)
+                          time.perf_counter() - t_start, measured, gaps, raw, clock_start)
 
 
 def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, log=None):
@@ -201,15 +377,18 @@ def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, lo
     from scipy.optimize import minimize_scalar
 
     # read with the largest offset: it keeps every sample any offset in the bounds needs
-    imu0, gnss = load_inputs(cfg, bounds[1])
+    raw = load_raw_gnss(cfg, log) if cfg.gnss.coupling == "tight" else None
+    imu0, gnss = load_inputs(cfg, bounds[1], raw)
+    key = "pseudorange" if raw is not None else "gnss_pos"
     evals = []
 
     def f(off):
         imu = ImuData(imu0.time + (off - bounds[1]), imu0.dtheta_b, imu0.dv_b)
         k0 = int(np.searchsorted(imu.time, max(gnss.time[0], cfg.imu.start_s if cfg.imu.start_s is not None
                                                  else -np.inf)))
-        res = navigate(cfg, inputs=(imu.slice(k0), gnss))
-        v = float(np.mean(res.forward.innovations["gnss_pos"]["nis"]))
+        res = navigate(cfg, inputs=(imu.slice(k0), gnss, raw))
+        inn = res.forward.innovations[key]
+        v = float(np.sum(inn["nis"]) / max(np.sum(inn["dof"]), 1))
         evals.append((float(off), v))
         if log:
             log(f"calibrate: offset {off:+.4f} s -> mean NIS {v:.3f}")
@@ -277,6 +456,21 @@ def summary(res: NavigateResult) -> dict:
         "gyro_deg_s": [float(v) for v in fw.estimate("bg")[-1] / DEG],
         "accel_m_s2": [float(v) for v in fw.estimate("ba")[-1]],
     }
+    out["coupling"] = res.config.gnss.coupling
+    if res.raw is not None:
+        tb = res.raw.table
+        ep = np.asarray(tb.epoch)
+        n_per = np.bincount(ep, minlength=len(res.raw.obs.time)) if len(ep) else np.zeros(1, int)
+        s = res.raw.spp
+        out["tight"] = {
+            "rinex_epochs": int(len(res.raw.obs.time)),
+            "ranges": int(len(ep)),
+            "satellites_per_epoch_median": float(np.median(n_per)),
+            "satellites_per_epoch_min": int(n_per.min()),
+            "spp_epochs_solved": int(np.isfinite(s.r_e).all(axis=1).sum()),
+            "clock_start": res.clock_start,
+            "reference": "gnss.file" if res.config.gnss.file is not None else "single-point solution",
+        }
     out["health"] = health(fw, res.gaps or ())
     out["imu_gaps"] = [{"row": g.row, "start_s": g.start_s, "length_s": g.length_s} for g in (res.gaps or ())]
     out["final_estimates"] = {b.name: {"values": [float(v) for v in fw.estimate(b.name)[-1]],
