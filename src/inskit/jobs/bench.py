@@ -27,6 +27,18 @@ def _best_rate(fn, n, repeats):
     return n / best
 
 
+def _median_rate(fn, n, repeats):
+    """Median rate over ``repeats`` timed calls after a warm-up, and the
+    spread (min, max) of the rates."""
+    fn()
+    rates = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        fn()
+        rates.append(n / (time.perf_counter() - t0))
+    return float(np.median(rates)), [float(min(rates)), float(max(rates))]
+
+
 def _static_imu(duration_s, rate_hz, rng):
     """A 100 Hz static log with white noise, built without the slow quadrature."""
     t = np.arange(0.0, duration_s, 1.0 / rate_hz)
@@ -68,6 +80,13 @@ def run_benchmarks(quick=False, progress=None):
     out["lc_gnss_rate_hz"] = 1.0
     if progress:
         progress("lc")
+    med, spread = _median_rate(_tc_job(imu, init), n, repeats)
+    out["tc_epochs_per_s"] = round(med)
+    out["tc_epochs_per_s_spread"] = [round(v) for v in spread]
+    out["tc_satellites"] = 8
+    out["tc_rate_hz"] = 1.0
+    if progress:
+        progress("tc")
     from .bench_gyrofree import gyrofree_rate
 
     out["gyrofree_epochs_per_s"] = gyrofree_rate(quick)
@@ -98,6 +117,51 @@ def _simulate_rate(quick):
         apply_imu_errors(ideal_imu(tr, t, nodes=sc.imu.quadrature_nodes), err, np.random.default_rng(1))
 
     return round(_best_rate(job, len(t), 2)), "car"
+
+
+def _tc_table(times, r_rx, n_sat=8, seed=0):
+    """Corrected ranges of ``n_sat`` satellites 20,000 km away at ``times``,
+    seen from a receiver at rest at ``r_rx`` with a drifting clock."""
+    from types import SimpleNamespace
+
+    rng = np.random.default_rng(seed)
+    up = r_rx / np.linalg.norm(r_rx)
+    dirs = []
+    while len(dirs) < n_sat:
+        d = rng.normal(size=3)
+        d /= np.linalg.norm(d)
+        if d @ up > 0.3:
+            dirs.append(d)
+    dirs = np.array(dirs)
+    vel = np.cross(dirs, up) * 3.9e3
+    m = len(times)
+    t = np.repeat(times, n_sat)
+    tt = (t - times[0])[:, None]
+    ps = np.tile(r_rx + 2.0e7 * dirs, (m, 1)) + np.tile(vel, (m, 1)) * tt
+    vs = np.tile(vel, (m, 1))
+    d = r_rx - ps
+    rng_m = np.linalg.norm(d, axis=1)
+    clock_b, clock_d = 3.0e4 + 20.0 * (t - times[0]), np.full(len(t), 20.0)
+    return SimpleNamespace(time=t, epoch=np.repeat(np.arange(m), n_sat), sat=np.tile([f"G{k:02d}" for k in
+                           range(1, n_sat + 1)], m), sat_pos_e=ps, sat_vel_e=vs, travel_s=rng_m / 299792458.0 * 0,
+                           pseudorange_m=rng_m + clock_b, sigma_pr_m=np.full(len(t), 3.0),
+                           range_rate_m_s=np.einsum("ij,ij->i", d / rng_m[:, None], -vs) + clock_d,
+                           sigma_rr_m_s=np.full(len(t), 0.1), elevation_rad=np.full(len(t), 0.8))
+
+
+def _tc_job(imu, init):
+    """The tightly coupled filter as navigate runs it: 21 INS states plus the
+    receiver clock, IMU-rate propagation, pseudorange and pseudorange-rate
+    updates from 8 satellites every second, gated per satellite."""
+    from .. import earth
+    from ..integration import FilterSettings, run_filter
+    from ..integration.blocks import ReceiverClock
+    from ..integration.tight import Pseudorange, PseudorangeRate
+
+    table = _tc_table(imu.time[::100], earth.lla_to_ecef(init.lla))
+    settings = FilterSettings.standard(scale_factors=True, extra_blocks=[ReceiverClock(estimate0=(3.0e4, 20.0))])
+    meas = [Pseudorange(table), PseudorangeRate(table)]
+    return lambda: run_filter(imu, init, meas, settings)
 
 
 def _lc_job(imu, init):
