@@ -420,7 +420,17 @@ def schemes(scenario_file, outage, seed, as_json):
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def align(imu_file, lat_deg, method, m_gain, t_start, t_end, imu_format, mount_rpy, accel_bias_ug, gyro_bias_deg_h,
           no_unit_check, as_json):
-    """Initial alignment of a static IMU log: roll, pitch, yaw and their sigmas."""
+    """Initial alignment of a static IMU log: roll, pitch, yaw and their sigmas.
+
+    The sigmas come from the sensor biases (which do not average out at rest)
+    and the noise of the static means.  Without --accel-bias-ug and
+    --gyro-bias-deg-h the biases of a consumer MEMS IMU are assumed (Bosch
+    BMI160 class: 40 mg, 1 deg/s, 1 sigma per axis): conservative for a
+    better IMU, and too poor a gyro to find north, so give your IMU's values.
+    The output says which priors were used (sigma_basis).  An interval given
+    with --end is checked to be static.  A yaw sigma of 180 deg means no
+    heading information.
+    """
     from .alignment import align_static
 
     if not -90.0 <= lat_deg <= 90.0:
@@ -444,16 +454,22 @@ def align(imu_file, lat_deg, method, m_gain, t_start, t_end, imu_format, mount_r
                        imu_format=imu_format, mount_rpy=np.radians(mount), check_units=not no_unit_check,
                        accel_bias_sigma=None if accel_bias_ug is None else accel_bias_ug * MICRO_G,
                        gyro_bias_sigma=None if gyro_bias_deg_h is None else gyro_bias_deg_h * DEG_PER_HOUR)
-    lines = [f"{method} alignment over {res['static_s']:.1f} s of static data at {lat_deg:.4f} deg",
-             f"roll  {res['roll_deg']:9.4f} deg  +- {res['roll_sigma_deg']:.4f}",
+    yaw_sigma = (f"{res['yaw_sigma_deg']:.4f}" if res["heading_usable"] else
+                 f"{res['yaw_sigma_deg']:.0f} (no heading information)")
+    lines = [f"{method} alignment over {res['static_s']:.1f} s of static data at {lat_deg:.4f} deg "
+             f"([{res['static_start_s']:.1f}, {res['static_end_s']:.1f}] s)",
+             f"roll  {res['roll_deg']:9.4f} deg  +- {res['roll_sigma_deg']:.4f} (1 sigma)",
              f"pitch {res['pitch_deg']:9.4f} deg  +- {res['pitch_sigma_deg']:.4f}",
-             f"yaw   {res['yaw_deg']:9.4f} deg  +- {res['yaw_sigma_deg']:.4f}"]
+             f"yaw   {res['yaw_deg']:9.4f} deg  +- {yaw_sigma}"]
     if "m" in res:
         lines.append(f"blending gain m = {res['m']:.4f}")
     if "converge_time_s" in res:
         lines.append("converged after (roll, pitch, yaw): " + ", ".join(
-            "n/a" if v is None else f"{v:.1f} s" for v in res["converge_time_s"]))
+            "not converged" if v is None else f"{v:.1f} s" for v in res["converge_time_s"]))
+        if res.get("converge_note"):
+            lines.append(res["converge_note"])
     lines.append(f"heading from gyros usable: {'yes' if res['heading_usable'] else 'no'}: {res['heading_reason']}")
+    lines.append(f"sigma basis: {res['sigma_basis']}")
     _emit(res, as_json, "\n".join(lines))
 
 
@@ -536,10 +552,12 @@ def demo(checks, as_json):
 from .cli_gyrofree import register as _register_gyrofree  # noqa: E402
 from .cli_platform import platform as _platform_group  # noqa: E402
 from .cli_platform import reproduce_integration_filters as _reproduce_integration_filters  # noqa: E402
+from .cli_gnss import register as _register_gnss  # noqa: E402
 
 _register_gyrofree(cli, reproduce)
 cli.add_command(_platform_group, "platform")
 reproduce.add_command(_reproduce_integration_filters, "integration-filters")
+_register_gnss(cli)
 
 
 def main(argv=None):

@@ -87,12 +87,32 @@ def run_benchmarks(quick=False, progress=None):
     out["tc_rate_hz"] = 1.0
     if progress:
         progress("tc")
+    out.update(_spp_rate(repeats))
+    if progress:
+        progress("spp")
     from .bench_gyrofree import gyrofree_rate
 
     out["gyrofree_epochs_per_s"] = gyrofree_rate(quick)
     if progress:
         progress("gyrofree")
     return out
+
+
+def _spp_rate(repeats):
+    """Single-point positioning of the bundled IGS ABPO day (2727 epochs):
+    both range-table passes and both solves, as ``inskit spp`` runs them."""
+    from pathlib import Path
+
+    from .spp import spp_throughput
+
+    d = Path(__file__).resolve().parents[3] / "data" / "abpo"
+    obs, nav = d / "abpo0080.15o.gz", d / "abpo0080.15n.gz"
+    if not (obs.is_file() and nav.is_file()):
+        return {"spp_epochs_per_s": None, "spp_note": "data/abpo not found (run from a source checkout)"}
+    r = spp_throughput(obs, nav, repeats=repeats, systems=("G",))
+    return {"spp_epochs_per_s": round(r["epochs_per_s"]),
+            "spp_epochs_per_s_spread": [round(r["epochs_per_s_min"]), round(r["epochs_per_s_max"])],
+            "spp_epochs": r["epochs"]}
 
 
 def _simulate_rate(quick):

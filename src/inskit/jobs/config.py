@@ -37,9 +37,9 @@ class GnssSection(_Strict):
     coupling: Literal["loose", "tight"] = Field(
         "loose", description="loose: position (and velocity) fixes from `file` update the filter; tight: "
         "pseudoranges and Doppler from the RINEX `obs` and `nav` files do, satellite by satellite")
-    file: Path | None = Field(None, description="GNSS fixes: the measurements of loose coupling; with tight "
-                              "coupling the reference for start-up and scoring (default there: our own "
-                              "single-point solution of the RINEX files)")
+    file: Path | None = Field(None, description="GNSS fixes: the measurements of loose coupling (default: our "
+                              "own single-point solution of `obs` and `nav`); with tight coupling the reference "
+                              "for start-up and scoring (default there: the same single-point solution)")
     format: Literal["inskit", "rtklib-pos"] = "inskit"
     time_offset_s: float = 0.0
     quality: list[int] = [1, 2]
@@ -64,8 +64,9 @@ class GnssSection(_Strict):
 
     @model_validator(mode="after")
     def _inputs(self):
-        if self.coupling == "loose" and self.file is None:
-            raise ValueError("gnss.file is required with loose coupling (the fixes to fuse)")
+        if self.coupling == "loose" and self.file is None and (self.obs is None or self.nav is None):
+            raise ValueError("loose coupling needs gnss.file (the fixes to fuse), or gnss.obs and gnss.nav "
+                             "(RINEX: then our own single-point solution is fused)")
         if self.coupling == "tight" and (self.obs is None or self.nav is None):
             raise ValueError("tight coupling needs gnss.obs and gnss.nav (RINEX observation and navigation "
                              "files)")
@@ -92,6 +93,10 @@ class InitSection(_Strict):
     height_m: float | None = None
     v_ned_m_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
     rpy_deg: tuple[float, float, float] | None = None
+    min_static_s: float = Field(5.0, gt=0, description="static-then-track: the rest the start-up needs at the "
+                                "log's start to level and find the gyro biases [s]")
+    heading_speed_m_s: float = Field(3.0, gt=0, description="static-then-track: the GNSS track speed from which "
+                                     "its course gives the heading (a walk needs about 1 m/s)")
     sigma_pos_m: float = Field(0.05, gt=0)
     sigma_vel_m_s: float = Field(0.05, gt=0)
     sigma_roll_pitch_deg: float = Field(1.0, gt=0)

@@ -110,6 +110,8 @@ def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = N
     ipath = cfg.resolve(cfg.imu.file)
     week0 = None if raw is None else raw.week
     if cfg.gnss.file is None:
+        if raw is None:
+            raise InputError("no GNSS fixes: give gnss.file, or gnss.obs and gnss.nav")
         gpath = cfg.resolve(cfg.gnss.obs)
         gnss = spp_fixes(raw)
     elif cfg.gnss.format == "rtklib-pos":
@@ -301,13 +303,16 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
                          "(use filter.scheme = \"closed\" or \"open\")")
     raw = None
     if inputs is None:
-        raw = load_raw_gnss(cfg, log) if tight else None
+        raw = load_raw_gnss(cfg, log) if (tight or cfg.gnss.file is None) else None
         imu, gnss = load_inputs(cfg, time_offset_s, raw)
     else:
         imu, gnss = inputs[:2]
         raw = inputs[2] if len(inputs) > 2 else None
         if tight and raw is None:
             raise InputError("tight coupling needs the RINEX inputs (inputs=(imu, gnss, raw))")
+    if tight and (cfg.gnss.use_velocity or cfg.gnss.sigma_floor_m):
+        raise InputError("gnss.use_velocity and gnss.sigma_floor_m describe fixes fused by loose coupling; with "
+                         "tight coupling the fixes are only the reference (use use_doppler and the sigma scales)")
     gaps = find_gaps(imu, cfg.imu.gap_factor)
     for g in gaps:
         if log:
@@ -323,7 +328,8 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     startup = None
     measured = {}
     if cfg.init.mode == "static-then-track":
-        startup = startup_state(imu, gnss_used, lever)
+        startup = startup_state(imu, gnss_used, lever, min_static_s=cfg.init.min_static_s,
+                                heading_speed_m_s=cfg.init.heading_speed_m_s)
         initial = startup.state
         if cfg.noise.from_static:
             arw, vrw = static_noise_density(imu, startup.static_end)
@@ -377,9 +383,10 @@ def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, lo
     from scipy.optimize import minimize_scalar
 
     # read with the largest offset: it keeps every sample any offset in the bounds needs
-    raw = load_raw_gnss(cfg, log) if cfg.gnss.coupling == "tight" else None
+    tight = cfg.gnss.coupling == "tight"
+    raw = load_raw_gnss(cfg, log) if (tight or cfg.gnss.file is None) else None
     imu0, gnss = load_inputs(cfg, bounds[1], raw)
-    key = "pseudorange" if raw is not None else "gnss_pos"
+    key = "pseudorange" if tight else "gnss_pos"
     evals = []
 
     def f(off):
@@ -462,7 +469,7 @@ def summary(res: NavigateResult) -> dict:
         ep = np.asarray(tb.epoch)
         n_per = np.bincount(ep, minlength=len(res.raw.obs.time)) if len(ep) else np.zeros(1, int)
         s = res.raw.spp
-        out["tight"] = {
+        out["rinex"] = {
             "rinex_epochs": int(len(res.raw.obs.time)),
             "ranges": int(len(ep)),
             "satellites_per_epoch_median": float(np.median(n_per)),
@@ -534,6 +541,8 @@ def health(out, gaps=()) -> dict:
     lay = out.layout
     for b in lay.blocks:
         if not b.has_estimate or np.all(np.isnan(out.sigma[-1, lay.slice(b.name)])):
+            continue
+        if b.predict_estimate:  # a clock runs away from its start by design
             continue
         dev = np.abs(out.estimate(b.name)[-1] - b.estimate0) / b.sigma0
         for axis, d, v in zip(b.axes, dev, out.estimate(b.name)[-1]):

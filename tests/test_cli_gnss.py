@@ -1,0 +1,109 @@
+"""``inskit spp`` (inskit.cli_gnss) and its job (inskit.jobs.spp).
+
+The command is mounted on a bare click group the way ``inskit.cli``
+registers it (``register(cli)``); the subprocess cases run it through
+``inskit.cli.main`` to check the one-line errors and exit status 2.
+"""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import click
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from inskit.cli_gnss import register
+from inskit.errors import InputError
+from inskit.jobs.spp import run_spp, spp_throughput
+
+DATA = Path(__file__).resolve().parent / "data" / "gnss"
+OBS = DATA / "abpo0080_0000-0200.15o"
+NAV = DATA / "abpo0080.15n"
+ABPO_XYZ = (4097216.6805, 4429119.0287, -2065771.3676)
+HARNESS = ("import sys\nfrom inskit import cli as C\nfrom inskit.cli_gnss import register\n"
+           "register(C.cli)\nC.main(sys.argv[1:])\n")
+KEYS = {"epochs_total", "epochs_solved", "epochs_excluded_sats", "horizontal_rms_m", "rms_3d_m", "mean_enu_m",
+        "std_enu_m", "hdop_median", "n_sats_median", "seconds", "files"}
+
+
+def group():
+    g = click.Group()
+    register(g)
+    return g
+
+
+def invoke(*args):
+    return CliRunner().invoke(group(), ["spp", *map(str, args)])
+
+
+def inskit(*args):
+    return subprocess.run([sys.executable, "-c", HARNESS, "spp", *map(str, args)], capture_output=True, text=True,
+                          check=False)
+
+
+def test_json_summary_and_files(tmp_path):
+    from inskit.io.csv_formats import read_gnss
+    from inskit.io.rtklib import read_pos
+
+    r = invoke(OBS, NAV, "--reference", "header", "--out", tmp_path / "o", "--json")
+    assert r.exit_code == 0, r.output
+    s = json.loads(r.stdout)                                    # exactly one JSON object, nothing else
+    assert KEYS <= set(s)
+    assert s["epochs_total"] == s["epochs_solved"] == 240
+    # the header position is the surveyed one: the same figures as tests/test_gnss_spp.py's excerpt test
+    assert s["horizontal_rms_m"] < 2.0 and s["rms_3d_m"] < 6.0
+    np.testing.assert_allclose(s["reference_e"], ABPO_XYZ)
+    names = sorted(Path(f).name for f in s["files"])
+    assert names == ["spp.pos", "spp_epochs.csv", "spp_solution.csv", "summary.json"]
+    g, _ = read_pos(tmp_path / "o" / "spp.pos", quality=(5,))
+    fixes = read_gnss(tmp_path / "o" / "spp_solution.csv")
+    assert len(g) == len(fixes) == 240
+    np.testing.assert_allclose(fixes.time, g.time, atol=1e-3)    # both GPS seconds of week
+    np.testing.assert_allclose(fixes.lla[:, 2], g.lla[:, 2], atol=1e-4)
+    assert json.loads((tmp_path / "o" / "summary.json").read_text())["epochs_solved"] == 240
+    epochs = (tmp_path / "o" / "spp_epochs.csv").read_text().splitlines()
+    assert len(epochs) == 241 and "err_n_m" in epochs[0] and "status" in epochs[0]
+    # an earlier run's files are not overwritten without --force
+    r = invoke(OBS, NAV, "--out", tmp_path / "o")
+    assert isinstance(r.exception, InputError) and "already exists" in str(r.exception)
+    r = invoke(OBS, NAV, "--out", tmp_path / "o", "--force", "--json")
+    assert r.exit_code == 0 and json.loads(r.stdout)["horizontal_rms_m"] is None   # no reference this time
+
+
+def test_table_output_and_explicit_reference():
+    r = invoke(OBS, NAV, "--reference", ",".join(map(str, ABPO_XYZ)), "--systems", "G", "--mask", "15")
+    assert r.exit_code == 0, r.output
+    assert "North" in r.stdout and "horizontal RMS" in r.stdout and "240 of 240 epochs solved" in r.stdout
+    assert not r.stdout.lstrip().startswith("{")
+
+
+def test_user_errors_are_one_line_with_exit_2(tmp_path):
+    missing = tmp_path / "nope.15o"
+    r = inskit(missing, NAV, "--json")
+    assert r.returncode == 2 and r.stdout == ""
+    assert r.stderr.count("\n") == 1 and "nope.15o" in r.stderr
+    garbage = tmp_path / "garbage.15o"
+    garbage.write_text("this is not a RINEX file\n" * 20)
+    r = inskit(garbage, NAV, "--json")
+    assert r.returncode == 2 and r.stdout == "" and r.stderr.count("\n") == 1 and "garbage.15o" in r.stderr
+    r = inskit(OBS, NAV, "--reference", "1,2", "--json")
+    assert r.returncode == 2 and "--reference" in r.stderr
+    r = inskit(OBS, NAV, "--systems", "G,R")
+    assert r.returncode == 2 and "--systems" in r.stderr
+
+
+def test_job_refuses_a_reference_off_the_earth_and_bad_models():
+    with pytest.raises(InputError, match="not on the Earth"):
+        run_spp(OBS, NAV, reference=(1.0, 2.0, 3.0))
+    with pytest.raises(ValueError, match="--iono"):
+        run_spp(OBS, NAV, iono="nequick")
+
+
+def test_throughput_figure():
+    """A benchmark figure, not a timing test: the dict is well formed."""
+    b = spp_throughput(OBS, NAV, repeats=2)
+    assert b["epochs"] == 240 and b["repeats"] == 2
+    assert b["epochs_per_s_min"] <= b["epochs_per_s"] <= b["epochs_per_s_max"]
