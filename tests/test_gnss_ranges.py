@@ -22,12 +22,11 @@ from inskit.errors import ConfigError
 from inskit.gnss import RangeTable, range_table, read_nav, read_obs, saastamoinen_delay, sagnac_rotate
 
 DATA = Path(__file__).resolve().parent / "data" / "gnss"
-SHARED = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 ABPO_OBS = DATA / "abpo0080_0000-0200.15o"
 ABPO_NAV = DATA / "abpo0080.15n"
 WALK_OBS = DATA / "gnss_1730_first40.obs"
 WALK_NAV = DATA / "gnss_1730.nav"
-ABPO_FULL = SHARED / "rinex-sample" / "abpo0080.15o"
+ABPO_FULL = Path(__file__).resolve().parents[1] / "data" / "abpo" / "abpo0080.15o.gz"  # bundled
 
 
 @pytest.fixture(scope="module")
@@ -172,7 +171,6 @@ def test_receiver_position_options(abpo):
         range_table(obs, nav, code="C5Q")
 
 
-@pytest.mark.skipif(not ABPO_FULL.exists(), reason="full-day ABPO file not available (../shared/data)")
 def test_abpo_full_day():
     obs = read_obs(ABPO_FULL)
     nav = read_nav(ABPO_NAV)

@@ -20,13 +20,12 @@ from inskit.gnss import from_week_sow, gps_seconds, read_nav, read_obs, week_sow
 from inskit.gnss.time import to_datetime64
 
 DATA = Path(__file__).resolve().parent / "data" / "gnss"
-SHARED = Path(__file__).resolve().parents[1] / ".." / "shared" / "data"
 ABPO_OBS = DATA / "abpo0080_0000-0200.15o"
 ABPO_NAV = DATA / "abpo0080.15n"
 WALK_OBS = DATA / "gnss_1730_first40.obs"
 WALK_NAV = DATA / "gnss_1730.nav"
 BRDC_NAV = DATA / "BRDC00IGS_R_20201360000_01D_MN.rnx"
-ABPO_FULL = SHARED / "rinex-sample" / "abpo0080.15o"
+ABPO_FULL = Path(__file__).resolve().parents[1] / "data" / "abpo" / "abpo0080.15o.gz"  # bundled
 
 
 # ------------------------------------------------------------------ GPS time
@@ -101,7 +100,6 @@ def test_systems_and_codes_filters():
         obs.sat_index("G99")
 
 
-@pytest.mark.skipif(not ABPO_FULL.exists(), reason="full-day ABPO file not available (../shared/data)")
 def test_abpo_full_day_reads_fast():
     t0 = time.perf_counter()
     obs = read_obs(ABPO_FULL)

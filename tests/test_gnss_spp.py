@@ -34,9 +34,9 @@ RX_LLA = np.array([40.0 * DEG, -105.0 * DEG, 1600.0])
 R_ORBIT = 26_560e3
 
 HERE = Path(__file__).resolve().parent
-SHARED = HERE.parents[0] / ".." / "shared" / "data"
-ABPO_FULL = SHARED / "rinex-sample"
-WALK = SHARED / "rtklibexplorer-gnss-imu" / "walk_0827"
+DATA = HERE.parents[0] / "data"  # the bundled samples: these tests run on every clone
+ABPO_FULL = DATA / "abpo"
+WALK = DATA / "walk_0827"
 EXCERPTS = HERE / "data" / "gnss"
 ABPO_XYZ = np.array([4097216.6805, 4429119.0287, -2065771.3676])
 
@@ -323,7 +323,6 @@ def test_abpo_excerpt_two_hours():
     assert 7 <= np.median(sol.n_sats) <= 10 and np.median(sol.hdop) < 1.5
 
 
-@pytest.mark.skipif(not (ABPO_FULL / "abpo0080.15o").exists(), reason="shared ABPO full-day file not present")
 def test_abpo_full_day_matches_rtklib():
     """All 2727 epochs; RTKLIB 2.4.3b34 on the same settings: mean N -2.55,
     E -0.01, U +3.07 m; std 2.03 / 0.96 / 4.34 m; horizontal RMS 3.4 m,
@@ -332,7 +331,7 @@ def test_abpo_full_day_matches_rtklib():
     RTKLIB's within 0.5 m and stds within 0.3 m (its weighting differs)."""
     from inskit.gnss.solution import errors_against
 
-    _, sol = _spp_files(ABPO_FULL / "abpo0080.15o", ABPO_FULL / "abpo0080.15n")
+    _, sol = _spp_files(ABPO_FULL / "abpo0080.15o.gz", ABPO_FULL / "abpo0080.15n.gz")
     assert len(sol) == 2727 and sol.solved.all()
     _, s = errors_against(sol, ABPO_XYZ)
     assert s["horizontal_rms_m"] <= 3.4 and s["rms_3d_m"] <= 6.3
@@ -367,7 +366,6 @@ def test_walk_excerpt_agrees_with_rtklib():
     assert np.median(np.linalg.norm(sol.v_enu[:, :2], axis=1)) < 0.5
 
 
-@pytest.mark.skipif(not (WALK / "gnss_1730.obs").exists(), reason="shared walk_0827 files not present")
 def test_walk_against_the_rtk_track():
     """Whole walk (536 epochs, 134 s) against the RTK .pos (heights there are
     above mean sea level: ellipsoidal = MSL - 21.4 m, README).  Of the ~13
@@ -380,11 +378,11 @@ def test_walk_against_the_rtk_track():
     from inskit.gnss.solution import errors_against
     from inskit.io.rtklib import read_pos
 
-    _, sol = _spp_files(WALK / "gnss_1730.obs", WALK / "gnss_1730.nav")
+    _, sol = _spp_files(WALK / "gnss_1730.obs.gz", WALK / "gnss_1730.nav.gz")
     assert len(sol) == 536
     assert sol.solved.sum() == 528 and (sol.refusal[~sol.solved] == TOO_FEW).all()
     assert any("8 of 536 epochs unsolved" in n for n in sol.notes)
-    ref, _ = read_pos(WALK / "gnss_1730_sf.pos", quality=(1, 2))
+    ref, _ = read_pos(WALK / "gnss_1730_sf.pos.gz", quality=(1, 2))
     lla = ref.lla.copy()
     lla[:, 2] -= 21.4
     k = np.clip(np.searchsorted(ref.time, sol.sow - 0.005), 0, len(ref.time) - 1)
