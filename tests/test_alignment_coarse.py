@@ -6,10 +6,10 @@ import pytest
 
 from inskit import earth
 from inskit import rotations as rot
-from inskit.alignment.coarse import (detect_motion_start, detect_static_start, heading_from_track, level,
-                                     startup_state, static_intervals)
+from inskit.alignment.coarse import (check_static, detect_motion_start, detect_static_start, heading_from_track,
+                                     level, startup_state, static_intervals)
 from inskit.errors import InputError
-from inskit.simulation import ideal_imu, truth_solution
+from inskit.simulation import StationaryTrajectory, ideal_imu, truth_solution
 from inskit.simulation.gnss import GnssErrors, simulate_gnss
 from inskit.simulation.segments import SegmentTrajectory
 from inskit.types import ImuData
@@ -64,3 +64,34 @@ def test_refuses_a_log_that_does_not_start_at_rest(drive):
     k = int(np.searchsorted(imu.time, 21.0))
     with pytest.raises(InputError, match="give the initial state"):
         startup_state(imu.slice(k), gnss.select(gnss.time >= imu.time[k]))
+
+
+def test_check_static_names_the_interval_and_what_moved(drive):
+    imu, _, _ = drive
+    k = int(np.searchsorted(imu.time, 15.0))
+    check_static(imu.slice(0, k))  # the static start passes
+    k = int(np.searchsorted(imu.time, 40.0))
+    with pytest.raises(InputError, match=r"the interval \[0\.0, 40\.0\] s is not static: in the window "
+                                         r"\[(19|20)\.0, (20|21)\.0\] s the mean specific force moved"):
+        check_static(imu.slice(0, k))
+
+
+def test_vibration_beyond_the_absolute_limit_is_motion():
+    """An interval that shakes from its first window on: no relative test can see it, the absolute limit can
+    (gyro noise of 10 deg/s per sample, twice the 5 deg/s limit; a car standing with its engine running shows
+    1.6 deg/s)."""
+    tr = StationaryTrajectory((np.radians(45.0), 0.0, 0.0), (0.0, 0.0, 0.0))
+    t = np.arange(0.0, 20.0 + 1e-9, 0.01)
+    ideal = ideal_imu(tr, t, nodes=1)
+    rng = np.random.default_rng(1)
+    dth = ideal.dtheta_b + np.r_[[np.zeros(3)], rng.normal(0, np.radians(10.0), (len(t) - 1, 3)) * 0.01]
+    imu = ImuData(t, dth, ideal.dv_b)
+    with pytest.raises(InputError, match=r"\[0\.0, 20\.0\] s is not static: in the window \[0\.0, 1\.0\] s "
+                                         r"gyro std (9|10)(\.\d+)? deg/s, static limit 5 deg/s"):
+        check_static(imu)
+    with pytest.raises(InputError, match=r"static for only 0\.0 s .*\(from 0\.0 s: gyro std (9|10)"):
+        detect_static_start(imu)
+    quiet = ImuData(t, ideal.dtheta_b + np.r_[[np.zeros(3)], rng.normal(0, np.radians(1.0), (len(t) - 1, 3)) * 0.01],
+                    ideal.dv_b)
+    check_static(quiet)
+    assert detect_static_start(quiet) > 19.0

@@ -8,15 +8,25 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from inskit.alignment.static import align_static
+from inskit import rotations as rot
+from inskit.alignment.coarse import motion_test
+from inskit.alignment.static import NO_HEADING_SIGMA_DEG, align_imu, align_static
+from inskit.errors import InputError
+from inskit.io import write_imu
 from inskit.jobs.config import load_config
 from inskit.jobs.navigate import navigate
 from inskit.jobs.simulate import write_simulation
+from inskit.simulation import StationaryTrajectory, ideal_imu
 from inskit.simulation.scenario import load_scenario, simulate
+from inskit.simulation.segments import SegmentTrajectory
+from inskit.simulation.sensors import apply_imu_errors, preset
+from inskit.types import ImuData
+from inskit.units import DEG
 
 ROOT = Path(__file__).resolve().parents[1]
 DRIVE = ROOT / "data" / "drive_0708" / "imu_1934_gpst.csv.gz"
 MOUNT = np.radians([180.0, -6.79, 185.35])
+ANGLES = ("roll", "pitch", "yaw")
 
 
 @pytest.fixture(scope="module")
@@ -29,9 +39,16 @@ def static_log(tmp_path_factory):
     return d / "imu.csv"
 
 
+def _within_3_sigma(r, truth_deg):
+    for a, t in zip(ANGLES, truth_deg):
+        err = float(np.degrees(rot.wrap_angle(np.radians(r[f"{a}_deg"] - t))))
+        assert abs(err) < 3 * r[f"{a}_sigma_deg"], f"{a}: error {err:.4f} deg, sigma {r[f'{a}_sigma_deg']:.4f}"
+
+
 @pytest.mark.parametrize("method", ["accel", "gyro", "blend", "fine"])
 def test_navigation_grade_static_alignment(static_log, method):
-    r = align_static(static_log, np.radians(45), method=method)
+    # the bias classes of the grade that made the log (as --accel-bias-ug / --gyro-bias-deg-h would give them)
+    r = align_static(static_log, np.radians(45), method=method, grade="navigation")
     # navigation grade: 25 ug -> 0.0015 deg of tilt; the gyro basis also tilts by the latitude mismatch its
     # gyro errors imply (0.003 deg/h turn-on + 0.005 deg/h of noise over 600 s: ~0.03 deg)
     tol = 0.06 if method == "gyro" else 0.01
@@ -39,16 +56,82 @@ def test_navigation_grade_static_alignment(static_log, method):
     assert abs(r["yaw_deg"] - 30.0) < 0.5  # 0.003 deg/h drift -> 0.016 deg; noise over 600 s dominates
     assert r["heading_usable"]
     assert r["static_s"] > 590
+    _within_3_sigma(r, (0.0, 0.0, 30.0))
+    assert "assumed navigation grade" in r["sigma_basis"]
+
+
+def test_default_prior_claims_no_heading(static_log):
+    """Without bias classes consumer MEMS is assumed: the same log gets 2.3 deg of tilt sigma and no heading
+    (the old report, roll +- 0.0000 deg from the white noise of the means alone, was 1000 times too sure)."""
+    r = align_static(static_log, np.radians(45), method="blend")
+    assert not r["heading_usable"] and r["yaw_sigma_deg"] == NO_HEADING_SIGMA_DEG and r["m"] == 0.0
+    assert r["roll_sigma_deg"] == pytest.approx(2.29, abs=0.02)
+    assert "assumed consumer-mems" in r["sigma_basis"]
 
 
 def test_fine_alignment_reports_convergence(static_log):
-    r = align_static(static_log, np.radians(45), method="fine")
+    r = align_static(static_log, np.radians(45), method="fine", grade="navigation")
     t = r["converge_time_s"]
     assert t[0] is not None and t[0] < 60  # tilt within a minute
     assert t[2] is not None and t[2] > t[0]  # gyrocompassing is the slow part
     assert abs(r["yaw_deg"] - 30.0) < 0.5
-    # the reported sigma reflects the assumed gyro-bias class (0.2 deg/h by default), not only the data
-    assert r["yaw_sigma_deg"] < 3.0
+    _within_3_sigma(r, (0.0, 0.0, 30.0))
+    assert r["yaw_sigma_deg"] < 3.0 and r["converge_note"] == ""
+
+
+@pytest.mark.parametrize("grade", ["industrial-mems", "consumer-mems"])
+def test_fine_on_20_s_of_mems_claims_no_heading(grade):
+    """Issue 12: --method fine on 20 s reported yaw 'converged' at 49 +- 8.7 deg (true 0) while saying the
+    heading was unusable.  Now: no convergence time, a reason, and the prior's sigma, with either prior."""
+    lat = np.radians(45.0)
+    t = np.arange(0.0, 20.0 + 1e-9, 0.01)
+    imu, _ = apply_imu_errors(ideal_imu(StationaryTrajectory((lat, 0.0, 0.0), (0.0, 0.0, 0.0)), t, nodes=1),
+                              preset(grade), np.random.default_rng(3))
+    for kw in ({}, {"grade": grade}):
+        r = align_imu(imu, lat, method="fine", **kw)
+        assert not r["heading_usable"]
+        assert r["converge_time_s"][2] is None and "unobservable" in r["converge_note"]
+        assert r["yaw_sigma_deg"] == NO_HEADING_SIGMA_DEG
+        _within_3_sigma(r, (0.0, 0.0, 0.0))
+        # the tilt cannot beat the accelerometer bias at rest (1 mg or 40 mg)
+        assert r["roll_sigma_deg"] >= 0.99 * np.degrees(r["accel_bias_sigma_ug"] * 9.80665e-6 / 9.806)
+
+
+def _static_then_drive():
+    tr = SegmentTrajectory((np.radians(40), 0.0, 0.0), yaw0=np.radians(130.0))
+    tr.static(20).accelerate(5, 5).cruise(5).turn(np.radians(45), rate=np.radians(10)).cruise(5)
+    t = np.arange(0.0, tr.duration, 0.01)
+    return ideal_imu(tr, t, nodes=3), np.radians(40)
+
+
+def test_a_given_interval_must_be_static(tmp_path):
+    imu, lat = _static_then_drive()
+    r = align_imu(imu, lat, method="accel", t_start=2.0, t_end=18.0)  # inside the static start: accepted
+    assert r["static_start_s"] == pytest.approx(2.0) and r["static_end_s"] == pytest.approx(18.0)
+    with pytest.raises(InputError, match=r"\[0\.0, 28\.0\] s is not static: in the window \[2\d\.\d, 2\d\.\d\] s "
+                                         r"the mean specific force moved.*--start/--end"):
+        align_imu(imu, lat, method="accel", t_end=28.0)
+    # the CLI says the same, naming the file, and exits 2
+    p = tmp_path / "drive.csv"
+    write_imu(p, imu)
+    r = subprocess.run([sys.executable, "-m", "inskit.cli", "align", str(p), "--lat", "40", "--end", "28"],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and str(p) in r.stderr and "is not static" in r.stderr
+
+
+def test_a_steady_turn_in_place_is_refused():
+    """A level IMU turning at a steady 10 deg/s about the vertical: every window looks alike and the specific
+    force does not change, so only the size of the mean rate against the gyro prior betrays it."""
+    lat = np.radians(45.0)
+    t = np.arange(0.0, 30.0 + 1e-9, 0.02)
+    ideal = ideal_imu(StationaryTrajectory((lat, 0.0, 0.0), (0.0, 0.0, 0.0)), t, nodes=1)
+    dth = ideal.dtheta_b.copy()
+    dth[1:, 2] += 10.0 * DEG * np.diff(t)
+    imu = ImuData(t, dth, ideal.dv_b)
+    assert not motion_test(imu).moving.any()
+    with pytest.raises(InputError, match=r"over \[0\.0, 30\.0\] s the mean rate differs from the Earth rate by 10 "
+                                         r"deg/s.*stays within 5 deg/s .*turned during the interval"):
+        align_imu(imu, lat, method="accel", t_end=30.0)
 
 
 def test_drive_0708_static_start_against_the_filter():
@@ -60,6 +143,8 @@ def test_drive_0708_static_start_against_the_filter():
     rpy = np.degrees(res.smoothed.nav.euler[static]).mean(axis=0)
     assert abs(r["roll_deg"] - rpy[0]) < 0.5
     assert abs(r["pitch_deg"] - rpy[1]) < 0.5
+    # the consumer prior's 2.3 deg tilt sigma covers the difference from the smoothed filter
+    assert abs(r["roll_deg"] - rpy[0]) < 3 * r["roll_sigma_deg"]
 
 
 def test_cli_align_json_keys():
@@ -70,6 +155,31 @@ def test_cli_align_json_keys():
     d = json.loads(r.stdout)
     for k in ("roll_deg", "pitch_deg", "yaw_deg", "roll_sigma_deg", "pitch_sigma_deg", "yaw_sigma_deg"):
         assert isinstance(d[k], float)
+    assert "assumed consumer-mems grade" in d["sigma_basis"]
+    r = subprocess.run([sys.executable, "-m", "inskit.cli", "align", str(DRIVE), "--lat", "40.0966",
+                        "--imu-format", "rtklibexplorer", "--mount-rpy", "180,-6.79,185.35", "--method", "accel",
+                        "--accel-bias-ug", "1000", "--gyro-bias-deg-h", "50"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "sigma basis: given: accelerometer bias 1000 ug and gyro bias 50 deg/h" in r.stdout
+    assert "no heading information" in r.stdout
     r = subprocess.run([sys.executable, "-m", "inskit.cli", "align", str(DRIVE), "--lat", "95"], capture_output=True,
                        text=True)
     assert r.returncode == 2 and "--lat" in r.stderr
+
+
+def test_deg_s_read_as_rad_s_is_recognised_at_rest():
+    """A tactical gyro logged in deg/s under a rad/s header: the file reader cannot tell at rest (the values look
+    like a MEMS bias: tests/test_io.py), but the static mean is the Earth rate times 57.3 pointing where the Earth
+    rate points at the given latitude, which align knows."""
+    lat = np.radians(45.0)
+    t = np.arange(0.0, 300.0 + 1e-9, 0.02)
+    imu, _ = apply_imu_errors(ideal_imu(StationaryTrajectory((lat, 0.0, 0.0), (0.0, 0.0, 0.7)), t, nodes=1),
+                              preset("tactical"), np.random.default_rng(5))
+    wrong = ImuData(t, imu.dtheta_b / DEG, imu.dv_b)
+    with pytest.raises(InputError, match=r"\d\d\.\d times the Earth rate, and it points where the Earth rate "
+                                         r"points at this latitude .*deg/s under a rad/s header"):
+        align_imu(wrong, lat, method="accel")
+    r = align_imu(wrong, lat, method="accel", check_units=False)
+    assert not r["heading_usable"]
+    r = align_imu(imu, lat, method="accel", grade="tactical")  # the right unit passes, with a heading
+    assert r["heading_usable"] and abs(r["yaw_deg"] - 40.1) < 3 * r["yaw_sigma_deg"]

@@ -14,6 +14,24 @@ from . import rotations as rot
 from .errors import InputError
 
 
+def plain_number(x, digits=None) -> str:
+    """A number as a message shows it: ``inf``, ``nan``, ``0.1``, never
+    ``np.float64(0.1)`` (the ``repr`` of a numpy scalar since numpy 2).
+
+    ``digits=None`` gives the shortest text that reads back as the same
+    float (``repr(float(x))``), for a value the user must find in a file;
+    an integer gives ``:.{digits}g``.  Arrays give ``[a, b, ...]``; what is
+    not a number comes back as its ``repr``.
+    """
+    if np.ndim(x) > 0:
+        return "[" + ", ".join(plain_number(v, digits) for v in np.asarray(x).ravel()) + "]"
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return repr(x)
+    return repr(v) if digits is None else f"{v:.{digits}g}"
+
+
 def _as_array(name, x, shape_tail, n=None):
     a = np.ascontiguousarray(x, dtype=float)
     if a.ndim != 1 + len(shape_tail) or a.shape[1:] != tuple(shape_tail):
@@ -21,9 +39,12 @@ def _as_array(name, x, shape_tail, n=None):
         raise InputError(f"`{name}` must have shape {want}, got {a.shape}")
     if n is not None and a.shape[0] != n:
         raise InputError(f"`{name}` has {a.shape[0]} rows but `time` has {n}")
-    bad = ~np.isfinite(a.reshape(a.shape[0], -1)).all(axis=1)
+    flat = a.reshape(a.shape[0], -1)
+    bad = ~np.isfinite(flat).all(axis=1)
     if bad.any():
-        raise InputError(f"`{name}` has a NaN or infinite value at row {int(np.argmax(bad))}")
+        k = int(np.argmax(bad))
+        v = flat[k][~np.isfinite(flat[k])][0]
+        raise InputError(f"`{name}` has a NaN or infinite value ({plain_number(v)}) at row {k}")
     return a
 
 
@@ -33,13 +54,15 @@ def check_time(name, t):
     if t.ndim != 1:
         raise InputError(f"`{name}` must have shape (n,), got {t.shape}")
     if not np.isfinite(t).all():
-        raise InputError(f"`{name}` has a NaN or infinite value at row {int(np.argmax(~np.isfinite(t)))}")
+        k = int(np.argmax(~np.isfinite(t)))
+        raise InputError(f"`{name}` has a NaN or infinite value ({plain_number(t[k])}) at row {k}")
     d = np.diff(t)
     if (d <= 0).any():
         k = int(np.argmax(d <= 0)) + 1
         what = "repeats" if d[k - 1] == 0 else "goes back from"
         raise InputError(
-            f"`{name}` must strictly increase: row {k} ({float(t[k])!r}) {what} row {k - 1} ({float(t[k - 1])!r})"
+            f"`{name}` must strictly increase: row {k} ({plain_number(t[k])}) {what} row {k - 1} "
+            f"({plain_number(t[k - 1])})"
         )
     return t
 

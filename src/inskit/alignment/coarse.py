@@ -17,6 +17,7 @@ from .. import earth
 from .. import rotations as rot
 from ..errors import InputError
 from ..types import GnssData, ImuData, NavState
+from ..units import DEG
 
 
 def level(f_b_mean):
@@ -171,38 +172,136 @@ def startup_state(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), *, 
     return Startup(state, gyro_bias, accel_bias, static_end, t_head)
 
 
-def detect_static_start(imu: ImuData, window_s=1.0, factor=3.0, min_static_s=5.0):
-    """End time of the static interval at the start of an IMU log.
+#: absolute per-window limits of "at rest" (1 s windows, RMS over the axes of the standard deviation):
+#: engine vibration of a car standing still stays below (the bundled drive_0708, consumer MEMS: 1.6 deg/s,
+#: 0.09 m/s^2); walking (10-20 deg/s) and handling exceed them
+STATIC_GYRO_STD_MAX = 5.0 * DEG
+STATIC_ACCEL_STD_MAX = 1.0
 
-    Per window of ``window_s``: the standard deviations of the specific-force
-    and rate magnitudes, and the mean specific-force vector.  The log must
-    start at rest; the interval ends one window before the first window whose
-    deviations exceed ``factor`` times those of the first window, or whose
-    mean vector has moved by more than ``factor`` standard errors (0.02 m/s^2
-    at least: a gentle start of motion tilts the mean before it adds
-    vibration).  Floors of 0.02 m/s^2 and 0.002 rad/s keep an ideal log from
-    tripping on rounding.
+
+@dataclass(frozen=True)
+class MotionTest:
+    """Per-window result of the static test (:func:`motion_test`).
+
+    Attributes
+    ----------
+    t0, t1 : (n,) ndarray
+        Start and end time of each window [s].
+    moving : (n,) ndarray of bool
+        The window fails one of the tests.
+    reasons : list of str
+        For each moving window, what moved (empty for a quiet one).
+    """
+
+    t0: np.ndarray
+    t1: np.ndarray
+    moving: np.ndarray
+    reasons: list
+
+
+def _deg_s(x):
+    return f"{float(x) / DEG:.3g} deg/s"
+
+
+def motion_test(imu: ImuData, window_s=1.0, factor=3.0) -> MotionTest:
+    """The static test of :func:`detect_static_start`, window by window.
+
+    Per window of ``window_s``, against the first window (relative tests:
+    the start of motion) and against absolute limits (an interval that moves
+    from its first window on):
+
+    * the standard deviation of the specific-force magnitude, or of the rate
+      magnitude, exceeds ``factor`` times that of the first window (floors of
+      0.02 m/s^2 and 0.002 rad/s keep an ideal log from tripping on rounding);
+    * the mean specific-force vector has moved from that of the first few
+      windows by more than ``factor`` standard errors (0.02 m/s^2 at least: a
+      gentle start of motion tilts the mean before it adds vibration);
+    * the mean rate vector has moved by more than 6 standard errors of the
+      difference (0.002 rad/s at least: a turn that does not tilt);
+    * the per-axis standard deviations (RMS over the axes) exceed
+      :data:`STATIC_GYRO_STD_MAX` or :data:`STATIC_ACCEL_STD_MAX`.
     """
     w, f = imu.rates()
     dt = float(np.median(np.diff(imu.time)))
     k = max(3, int(round(window_s / dt)))
     n = (len(imu) - 1) // k
     if n < 2:
-        raise InputError(f"the IMU log is shorter than two {window_s} s windows")
+        raise InputError(f"the IMU log [{float(imu.time[0]):.3f}, {float(imu.time[-1]):.3f}] s is shorter than two "
+                         f"{window_s:g} s windows: too short to tell whether it is static")
     fw = f[1:n * k + 1].reshape(n, k, 3)
     ww = w[1:n * k + 1].reshape(n, k, 3)
     fn, wn = np.linalg.norm(fw, axis=2), np.linalg.norm(ww, axis=2)
     sf, sw = fn.std(axis=1), wn.std(axis=1)
+    sf_axis = np.sqrt((fw.std(axis=1) ** 2).mean(axis=1))
+    sw_axis = np.sqrt((ww.std(axis=1) ** 2).mean(axis=1))
     ref_f, ref_w = max(sf[0], 0.02), max(sw[0], 0.002)
-    mean_f = fw.mean(axis=1)
-    # the reference mean from the first few windows (less noisy than one)
-    ref_mean = mean_f[: max(1, min(3, n // 4))].mean(axis=0)
-    drift = np.linalg.norm(mean_f - ref_mean, axis=1)
-    tol = max(factor * ref_f / np.sqrt(k), 0.02)
-    moving = (sf > factor * ref_f) | (sw > factor * ref_w) | (drift > tol)
-    i = int(np.argmax(moving)) if moving.any() else n + 1
-    t_end = imu.time[min(max(i - 1, 0) * k, len(imu) - 1)]
+    nref = max(1, min(3, n // 4))
+    mean_f, mean_w = fw.mean(axis=1), ww.mean(axis=1)
+    # the reference means from the first few windows (less noisy than one)
+    drift_f = np.linalg.norm(mean_f - mean_f[:nref].mean(axis=0), axis=1)
+    drift_w = np.linalg.norm(mean_w - mean_w[:nref].mean(axis=0), axis=1)
+    tol_f = max(factor * ref_f / np.sqrt(k), 0.02)
+    # the scatter of a window's mean rate from that of sub-blocks of the reference windows (not std / sqrt(k):
+    # rates interpolated from increments, or filtered, are correlated from sample to sample); a turn is a drift
+    # beyond 6 sigma of the 3-vector difference, so that an hour of 1 s windows rarely trips on noise
+    sub = max(1, k // 10)
+    nsub = k // sub
+    blocks = ww[:nref, : nsub * sub].reshape(nref, nsub, sub, 3).mean(axis=2)
+    var_mean = float(np.mean(blocks.var(axis=1, ddof=1))) / nsub if nsub > 1 else float(np.mean(sw_axis[0] ** 2)) / k
+    tol_w = max(6.0 * np.sqrt(var_mean * (1.0 + 1.0 / nref)), 0.002)
+    tests = [
+        (sf > factor * ref_f, lambda i: f"the specific-force magnitude's std {sf[i]:.3g} m/s^2 is "
+                                        f"{sf[i] / ref_f:.1f} times that of the first window (limit {factor:g})"),
+        (sw > factor * ref_w, lambda i: f"the rate magnitude's std {_deg_s(sw[i])} is {sw[i] / ref_w:.1f} times "
+                                        f"that of the first window (limit {factor:g})"),
+        (drift_f > tol_f, lambda i: f"the mean specific force moved by {drift_f[i]:.3g} m/s^2 (limit "
+                                    f"{tol_f:.3g} m/s^2: the IMU tilted or accelerated)"),
+        (drift_w > tol_w, lambda i: f"the mean rate moved by {_deg_s(drift_w[i])} (limit {_deg_s(tol_w)}: the "
+                                    "IMU turned)"),
+        (sw_axis > STATIC_GYRO_STD_MAX, lambda i: f"gyro std {_deg_s(sw_axis[i])}, static limit "
+                                                  f"{_deg_s(STATIC_GYRO_STD_MAX)}"),
+        (sf_axis > STATIC_ACCEL_STD_MAX, lambda i: f"accelerometer std {sf_axis[i]:.3g} m/s^2, static limit "
+                                                   f"{STATIC_ACCEL_STD_MAX:g} m/s^2"),
+    ]
+    moving = np.zeros(n, bool)
+    for flag, _ in tests:
+        moving |= flag
+    reasons = ["; ".join(say(i) for flag, say in tests if flag[i]) if moving[i] else "" for i in range(n)]
+    t = imu.time
+    return MotionTest(t[np.arange(n) * k], t[np.arange(1, n + 1) * k], moving, reasons)
+
+
+def detect_static_start(imu: ImuData, window_s=1.0, factor=3.0, min_static_s=5.0):
+    """End time of the static interval at the start of an IMU log.
+
+    The log must start at rest; the interval ends one window before the
+    first window that fails :func:`motion_test`.
+    """
+    mt = motion_test(imu, window_s, factor)
+    n = len(mt.moving)
+    i = int(np.argmax(mt.moving)) if mt.moving.any() else n + 1
+    t_end = mt.t0[max(i - 1, 0)] if i <= n else imu.time[-1]
     if t_end - imu.time[0] < min_static_s:
+        why = f" (from {float(mt.t0[i]):.1f} s: {mt.reasons[i]})" if i < n else ""
         raise InputError(f"the log is static for only {t_end - imu.time[0]:.1f} s at its start (at least "
-                         f"{min_static_s:.0f} s needed); give the interval with --start/--end")
+                         f"{min_static_s:.0f} s needed){why}; give the interval with --start/--end")
     return float(t_end)
+
+
+def check_static(imu: ImuData, window_s=1.0, factor=3.0):
+    """Refuse an interval in which the IMU moves (:func:`motion_test`).
+
+    Raises
+    ------
+    InputError
+        Naming the interval, the first window that moved and what moved.
+    """
+    mt = motion_test(imu, window_s, factor)
+    if mt.moving.any():
+        i = int(np.argmax(mt.moving))
+        a, b = float(imu.time[0]), float(imu.time[-1])
+        raise InputError(
+            f"the interval [{a:.1f}, {b:.1f}] s is not static: in the window [{float(mt.t0[i]):.1f}, "
+            f"{float(mt.t1[i]):.1f}] s {mt.reasons[i]}; give --start/--end of an interval where the IMU is at "
+            "rest (or leave --end out to detect the static start of the log)"
+        )

@@ -31,6 +31,7 @@ from ..strapdown import mechanize
 from ..types import NavState, check_time
 from .motion import InertialSolution
 from .solvers import ArraySolution
+from ..types import plain_number
 
 
 def quat_from_source(eps):
@@ -180,12 +181,12 @@ def navigate_inertial(time, omega_ib_b, f_b, *, q_ib0=(1.0, 0.0, 0.0, 0.0), v_i0
             raise InputError(f"`{name}` has a NaN or infinite value at row {int(np.argmax(~np.isfinite(a).all(1)))}")
     q0 = np.asarray(q_ib0, float).reshape(-1)
     if q0.shape != (4,) or abs(np.linalg.norm(q0) - 1) > 1e-6:
-        raise InputError(f"`q_ib0` must be a unit quaternion, scalar first, got {q_ib0!r}")
+        raise InputError(f"`q_ib0` must be a unit quaternion, scalar first, got {plain_number(q_ib0)}")
     vecs = []
     for name, x in (("v_i0", v_i0), ("r_i0", r_i0), ("gravity_i", gravity_i)):
         a = np.asarray(x, float).reshape(-1)
         if a.shape != (3,) or not np.isfinite(a).all():
-            raise InputError(f"`{name}` must be three finite numbers, got {x!r}")
+            raise InputError(f"`{name}` must be three finite numbers, got {plain_number(x)}")
         vecs.append(a)
     q = np.empty((n, 4))
     v = np.empty((n, 3))

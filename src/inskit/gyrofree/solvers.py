@@ -65,6 +65,7 @@ from ..errors import InputError
 from ..types import ImuData
 from .layout import PARAMETERS, W_PAIRS, ArrayLayout, observability, require, source_index
 from .model import ArrayData
+from ..types import plain_number
 
 SIGN_RULES = ("robust", "source")
 
@@ -275,7 +276,7 @@ def _initial_rate(omega0, W0, rest_tolerance, what):
     if omega0 is not None:
         w = np.asarray(omega0, float).reshape(-1)
         if w.shape != (3,) or not np.isfinite(w).all():
-            raise InputError(f"`omega0` must be three finite numbers p, q, r [rad/s], got {omega0!r}")
+            raise InputError(f"`omega0` must be three finite numbers p, q, r [rad/s], got {plain_number(omega0)}")
         return w
     if W0 is None:
         raise InputError(f"{what} gets the rates by integrating angular accelerations only: pass `omega0`, the "

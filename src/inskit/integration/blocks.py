@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import InputError
+from ..types import plain_number
 
 NAV_ROLES = ("pos", "vel", "att")
 SENSOR_ROLES = ("gyro_bias", "accel_bias", "gyro_scale", "accel_scale")
@@ -339,7 +340,7 @@ class InitialUncertainty:
             if not getattr(self, name) > 0:
                 raise InputError(f"initial uncertainty {name} must be > 0, got {getattr(self, name)}")
         if not all(s > 0 for s in self.pos_m):
-            raise InputError(f"initial position sigmas must be > 0, got {self.pos_m}")
+            raise InputError(f"initial position sigmas must be > 0, got {plain_number(self.pos_m)}")
 
 
 def ins_blocks(noise: SensorNoise = SensorNoise(1e-3, 1e-2, 1e-5, 1e-4),

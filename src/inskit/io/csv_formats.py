@@ -20,6 +20,7 @@ from ..errors import InputError
 from ..files import write_csv
 from ..types import GnssData, ImuData, NavSolution
 from ..units import DEG, DEG_PER_HOUR, G0
+from ..types import plain_number
 
 AXES = ("x", "y", "z")
 GYRO_UNITS = {"rad_s": 1.0, "deg_s": DEG, "deg_h": DEG_PER_HOUR}
@@ -72,7 +73,8 @@ def numeric_columns(path, df, columns):
         if bad.any():
             i = int(np.argmax(bad))
             raw = df[c].iloc[i]
-            what = "is empty" if (isinstance(raw, float) and np.isnan(raw)) else f"has {raw!r}"
+            shown = plain_number(raw) if isinstance(raw, (int, float, np.number)) else repr(raw)
+            what = "is empty" if (isinstance(raw, float) and np.isnan(raw)) else f"has {shown}"
             raise InputError(f"{path}: line {i + 2}: column '{c}' {what}; expected a finite number")
         out[:, j] = col
     return out
@@ -165,6 +167,30 @@ def read_imu(path, *, check_units=True, sampled="instant") -> ImuData:
 
 
 def check_imu_units(path, w, f, gcol, acol, gunit, aunit):
+    """Refuse magnitudes that betray a wrong unit (see :func:`read_imu`).
+
+    ``w`` [rad/s] and ``f`` [m/s^2] are the rates as converted from the
+    header's units ``gunit`` and ``aunit``.
+
+    What can be told, and what cannot
+    ---------------------------------
+    * Accelerometers: a median ``|f|`` below 2 m/s^2 under an m/s^2 header
+      (g read as m/s^2), above 3 g under a g header.
+    * deg/s under a rad/s header, when the log moves: turn rates of more than
+      10 rad/s (570 deg/s) are beyond vehicles and people, so a 99th
+      percentile above 10 rad/s, a median above 1 rad/s, or a block of 50
+      consecutive samples whose median exceeds 10 rad/s (a turn faster
+      than 10 deg/s held for 75 samples or more, written in deg/s) give the
+      unit away.
+    * deg/s under a rad/s header on a *static* log cannot be told here: the
+      values are 57.3 times the true rates, i.e. 57.3 times the Earth rate
+      plus bias, about 0.004 rad/s for a good gyro.  That is also the bias of
+      many a calibrated MEMS gyro in true rad/s (0.1 to 0.5 deg/s), and the
+      reader knows neither the gyro grade nor the latitude.  Only a MEMS gyro
+      whose bias exceeds 1 deg/s trips the median rule.  ``inskit align``,
+      which knows the latitude, recognises the Earth rate scaled by 57.3 in
+      a static log of a gyro good enough to see it.
+    """
     fn = np.median(np.linalg.norm(f, axis=1))
     if aunit in ("m_s2",) and fn < _ACCEL_G_LIKE:
         raise InputError(
@@ -176,13 +202,27 @@ def check_imu_units(path, w, f, gcol, acol, gunit, aunit):
             f"{path}: column '{acol}': the median specific force is {fn / G0:.3f} g, which looks like "
             "values in m/s^2; rename the columns accel_*_m_s2 (or pass check_units=False / --no-unit-check)"
         )
+    if gunit != "rad_s":
+        return
     wn = np.linalg.norm(w, axis=1)
-    if gunit == "rad_s" and (np.percentile(wn, 99) > _GYRO_RAD_MAX or np.median(wn) > _GYRO_RAD_MEDIAN):
+    hint = ("rename the columns gyro_*_deg_s (or pass check_units=False / --no-unit-check); note that deg/s under "
+            "a rad/s header is caught only when the log turns: a static log cannot show it")
+    if np.percentile(wn, 99) > _GYRO_RAD_MAX or np.median(wn) > _GYRO_RAD_MEDIAN:
         raise InputError(
             f"{path}: column '{gcol}': angular rates reach {np.percentile(wn, 99):.1f} rad/s "
-            f"(median {np.median(wn):.2f}), which looks like values in deg/s; rename the columns "
-            "gyro_*_deg_s (or pass check_units=False / --no-unit-check)"
+            f"(median {np.median(wn):.2f}), which looks like values in deg/s; {hint}"
         )
+    k = 50  # samples per block of the sustained-turn test
+    nb = len(wn) // k
+    if nb:
+        med = np.median(wn[: nb * k].reshape(nb, k), axis=1)
+        if (med > _GYRO_RAD_MAX).any():
+            i = int(np.argmax(med > _GYRO_RAD_MAX))
+            raise InputError(
+                f"{path}: column '{gcol}': {k} consecutive samples (near line {i * k + 2}) turn at a median "
+                f"{float(med[i]):.1f} rad/s ({float(med[i]) / DEG:.0f} deg/s), more than a vehicle or a person "
+                f"can; it looks like values in deg/s; {hint}"
+            )
 
 
 def write_imu(path, imu: ImuData, *, overwrite=False):

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import ConfigError
+from ..types import plain_number
 
 __all__ = ["M_NWU_ENU", "InitialErrors", "PlatformErrors", "enu_to_nwu", "nwu_to_enu"]
 
@@ -40,7 +41,7 @@ def nwu_to_enu(x):
 def _vec3(name, v):
     a = np.asarray(v, float).reshape(-1)
     if a.shape != (3,) or not np.isfinite(a).all():
-        raise ConfigError(f"`{name}` must be three finite numbers, got {v!r}")
+        raise ConfigError(f"`{name}` must be three finite numbers, got {plain_number(v)}")
     return tuple(float(x) for x in a)
 
 
@@ -80,7 +81,7 @@ class PlatformErrors:
         for name in ("gyro_noise", "accel_noise"):
             v = float(getattr(self, name))
             if not (np.isfinite(v) and v >= 0):
-                raise ConfigError(f"`{name}` must be >= 0, got {getattr(self, name)!r}")
+                raise ConfigError(f"`{name}` must be >= 0, got {plain_number(getattr(self, name))}")
             object.__setattr__(self, name, v)
         if not np.isfinite(self.altimeter_bias):
             raise ConfigError("`altimeter_bias` must be finite")
