@@ -1,4 +1,7 @@
+from pathlib import Path
+
 import numpy as np
+import pytest
 
 from inskit import io
 from inskit.jobs.simulate import write_simulation
@@ -49,3 +52,134 @@ def test_same_seed_byte_identical_files(tmp_path):
     imu = io.read_imu(tmp_path / "a" / "imu.csv")
     truth = io.read_solution(tmp_path / "a" / "truth.csv")
     assert len(imu) == len(truth) and np.isfinite(imu.dv_b).all()
+
+
+# --- raw GNSS ([raw_gnss]) --------------------------------------------------------------------------
+RAW = """
+[raw_gnss]
+constellation = "walker-gps+galileo"
+start_gps_week = 2374
+start_sow_s = 243240.0
+rate_hz = 1.0
+dual_frequency = true
+[[raw_gnss.blockage]]
+start_s = 4.0
+end_s = 7.0
+keep = 2
+"""
+
+
+def _scenario(tmp_path, extra="", name="s.toml", where=None):
+    p = tmp_path / name
+    text = SCEN.replace('[[vibration]]', extra + '\n[[vibration]]', 1)
+    if where:
+        text = text.replace("lat_deg = 45.0\nlon_deg = 7.0", where)
+    p.write_text(text)
+    return load_scenario(p)
+
+
+def test_raw_gnss_leaves_every_other_draw_unchanged(tmp_path):
+    plain = simulate(_scenario(tmp_path), seed=5)
+    raw = simulate(_scenario(tmp_path, RAW, "r.toml"), seed=5)
+    assert plain.raw is None and raw.raw is not None
+    np.testing.assert_array_equal(plain.imu.dv_b, raw.imu.dv_b)
+    np.testing.assert_array_equal(plain.imu.dtheta_b, raw.imu.dtheta_b)
+    np.testing.assert_array_equal(plain.gnss.lla, raw.gnss.lla)
+    # and the raw observations do not depend on the IMU settings
+    other = _scenario(tmp_path, RAW, "o.toml")
+    other.imu.grade = "tactical"
+    again = simulate(other, seed=5)
+    for k, v in raw.raw.obs.items():
+        assert np.array_equal(v, again.raw.obs[k], equal_nan=True), k
+
+
+def test_raw_gnss_files_share_one_gps_time_scale(tmp_path, monkeypatch):
+    from inskit.gnss import read_nav, read_obs
+
+    monkeypatch.setenv("SOURCE_DATE_EPOCH", "1764547200")   # reproducible PGM / RUN BY / DATE
+    sc = _scenario(tmp_path, RAW)
+    files = write_simulation(simulate(sc, seed=5), tmp_path / "a", plot=False)
+    write_simulation(simulate(sc, seed=5), tmp_path / "b", plot=False)
+    names = {f.name for f in files}
+    assert {"obs.rnx", "nav.rnx", "raw_truth.csv"} <= names
+    for f in ("imu.csv", "gnss.csv", "truth.csv", "obs.rnx", "nav.rnx", "raw_truth.csv"):
+        assert (tmp_path / "a" / f).read_bytes() == (tmp_path / "b" / f).read_bytes(), f
+    imu = io.read_imu(tmp_path / "a" / "imu.csv")
+    gnss = io.read_gnss(tmp_path / "a" / "gnss.csv")
+    truth = io.read_solution(tmp_path / "a" / "truth.csv")
+    for t in (imu.time, gnss.time, truth.time):
+        assert t[0] == 243240.0                      # GPS seconds of week of scenario time 0
+    obs = read_obs(tmp_path / "a" / "obs.rnx")
+    nav = read_nav(tmp_path / "a" / "nav.rnx")
+    sow = obs.time - 2374 * 604800.0
+    np.testing.assert_allclose(sow, 243240.0 + np.arange(len(sow)), atol=1e-6)
+    assert sow[-1] <= imu.time[-1]
+    assert set(obs.obs) >= {"C1C", "L1C", "D1C", "S1C", "C2W", "L2W", "C7Q", "L7Q"}
+    assert nav.iono_alpha is not None and set(nav.system) == {"G", "E"}
+    import pandas as pd
+
+    rt = pd.read_csv(tmp_path / "a" / "raw_truth.csv")
+    np.testing.assert_allclose(rt.time_s, sow, atol=1e-6)
+    np.testing.assert_allclose(rt.time_s - rt.true_time_s, rt.clock_bias_s, atol=1e-9)
+    inside = (rt.time_s >= 243244.0) & (rt.time_s <= 243247.0)
+    assert (rt.n_visible[inside] == 2).all() and (rt.n_visible[~inside] > 8).all()
+
+
+def test_raw_gnss_start_and_week_checks(tmp_path):
+    from inskit.errors import ConfigError
+    from inskit.simulation.scenario import raw_gnss_start
+
+    sc = _scenario(tmp_path, "[raw_gnss]\nstart_utc = \"2025-07-08T19:33:42\"\n")
+    assert raw_gnss_start(sc, 10.0)[:2] == (2374, 243240.0)            # GPS = UTC + 18 s
+    sc = _scenario(tmp_path, "[raw_gnss]\n")
+    assert raw_gnss_start(sc, 10.0)[:2] == (2374, 243240.0)            # the documented default
+    sc = _scenario(tmp_path, "[raw_gnss]\nstart_gps_week = 2374\nstart_sow_s = 604790.0\n")
+    with pytest.raises(ConfigError, match="end of the week"):
+        raw_gnss_start(sc, 15.0)
+    with pytest.raises(ConfigError, match="end of the week"):
+        simulate(sc, seed=1)
+    sc = _scenario(tmp_path, "[raw_gnss]\nstart_utc = \"2015-07-08T00:00:00\"\n")
+    with pytest.raises(ConfigError, match="2017"):
+        raw_gnss_start(sc, 10.0)
+    for bad, msg in (("start_utc = \"2025-07-08T00:00:00\"\nstart_sow_s = 5.0", "not both"),
+                     ("start_gps_week = 2374", "go together"),
+                     ("constellation = \"beidou\"", "constellation"),
+                     ("mask_deg = 95.0", "mask_deg"),
+                     ("[[raw_gnss.blockage]]\nstart_s = 5.0\nend_s = 4.0", "end_s"),
+                     ("colour = 1", "colour")):
+        with pytest.raises(ConfigError, match=msg):
+            _scenario(tmp_path, "[raw_gnss]\n" + bad + "\n")
+
+
+def test_raw_gnss_from_a_nav_file_relative_to_the_scenario(tmp_path):
+    import shutil
+    import warnings
+
+    from inskit.errors import ConfigError
+
+    src = Path(__file__).resolve().parent / "data" / "gnss" / "gnss_1730.nav"
+    if not src.exists():
+        pytest.skip(f"{src} is missing")
+    (tmp_path / "eph").mkdir()
+    shutil.copy(src, tmp_path / "eph" / "walk.nav")
+    walk = "lat_deg = 40.0966\nlon_deg = -105.1474"     # where the walk was logged
+    sc = _scenario(tmp_path, "[raw_gnss]\nconstellation = \"nav:eph/walk.nav\"\n"
+                             "start_utc = \"2025-08-28T17:30:21\"\n", where=walk)
+    assert sc.raw_gnss.constellation == f"nav:{tmp_path / 'eph' / 'walk.nav'}"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")   # the file's SBAS/BeiDou records are skipped with a warning
+        sim = simulate(sc, seed=1)
+        assert set(sim.raw.sats) == {"G10", "G23", "G27", "G32"} and (sim.raw.n_visible == 4).all()
+        late = _scenario(tmp_path, "[raw_gnss]\nconstellation = \"nav:eph/walk.nav\"\n", "late.toml", walk)
+        with pytest.raises(ConfigError, match="outside the file's validity"):
+            simulate(late, seed=1)
+
+
+@pytest.mark.parametrize("name", ["car_raw", "tc_blockage"])
+def test_raw_examples_load(name):
+    sc = load_scenario(Path(__file__).resolve().parents[1] / "examples" / f"{name}.toml")
+    assert sc.raw_gnss is not None and sc.raw_gnss.constellation == "walker-gps"
+    if name == "tc_blockage":
+        assert [(b.start_s, b.end_s, b.keep) for b in sc.raw_gnss.blockage] == \
+            [(150.0, 270.0, 3), (360.0, 480.0, 2), (570.0, 690.0, 1)]
+        assert [tuple(o) for o in sc.gnss.outages_s] == [(150.0, 270.0), (360.0, 480.0), (570.0, 690.0)]

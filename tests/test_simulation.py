@@ -53,3 +53,18 @@ def test_increments_converge_with_quadrature_order():
     b = ideal_imu(TRAJ, t, nodes=8)
     assert np.abs(a.dtheta_b - b.dtheta_b).max() < 1e-15
     assert np.abs(a.dv_b - b.dv_b).max() < 1e-13
+
+
+def test_segment_trajectory_continues_smoothly_just_before_time_zero():
+    """Raw GNSS receives at true times earlier than the first receiver tag by the clock offset
+    (~0.1 ms): the trajectory there is the smooth continuation, position the integral of velocity."""
+    from inskit.simulation.segments import SegmentTrajectory
+
+    tr = SegmentTrajectory((np.radians(40.0), np.radians(-105.0), 1600.0), 0.3, 0.0, 2.0)
+    tr.static(10.0).accelerate(10.0, 5.0).cruise(10.0)
+    tr.vibration("down", 0.001, 9.0)
+    t = np.array([-1e-3, -1e-4, 0.0])
+    k = tr.kinematics(t)
+    d = earth.lla_to_ned(k.lla, k.lla[2])
+    np.testing.assert_allclose(d, k.v_n[2] * t[:, None], atol=1e-7)   # jerk term (w^3 A t^3 / 6) 3e-8 m
+    assert np.isfinite(k.C_nb).all()

@@ -3,6 +3,7 @@ simulator's self-check (its ideal IMU mechanized against its truth)."""
 
 from __future__ import annotations
 
+import dataclasses
 from pathlib import Path
 
 import numpy as np
@@ -15,20 +16,74 @@ from ..simulation.scenario import Scenario, Simulation, build_trajectory
 
 
 def write_simulation(sim: Simulation, out_dir, *, overwrite=False, plot=True):
-    """Write ``imu.csv`` (increments), ``gnss.csv``, ``truth.csv`` and a plot."""
+    """Write ``imu.csv`` (increments), ``gnss.csv``, ``truth.csv`` and a plot.
+
+    With raw GNSS observations (``sim.raw``) also ``obs.rnx`` and ``nav.rnx``
+    (RINEX 3.04) and ``raw_truth.csv``, and then every time column of the
+    CSV files is GPS seconds of week (the scenario's start second of week
+    plus scenario time), the time scale of the RINEX epochs, as in a real
+    receiver and IMU log.  Without raw GNSS the times are scenario seconds.
+    """
     out = Path(out_dir)
     files = [out / "imu.csv", out / "gnss.csv", out / "truth.csv"]
+    if sim.raw is not None:
+        files += [out / "obs.rnx", out / "nav.rnx", out / "raw_truth.csv"]
     if not overwrite:
         for f in files:
             if f.exists():
                 raise InputError(f"{f}: already exists; refusing to overwrite it (use --force)")
     out.mkdir(parents=True, exist_ok=True)
-    io.write_imu(files[0], sim.imu, overwrite=True)
-    io.write_gnss(files[1], sim.gnss, overwrite=True)
-    io.write_solution(files[2], sim.truth, overwrite=True)
+    imu, gnss, truth = sim.imu, sim.gnss, sim.truth
+    if sim.raw is not None:
+        sow0 = raw_start_sow(sim)
+        imu = dataclasses.replace(imu, time=imu.time + sow0)
+        gnss = dataclasses.replace(gnss, time=gnss.time + sow0)
+        truth = dataclasses.replace(truth, time=truth.time + sow0)
+    io.write_imu(files[0], imu, overwrite=True)
+    io.write_gnss(files[1], gnss, overwrite=True)
+    io.write_solution(files[2], truth, overwrite=True)
+    if sim.raw is not None:
+        _write_raw(sim, files[3], files[4], files[5])
     if plot:
         files.append(_plot(sim, out / "scenario.png"))
     return files
+
+
+def raw_start_sow(sim: Simulation) -> float:
+    """GPS seconds of week of scenario time 0 of a simulation with raw GNSS."""
+    from ..gnss.time import week_sow
+
+    return float(week_sow(sim.raw.t0_gps)[1])
+
+
+def _write_raw(sim, obs_path, nav_path, truth_path):
+    from ..files import write_csv
+    from ..gnss.rinex_write import write_nav, write_obs
+    from ..gnss.time import week_sow
+
+    raw, sc = sim.raw, sim.scenario
+    week, sow0 = week_sow(raw.t0_gps)
+    r = sc.raw_gnss
+    comments = [f"inskit simulate: scenario {sc.name}",
+                f"constellation {r.constellation}"[:60],
+                f"scenario time 0 = GPS week {int(week)} {float(sow0):.3f} s",
+                "time tags: receiver clock (offset in raw_truth.csv)",
+                (f"iono: Klobuchar x {r.iono_scale:g}; tropo: "
+                 f"{'Saastamoinen' if r.troposphere else 'none'}")]
+    write_obs(obs_path, time=raw.time, sats=raw.sats, obs=raw.obs, lli=raw.lli, approx_position_e=raw.r_e[0],
+              header_comments=comments, interval_s=1.0 / r.rate_hz, marker_name=sc.name[:60])
+    write_nav(nav_path, raw.nav, iono_alpha=raw.iono_alpha, iono_beta=raw.iono_beta,
+              header_comments=[f"inskit simulate: scenario {sc.name}"[:60], f"constellation {r.constellation}"[:60]])
+    write_csv(truth_path, {
+        "time_s": week_sow(raw.time)[1],
+        "true_time_s": float(sow0) + (raw.t_sim - raw.clock_bias_s),   # full precision (not via 1.4e9 s floats)
+        "clock_bias_s": raw.clock_bias_s,
+        "clock_drift_s_s": raw.clock_drift_s_s,
+        "n_visible": raw.n_visible,
+        "n_blocked": raw.blocked.sum(axis=1),
+        "x_e_m": raw.r_e[:, 0], "y_e_m": raw.r_e[:, 1], "z_e_m": raw.r_e[:, 2],
+        "vx_e_m_s": raw.v_e[:, 0], "vy_e_m_s": raw.v_e[:, 1], "vz_e_m_s": raw.v_e[:, 2],
+    }, float_format="%.15g")
 
 
 def _plot(sim, path):

@@ -4,15 +4,22 @@ A scenario names a start, an IMU (rate, grade preset, overrides), a GNSS
 receiver model, optional vibration and a list of ``[[segment]]`` tables; see
 ``examples/*.toml``.  Units at this edge are degrees, deg/s, micro-g and the
 like; everything is converted to SI here.
+
+An optional ``[raw_gnss]`` table adds raw GNSS observations (pseudorange,
+carrier phase, Doppler, C/N0 of a synthetic or real constellation,
+:mod:`.gnss_raw`) on a GPS time scale; the simulate job then writes them as
+RINEX 3 files and puts every CSV time column on GPS seconds of week.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from datetime import datetime
+from pathlib import Path
 from typing import Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from ..config_files import read_toml, validation_message
 from ..errors import ConfigError
@@ -83,6 +90,72 @@ class SegmentSpec(_S):
     repeat: int = Field(1, ge=1)
 
 
+#: Default start of raw GNSS scenarios: GPS week 2374, 243240 s of week = Tuesday
+#: 2025-07-08 19:34:00 GPS time (the day of the rtklibexplorer drive_0708 log).
+RAW_GNSS_DEFAULT_WEEK = 2374
+RAW_GNSS_DEFAULT_SOW_S = 243240.0
+#: GPS - UTC [s] since 2017-01-01 (IERS Bulletin C 52; no leap second announced since).
+_GPS_MINUS_UTC_S = 18.0
+_GPS_MINUS_UTC_SINCE = datetime(2017, 1, 1)
+
+
+class BlockageSpec(_S):
+    start_s: float = Field(..., ge=0, description="window start [s of scenario time]")
+    end_s: float = Field(..., gt=0, description="window end [s of scenario time]")
+    keep: int = Field(0, ge=0, le=99, description="satellites left in view: the highest above the mask")
+    sats: list[str] = Field(default_factory=list,
+                            description="satellites left in view (those above the mask), instead of `keep`")
+
+    @model_validator(mode="after")
+    def _order(self):
+        if not self.end_s > self.start_s:
+            raise ValueError(f"end_s ({self.end_s}) must come after start_s ({self.start_s})")
+        return self
+
+
+class RawGnssSection(_S):
+    enabled: bool = Field(True, description="simulate raw observations")
+    start_utc: str | None = Field(None, description="ISO date-time (UTC) of scenario time 0, from 2017-01-01")
+    start_gps_week: int | None = Field(None, ge=0, description="GPS week of scenario time 0 (with start_sow_s)")
+    start_sow_s: float | None = Field(None, ge=0, lt=604800, description="GPS seconds of week of scenario time 0")
+    rate_hz: float = Field(1.0, gt=0, le=100, description="observation rate [Hz]")
+    constellation: str = Field("walker-gps", description="'walker-gps', 'walker-galileo', 'walker-gps+galileo' "
+                               "or 'nav:PATH' (a RINEX navigation file, relative to the scenario file)")
+    mask_deg: float = Field(10.0, ge=-5, lt=90, description="elevation mask [deg]")
+    code_sigma_m: float = Field(0.5, ge=0, description="zenith white code noise [m] (/ sin el)")
+    phase_sigma_m: float = Field(0.003, ge=0, description="zenith white phase noise [m] (/ sin el)")
+    doppler_sigma_m_s: float = Field(0.05, ge=0, description="zenith white Doppler noise [m/s] (/ sin el)")
+    multipath_sigma_m: float = Field(0.3, ge=0, description="zenith code multipath sigma [m] (/ sin el)")
+    multipath_tau_s: float = Field(30.0, gt=0, description="multipath correlation time [s]")
+    clock_bias_us: float = Field(100.0, description="initial receiver clock offset [us]")
+    clock_drift_ppm: float = Field(0.1, description="initial receiver clock drift [ppm = 1e-6 s/s]")
+    clock_h0: float = Field(2e-19, ge=0, description="white frequency noise h0 [s] (TCXO default)")
+    clock_h_2: float = Field(2e-20, ge=0, description="random-walk frequency noise h_-2 [1/s] (TCXO default)")
+    clock_jumps: bool = Field(False, description="keep |offset| <= 0.5 ms by whole-millisecond clock steps")
+    iono_scale: float = Field(1.0, ge=0, description="factor on the Klobuchar delay (1: the broadcast model)")
+    iono_alpha: tuple[float, float, float, float] | None = Field(
+        None, description="Klobuchar alpha [s, s/sc, s/sc^2, s/sc^3]; default the nav file's or RTKLIB's")
+    iono_beta: tuple[float, float, float, float] | None = Field(
+        None, description="Klobuchar beta [s, s/sc, s/sc^2, s/sc^3]; default the nav file's or RTKLIB's")
+    troposphere: bool = Field(True, description="Saastamoinen tropospheric delay")
+    dual_frequency: bool = Field(False, description="add GPS L2 P(Y) (C2W...) and Galileo E5b (C7Q...)")
+    cn0_zenith_dbhz: float = Field(48.0, gt=0, description="C/N0 at zenith [dB-Hz]")
+    cn0_horizon_dbhz: float = Field(34.0, gt=0, description="C/N0 at the horizon [dB-Hz]")
+    blockage: list[BlockageSpec] = Field(default_factory=list, description="blockage windows")
+
+    @model_validator(mode="after")
+    def _start(self):
+        if self.start_utc is not None and (self.start_gps_week is not None or self.start_sow_s is not None):
+            raise ValueError("give start_utc or start_gps_week + start_sow_s, not both")
+        if (self.start_gps_week is None) != (self.start_sow_s is None):
+            raise ValueError("start_gps_week and start_sow_s go together")
+        if not (self.constellation in ("walker-gps", "walker-galileo", "walker-gps+galileo")
+                or self.constellation.startswith("nav:")):
+            raise ValueError(f"constellation {self.constellation!r}: use 'walker-gps', 'walker-galileo', "
+                             "'walker-gps+galileo' or 'nav:PATH'")
+        return self
+
+
 class Scenario(_S):
     name: str
     description: str = ""
@@ -90,17 +163,26 @@ class Scenario(_S):
     start: StartSpec
     imu: ImuSpec = ImuSpec()
     gnss: GnssSpec = GnssSpec()
+    raw_gnss: RawGnssSection | None = None
     vibration: list[VibrationSpec] = Field(default_factory=list)
     segment: list[SegmentSpec]
 
 
 def load_scenario(path) -> Scenario:
-    """Read and validate a scenario file."""
+    """Read and validate a scenario file (a ``nav:PATH`` constellation is
+    resolved relative to the file's folder)."""
     data = read_toml(path, "scenario")
     try:
-        return Scenario.model_validate(data)
+        sc = Scenario.model_validate(data)
     except ValidationError as exc:
         raise ConfigError(validation_message(path, exc)) from None
+    raw = sc.raw_gnss
+    if raw is not None and raw.constellation.startswith("nav:"):
+        nav = Path(raw.constellation[4:]).expanduser()
+        if not nav.is_absolute():
+            nav = Path(path).resolve().parent / nav
+        raw.constellation = f"nav:{nav}"
+    return sc
 
 
 def _need(seg, i, *names):
@@ -172,6 +254,94 @@ def gnss_errors(sc: Scenario) -> GnssErrors:
                       tuple(tuple(o) for o in g.outages_s), g.outlier_probability, g.outlier_sigma_m)
 
 
+def raw_gnss_spec(sc: Scenario):
+    """The :class:`.gnss_raw.RawGnssSpec` of a scenario's ``[raw_gnss]``
+    table (SI units; Klobuchar coefficients still to be chosen: see
+    :func:`simulate_raw_gnss`)."""
+    from .gnss_raw import Blockage, ClockModel, RawGnssSpec
+
+    r = sc.raw_gnss
+    clock = ClockModel(r.clock_bias_us * 1e-6, r.clock_drift_ppm * 1e-6, r.clock_h0, r.clock_h_2, r.clock_jumps)
+    blockage = tuple(Blockage(b.start_s, b.end_s, b.keep, tuple(b.sats)) for b in r.blockage)
+    return RawGnssSpec(mask_rad=r.mask_deg * DEG, code_sigma_m=r.code_sigma_m, phase_sigma_m=r.phase_sigma_m,
+                       doppler_sigma_m_s=r.doppler_sigma_m_s, multipath_sigma_m=r.multipath_sigma_m,
+                       multipath_tau_s=r.multipath_tau_s, clock=clock, iono_scale=r.iono_scale,
+                       troposphere=r.troposphere, dual_frequency=r.dual_frequency,
+                       lever_arm_b_m=tuple(sc.gnss.lever_arm_b_m), blockage=blockage,
+                       cn0_zenith_dbhz=r.cn0_zenith_dbhz, cn0_horizon_dbhz=r.cn0_horizon_dbhz)
+
+
+def raw_gnss_start(sc: Scenario, duration_s):
+    """GPS week and seconds of week of scenario time 0, checked so that the
+    scenario (plus 1 s of clock offset margin) ends inside the same GPS week:
+    then GPS seconds of week are one continuous time scale for every file."""
+    from ..gnss.time import from_week_sow, gps_seconds, week_sow
+
+    r = sc.raw_gnss
+    if r.start_utc is not None:
+        try:
+            d = datetime.fromisoformat(r.start_utc)
+        except ValueError:
+            raise ConfigError(f"raw_gnss.start_utc: {r.start_utc!r} is not an ISO date-time such as "
+                              "'2025-07-08T19:33:42'") from None
+        if d.tzinfo is not None:
+            if d.utcoffset().total_seconds() != 0:
+                raise ConfigError(f"raw_gnss.start_utc: {r.start_utc!r} must be UTC")
+            d = datetime(d.year, d.month, d.day, d.hour, d.minute, d.second, d.microsecond)
+        if d < _GPS_MINUS_UTC_SINCE:
+            raise ConfigError(f"raw_gnss.start_utc: {r.start_utc} is before 2017-01-01, when GPS - UTC was not "
+                              f"{_GPS_MINUS_UTC_S:.0f} s; give start_gps_week and start_sow_s instead")
+        week, sow = week_sow(gps_seconds(d.year, d.month, d.day, d.hour, d.minute,
+                                         d.second + d.microsecond * 1e-6 + _GPS_MINUS_UTC_S))
+        week, sow = int(week), float(sow)
+    elif r.start_gps_week is not None:
+        week, sow = int(r.start_gps_week), float(r.start_sow_s)
+    else:
+        week, sow = RAW_GNSS_DEFAULT_WEEK, RAW_GNSS_DEFAULT_SOW_S
+    if sow + duration_s + 1.0 >= 604800.0:
+        raise ConfigError(f"raw_gnss: the scenario ({duration_s:.0f} s) starting at GPS week {week}, {sow:.0f} s of "
+                          "week would run past the end of the week (seconds of week would jump back to 0); start "
+                          f"at start_sow_s <= {604800.0 - duration_s - 1.0:.0f}")
+    return week, sow, from_week_sow(week, sow)
+
+
+def simulate_raw_gnss(sc: Scenario, trajectory, seed):
+    """Raw GNSS observations of a scenario (:func:`.gnss_raw.simulate_raw`).
+
+    The draws come from a child of ``numpy.random.SeedSequence(seed)``, not
+    from the generator of the other draws: adding ``[raw_gnss]`` changes no
+    IMU or GNSS-fix number, and the raw observations do not depend on the
+    IMU settings.  Epochs are the receiver tags ``0, 1/rate, ...`` up to
+    the scenario's end.  Klobuchar coefficients: ``iono_alpha/beta`` if
+    given, else the navigation file's (``nav:PATH``), else RTKLIB's
+    default set (:data:`inskit.gnss.atmosphere.KLOBUCHAR_DEFAULT_ALPHA`),
+    rounded to the 5 digits of the RINEX header.
+    """
+    import dataclasses
+
+    from ..gnss.atmosphere import KLOBUCHAR_DEFAULT_ALPHA, KLOBUCHAR_DEFAULT_BETA
+    from ..gnss.rinex_write import iono_precision
+    from .constellation import constellation_from_nav, walker_constellation
+    from .gnss_raw import simulate_raw
+
+    r = sc.raw_gnss
+    rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0])
+    duration = trajectory.duration
+    _, _, t0 = raw_gnss_start(sc, duration)
+    t_sim = np.arange(0.0, duration + 1e-9, 1.0 / r.rate_hz)
+    if r.constellation.startswith("nav:"):
+        nav = constellation_from_nav(r.constellation[4:], t0, t0 + duration)
+    else:
+        nav = walker_constellation(r.constellation, t0 - 1.0, t0 + duration + 1.0, rng)
+    alpha = r.iono_alpha if r.iono_alpha is not None else (
+        nav.iono_alpha if nav.iono_alpha is not None else KLOBUCHAR_DEFAULT_ALPHA)
+    beta = r.iono_beta if r.iono_beta is not None else (
+        nav.iono_beta if nav.iono_beta is not None else KLOBUCHAR_DEFAULT_BETA)
+    spec = dataclasses.replace(raw_gnss_spec(sc), iono_alpha=tuple(iono_precision(alpha)),
+                               iono_beta=tuple(iono_precision(beta)))
+    return simulate_raw(trajectory, t_sim, t0_gps=t0, nav=nav, spec=spec, rng=rng)
+
+
 @dataclass
 class Simulation:
     scenario: Scenario
@@ -181,6 +351,8 @@ class Simulation:
     imu: ImuData
     gnss: GnssData
     draws: dict
+    #: raw GNSS observations (:class:`.gnss_raw.RawSimulation`) when the scenario has ``[raw_gnss]``
+    raw: object = None
 
 
 def simulate(sc: Scenario, seed=0, *, truth_rate_hz=None, progress=None) -> Simulation:
@@ -188,6 +360,8 @@ def simulate(sc: Scenario, seed=0, *, truth_rate_hz=None, progress=None) -> Simu
 
     One ``numpy.random.default_rng(seed)`` feeds every draw in a fixed order,
     so the same seed gives the same numbers (and byte-identical files).
+    Raw GNSS observations (``[raw_gnss]``) draw from their own child
+    generator (:func:`simulate_raw_gnss`).
     """
     rng = np.random.default_rng(seed)
     tr = build_trajectory(sc, rng)
@@ -205,4 +379,7 @@ def simulate(sc: Scenario, seed=0, *, truth_rate_hz=None, progress=None) -> Simu
         raise ConfigError(f"the truth rate must be > 0 Hz, got {truth_rate_hz}")
     tt = t if truth_rate_hz is None else np.arange(0.0, tr.duration + 1e-9, 1.0 / truth_rate_hz)
     truth = truth_solution(tr, tt, with_rates=True)
-    return Simulation(sc, tr, truth, ideal, imu, gnss, draws)
+    raw = None
+    if sc.raw_gnss is not None and sc.raw_gnss.enabled:
+        raw = simulate_raw_gnss(sc, tr, seed)
+    return Simulation(sc, tr, truth, ideal, imu, gnss, draws, raw)
