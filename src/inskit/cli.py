@@ -408,8 +408,8 @@ def schemes(scenario_file, outage, seed, as_json):
 @click.argument("imu_file", type=click.Path(dir_okay=False))
 @click.option("--lat", "lat_deg", type=float, required=True, help="Latitude [deg].")
 @click.option("--method", type=click.Choice(["accel", "gyro", "blend", "fine"]), default="blend", show_default=True)
-@click.option("--m", "m_gain", type=float, help="Blending gain for --method blend (default: chosen for the IMU's "
-              "own static noise by the GA).")
+@click.option("--m", "m_gain", type=float, help="Blending gain for --method blend (default: chosen by the GA for "
+              "the noise and the bias priors).")
 @click.option("--start", "t_start", type=float, help="Start of the static interval [s] (default: the log start).")
 @click.option("--end", "t_end", type=float, help="End of the static interval [s] (default: detected).")
 @click.option("--imu-format", type=click.Choice(["inskit", "rtklibexplorer"]), default="inskit", show_default=True)
@@ -557,7 +557,7 @@ from .cli_gnss import register as _register_gnss  # noqa: E402
 _register_gyrofree(cli, reproduce)
 cli.add_command(_platform_group, "platform")
 reproduce.add_command(_reproduce_integration_filters, "integration-filters")
-_register_gnss(cli)
+_register_gnss(cli, reproduce)
 
 
 def main(argv=None):

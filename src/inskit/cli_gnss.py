@@ -72,9 +72,30 @@ def spp(obs, nav, reference, mask_deg, iono, tropo, systems, no_raim, out_dir, f
     _emit(res, as_json, _table(res))
 
 
-def register(cli_group):
-    """Add ``spp`` to the main command group."""
+@click.command("tight-coupling")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Folder for the figures "
+              "(and the simulated blockage drive's files).")
+@click.option("--experiment", type=click.Choice(["walk", "blockage", "all"]), default="all", show_default=True)
+@click.option("--seed", type=int, default=1, show_default=True, help="Seed of the simulated blockage drive.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
+def reproduce_tight(out_dir, experiment, seed, as_json):
+    """Tight against loose coupling (source 000: tight coupling works with
+    fewer than four satellites): the bundled walk_0827 raw log against its RTK
+    track, and a simulated drive through blockages keeping 3, 2 and 1
+    satellites."""
+    from .jobs.reproduce_tight import run
+
+    exps = ("walk", "blockage") if experiment == "all" else (experiment,)
+    res, text = run(out_dir, exps, seed=seed, log=_log)
+    _emit(res, as_json, text + "\nfigures: " + ", ".join(res["files"]))
+
+
+def register(cli_group, reproduce_group=None):
+    """Add ``spp`` to the main command group (and ``tight-coupling`` to
+    ``reproduce``)."""
     cli_group.add_command(spp)
+    if reproduce_group is not None:
+        reproduce_group.add_command(reproduce_tight)
 
 
-__all__ = ["register", "spp"]
+__all__ = ["register", "reproduce_tight", "spp"]

@@ -169,7 +169,8 @@ class FilterOutput(Track):
     ----------
     counts : dict
         Per measurement name: ``{"used": n, "rejected": n, "skipped": n}``
-        (``rejected`` counts updates with at least one rejected row).
+        (``rejected`` counts updates with at least one rejected row); a
+        measurement gated per row adds ``rows`` and ``rows_rejected``.
     innovations : dict
         Per measurement name: arrays ``t``, ``nu`` (m, k), ``sigma`` (m, k),
         ``nis``, ``accepted``.
@@ -397,6 +398,9 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             nu_all = s_all = None
             if gate is not None and getattr(meas, "gating", "vector") == "row":
                 keep, s_rows = gate_rows(P, nu, H, R, gate)
+                c_m = counts[meas.name]
+                c_m["rows"] = c_m.get("rows", 0) + len(keep)
+                c_m["rows_rejected"] = c_m.get("rows_rejected", 0) + int((~keep).sum())
                 if not keep.all():  # record the whole vector; update with the rows that pass
                     counts[meas.name]["rejected"] += 1
                     nu_all, s_all = nu, s_rows

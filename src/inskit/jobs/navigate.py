@@ -206,8 +206,16 @@ def clock_blocks(cfg: NavigateConfig, raw: RawGnss, initial: NavState, lever, us
     ref = systems[0]
     sub = _rows(tb, (ep == e0) & (sys == ref))
     bias, drift, n = clock_from_ranges(sub, e0, r_a, v_a)
+    source = "ranges at the initial position"
+    s = raw.spp
+    if ref in tuple(s.systems) and np.isfinite(s.r_e[e0]).all():  # single-point's clock, when it solved that epoch
+        b_spp = float(np.asarray(s.clock_m)[e0, list(s.systems).index(ref)])
+        if np.isfinite(b_spp):
+            bias, source = b_spp, "single-point solution"
+            d_spp = float(np.asarray(s.clock_drift_m_s)[e0])
+            drift = d_spp if np.isfinite(d_spp) else drift
     if not np.isfinite(bias):
-        bias, drift = 0.0, 0.0
+        bias, drift, source = 0.0, 0.0, "none (no range at the start)"
     drift = 0.0 if not np.isfinite(drift) else drift
     blocks = [ReceiverClock(sigma0=(30.0 + 3.0 * float(max(cfg.init.sigma_pos_m, 1.0)), 2.0),
                             h0=cfg.gnss.clock_h0, h_2=cfg.gnss.clock_h_2, estimate0=(bias, drift))]
@@ -218,7 +226,8 @@ def clock_blocks(cfg: NavigateConfig, raw: RawGnss, initial: NavState, lever, us
             sub = _rows(tb, (ep == e_s[0]) & (sys == s))
             b_s, _, _ = clock_from_ranges(sub, int(e_s[0]), r_a, v_a)
         blocks.append(SystemTimeOffset(s, sigma0=100.0, estimate0=0.0 if not np.isfinite(b_s) else b_s - bias))
-    return blocks, {"bias_m": bias, "drift_m_s": drift, "satellites": n, "epoch_index": e0, "systems": systems}
+    return blocks, {"bias_m": bias, "drift_m_s": drift, "from": source, "satellites": n, "epoch_index": e0,
+                    "systems": systems}
 
 
 def _rows(tb, m):
@@ -498,7 +507,8 @@ def health(out, gaps=()) -> dict:
 
     *Unhealthy* when any of these holds (each reason is listed):
 
-    * more than 5 % of a measurement's updates rejected;
+    * more than 5 % of a measurement's updates rejected (of its rows, for a
+      measurement gated row by row, such as one row per satellite);
     * a measurement's mean NIS above 3 times its degrees of freedom (the
       filter is overconfident by more than sqrt(3) in sigma; a consistent
       filter averages 1 per degree of freedom);
@@ -529,7 +539,12 @@ def health(out, gaps=()) -> dict:
         frac = c["rejected"] / n_upd if n_upd else 0.0
         mean_nis = float(nis.mean()) if len(nis) else None
         per[name] = {"updates": n_upd, "rejected_fraction": frac, "mean_nis": mean_nis, "dof": dof}
-        if frac > HEALTH_MAX_REJECTED_FRACTION:
+        if c.get("rows"):  # gated row by row (one satellite each): judge the rows
+            frac = c["rows_rejected"] / c["rows"]
+            per[name].update(rows=c["rows"], rows_rejected=c["rows_rejected"], rejected_row_fraction=frac)
+            if frac > HEALTH_MAX_REJECTED_FRACTION:
+                reasons.append(f"{name}: {c['rows_rejected']} of {c['rows']} rows rejected ({frac:.0%})")
+        elif frac > HEALTH_MAX_REJECTED_FRACTION:
             reasons.append(f"{name}: {c['rejected']} of {n_upd} updates rejected ({frac:.0%})")
         if mean_nis is not None and dof:
             if mean_nis > HEALTH_MAX_MEAN_NIS_PER_DOF * dof:
