@@ -217,6 +217,9 @@ def clock_blocks(cfg: NavigateConfig, raw: RawGnss, initial: NavState, lever, us
     if not np.isfinite(bias):
         bias, drift, source = 0.0, 0.0, "none (no range at the start)"
     drift = 0.0 if not np.isfinite(drift) else drift
+    # the estimate starts at the initial time, which may lie before or after that epoch: carry it by the drift
+    t_e0 = float(t[np.argmax(ok)])
+    bias += drift * (initial.time - t_e0)
     blocks = [ReceiverClock(sigma0=(30.0 + 3.0 * float(max(cfg.init.sigma_pos_m, 1.0)), 2.0),
                             h0=cfg.gnss.clock_h0, h_2=cfg.gnss.clock_h_2, estimate0=(bias, drift))]
     for s in systems[1:]:
@@ -618,6 +621,36 @@ def clear_previous_run(out_dir: Path) -> list:
     return removed
 
 
+def write_innovations(innovations: dict, path) -> Path:
+    """Every innovation row of a run as one table (``measurement, t, row, nu,
+    sigma, nis, accepted``): one line per component (a satellite, an axis),
+    built with array operations."""
+    from ..files import write_csv
+
+    cols = {k: [] for k in ("measurement", "t", "row", "nu", "sigma", "nis", "accepted")}
+    for name, v in innovations.items():
+        t = np.asarray(v.get("t", []), float)
+        if not len(t):
+            continue
+        nu, sg = v["nu"], v["sigma"]
+        if nu.dtype == object:
+            k = np.asarray(v["dof"], np.int64)
+            nu_f, sg_f = np.concatenate(list(nu)), np.concatenate(list(sg))
+        else:
+            k = np.full(len(t), nu.shape[1], np.int64)
+            nu_f, sg_f = nu.reshape(-1), sg.reshape(-1)
+        starts = np.repeat(np.cumsum(k) - k, k)
+        cols["measurement"].append(np.full(len(nu_f), name, dtype=object))
+        cols["t"].append(np.repeat(t, k))
+        cols["row"].append(np.arange(len(nu_f)) - starts)
+        cols["nu"].append(nu_f)
+        cols["sigma"].append(sg_f)
+        cols["nis"].append(np.repeat(np.asarray(v["nis"], float), k))
+        cols["accepted"].append(np.repeat(np.asarray(v["accepted"], bool), k).astype(int))
+    data = {c: (np.concatenate(v) if v else np.empty(0)) for c, v in cols.items()}
+    return write_csv(path, data, "%.10g")
+
+
 def write_outputs(res: NavigateResult, out_dir: Path, s: dict) -> list:
     """Solution CSVs and plots into ``out_dir``, each written whole or not at
     all, then ``summary.json`` last (with the list of files), as the mark of a
@@ -629,6 +662,9 @@ def write_outputs(res: NavigateResult, out_dir: Path, s: dict) -> list:
     if res.smoothed is not None:
         io.write_solution(out_dir / "solution_smoothed.csv", res.smoothed.solution, overwrite=True)
         files.append(out_dir / "solution_smoothed.csv")
+    files.append(write_innovations(res.forward.innovations, out_dir / "innovations.csv"))
+    files.append(write_text(out_dir / "config_used.json",
+                            res.config.model_dump_json(indent=2, exclude={"base_dir"})))
     if res.config.output.plots:
         from .plots import plot_all
 
