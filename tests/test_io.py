@@ -224,3 +224,18 @@ def test_an_infinite_cell_is_named_without_numpy_repr(tmp_path):
     with pytest.raises(InputError, match=r"line 4: column 'gyro_x_deg_s' has inf; expected a finite number") as exc:
         io.read_imu(p)
     assert "np." not in str(exc.value)
+
+
+def test_read_speed_reads_and_refuses_kmh_and_time_going_back(tmp_path):
+    p = write(tmp_path, "odo.csv", "time_s,speed_m_s\n0.0,0.0\n0.1,12.5\n0.2,-1.0\n")
+    t, v = io.read_speed(p)
+    assert t.tolist() == [0.0, 0.1, 0.2] and v.tolist() == [0.0, 12.5, -1.0]
+    p = write(tmp_path, "kmh.csv", "time_s,speed_m_s\n0.0,0.0\n0.1,160.0\n")
+    with pytest.raises(InputError, match=r"kmh\.csv: line 3: column 'speed_m_s' holds 160\.0, above 150 m/s"):
+        io.read_speed(p)
+    p = write(tmp_path, "back.csv", "time_s,speed_m_s\n0.0,0.0\n-0.1,1.0\n")
+    with pytest.raises(InputError, match=r"back\.csv"):
+        io.read_speed(p)
+    p = write(tmp_path, "cols.csv", "time_s,v\n0.0,0.0\n")
+    with pytest.raises(InputError, match=r"cols\.csv.*speed_m_s"):
+        io.read_speed(p)

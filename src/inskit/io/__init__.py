@@ -11,7 +11,8 @@ reads and raises :class:`~inskit.errors.InputError` with the file, the line or
 column, and what was expected.
 """
 
-from .csv_formats import (
+from .csv_formats import (  # noqa: I001
+    read_speed,
     read_gnss,
     read_imu,
     read_solution,
@@ -20,4 +21,4 @@ from .csv_formats import (
     write_solution,
 )
 
-__all__ = ["read_gnss", "read_imu", "read_solution", "write_gnss", "write_imu", "write_solution"]
+__all__ = ["read_gnss", "read_imu", "read_solution", "read_speed", "write_gnss", "write_imu", "write_solution"]

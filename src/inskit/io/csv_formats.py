@@ -362,3 +362,23 @@ def write_solution(path, sol: NavSolution, *, overwrite=False):
         c = df.columns[df.isna().any()][0]
         raise InputError(f"{path}: refusing to write a NaN (column '{c}'); the solution is invalid")
     write_csv(path, df, "%.15g")
+
+
+def read_speed(path):
+    """Read an odometer / wheel-speed log: columns ``time_s, speed_m_s``
+    (speed along the vehicle's forward axis, >= 0 when driving forward;
+    negative values mean reversing and are allowed).
+
+    Returns
+    -------
+    (time, speed) : two (n,) float arrays
+    """
+    path, df = read_table(path)
+    require_columns(path, df, ["time_s", "speed_m_s"], " (an odometer log: time_s, speed_m_s)")
+    a = numeric_columns(path, df, ["time_s", "speed_m_s"])
+    check_time_column(path, a[:, 0])
+    if (np.abs(a[:, 1]) > 150.0).any():
+        i = int(np.argmax(np.abs(a[:, 1]) > 150.0))
+        raise InputError(f"{path}: line {i + 2}: column 'speed_m_s' holds {plain_number(a[i, 1])}, above 150 m/s: "
+                         "km/h or another unit? expected metres per second")
+    return a[:, 0].copy(), a[:, 1].copy()
