@@ -211,7 +211,9 @@ def bench(quick, as_json):
 @click.option("--lever-arm", help="IMU-to-antenna lever arm in body axes [m]: x,y,z.")
 @click.option("--imu-time-offset", type=float, help="Seconds added to the IMU time tags.")
 @click.option("--scheme", type=click.Choice(["closed", "open", "uncoupled"]), help="Integration scheme.")
-@click.option("--outages", type=click.Choice(["none", "rtklibexplorer"]), help="Outage protocol.")
+@click.option("--outages", metavar="SPEC",
+              help="GNSS outages: none, rtklibexplorer or windows:START-END[,START-END...] in seconds after the "
+              "first GNSS epoch (e.g. windows:15-25,30-40); replaces the config's [outages] protocol and windows.")
 @click.option("--smooth", is_flag=True, help="Add the RTS smoother; the summary keys then describe it.")
 @click.option("--calibrate-time-offset", is_flag=True,
               help="First find the IMU time offset that minimises the GNSS innovations, then run with it.")
@@ -221,9 +223,11 @@ def bench(quick, as_json):
 @click.option("--truth", "truth_file", type=click.Path(dir_okay=False),
               help="A truth file (e.g. from inskit simulate): add the errors against it to the summary.")
 @click.option("--strict", is_flag=True, help="Exit with status 3 when the run's health verdict is unhealthy.")
+@click.option("--report", "with_report", is_flag=True, help="Also write report.html, one self-contained page of "
+              "the run (as `inskit report`).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_arm, imu_time_offset, scheme, outages,
-             smooth, calibrate_time_offset, out_dir, force, no_plots, truth_file, strict, as_json):
+             smooth, calibrate_time_offset, out_dir, force, no_plots, truth_file, strict, with_report, as_json):
     """INS/GNSS integration from a TOML config file or flags."""
     from .jobs import config as C
     from .jobs import navigate as N
@@ -249,8 +253,8 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
         over.setdefault("gnss", {})["lever_arm_b_m"] = la
     if scheme:
         over.setdefault("filter", {})["scheme"] = scheme
-    if outages:
-        over.setdefault("outages", {})["protocol"] = outages
+    if outages is not None:
+        over.setdefault("outages", {}).update(C.outages_from_spec(outages))
     if no_plots:
         over.setdefault("output", {})["plots"] = False
     if config_file:
@@ -261,7 +265,7 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
         cfg = C.config_from_dict({}, base_dir=Path.cwd(), source="flags", overrides=over)
     from .files import check_folder_writable, same_file
 
-    target = Path(out_dir) if out_dir else (Path(cfg.output.dir) if cfg.output.dir else Path("out") / cfg.name)
+    target = Path(out_dir) if out_dir else (cfg.resolve(cfg.output.dir) if cfg.output.dir else Path("out") / cfg.name)
     if target.exists() and any(target.iterdir()) and not force:
         raise InputError(f"{target}: already holds results; refusing to overwrite them (use --force or --out)")
     for name in ("solution_forward.csv", "solution_smoothed.csv", "summary.json"):
@@ -292,6 +296,12 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
     if force:
         N.clear_previous_run(target)
     files = N.write_outputs(res, target, s)
+    if with_report:
+        from .jobs.report import build_report
+
+        rep = build_report(target)
+        s["report"] = rep["report"]
+        files.append(Path(rep["report"]))
     _log(f"wrote {len(files)} files to {target}/")
     h = s["health"]
     _log(f"health: {h['verdict']}")
@@ -553,11 +563,13 @@ from .cli_gyrofree import register as _register_gyrofree  # noqa: E402
 from .cli_platform import platform as _platform_group  # noqa: E402
 from .cli_platform import reproduce_integration_filters as _reproduce_integration_filters  # noqa: E402
 from .cli_gnss import register as _register_gnss  # noqa: E402
+from .cli_report import register as _register_report  # noqa: E402
 
 _register_gyrofree(cli, reproduce)
 cli.add_command(_platform_group, "platform")
 reproduce.add_command(_reproduce_integration_filters, "integration-filters")
 _register_gnss(cli, reproduce)
+_register_report(cli)
 
 
 def main(argv=None):

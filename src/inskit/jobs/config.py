@@ -1,20 +1,56 @@
 """The ``inskit navigate`` configuration: a validated TOML file.
 
 Units follow datasheets at this edge (deg/sqrt(h), micro-g, degrees) and are
-converted to SI when the filter settings are built.  Relative paths are taken
-relative to the config file.
+converted to SI when the filter settings are built.  Relative paths (the
+input files and ``[output] dir``) are taken relative to the config file.
+
+A key that would be ignored in the configuration it sits in is an error,
+not a silent no-op (:class:`~inskit.errors.ConfigError` naming the key):
+``[outages] windows_s`` without ``protocol = "windows"``, ``keep_satellites``
+without windows or without tight coupling, ``[gnss]`` RINEX and tight-coupling
+keys changed from their defaults where no RINEX is read or no pseudorange is
+fused, loose-coupling keys with tight coupling, ``[init]`` keys of the other
+start-up mode.  The reference of every key is ``docs/config.md``, generated
+from these models by ``python -m inskit.jobs.config_doc --write``.
 """
 
 from __future__ import annotations
 
 import math
+import re
 from pathlib import Path
 from typing import Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic_core import PydanticCustomError
 
 from ..config_files import read_toml, validation_message
-from ..errors import ConfigError
+from ..errors import ConfigError, InputError
+
+#: error type of a consistency rule that names its key (see :func:`_key_error`)
+_KEY_ERROR = "inskit_key"
+
+
+def _key_error(key, text):
+    """A validation error naming ``key`` (relative to the model raising it);
+    :func:`config_from_dict` turns it into ``source: field 'section.key': text``."""
+    return PydanticCustomError(_KEY_ERROR, "{text}", {"key": key, "text": text})
+
+
+def _changed(model, keys):
+    """The keys of ``keys`` whose value differs from the field's default."""
+    fields = type(model).model_fields
+    out = []
+    for k in keys:
+        d = fields[k].get_default(call_default_factory=True)
+        v = getattr(model, k)
+        if isinstance(d, (tuple, list)) and isinstance(v, (tuple, list)):
+            same = list(d) == list(v)
+        else:
+            same = v == d
+        if not same:
+            out.append(k)
+    return out
 
 
 class _Strict(BaseModel):
@@ -22,45 +58,99 @@ class _Strict(BaseModel):
 
 
 class ImuSection(_Strict):
-    file: Path
-    format: Literal["inskit", "rtklibexplorer"] = "inskit"
-    time_offset_s: float = 0.0
-    mount_rpy_deg: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    check_units: bool = True
-    start_s: float | None = Field(None, description="ignore IMU data before this time")
+    """The IMU log and how to read it."""
+
+    file: Path = Field(..., description="IMU log, relative to this config file (plain or .gz)")
+    format: Literal["inskit", "rtklibexplorer"] = Field(
+        "inskit", description="file layout: 'inskit' (our CSV of rates or increments, docs/formats.md) or "
+        "'rtklibexplorer' (the rtklibexplorer GNSS-IMU logs, GPS time tags)")
+    time_offset_s: float = Field(0.0, description="added to every IMU time tag (late tags need a negative "
+                                 "offset; `inskit navigate --calibrate-time-offset` finds it)")
+    mount_rpy_deg: tuple[float, float, float] = Field(
+        (0.0, 0.0, 0.0), description="roll, pitch, yaw (ZYX) of the rotation from the body axes (forward, right, "
+        "down) to the sensor axes; the readings are rotated into body axes")
+    check_units: bool = Field(True, description="refuse a log whose magnitudes betray a wrong unit (e.g. deg/s "
+                              "under a rad/s header; docs/formats.md)")
+    start_s: float | None = Field(None, description="ignore IMU data before this time (IMU time scale, after "
+                                  "time_offset_s; default: the first GNSS epoch)")
     gap_factor: float = Field(5.0, gt=1.0, description="an interval longer than this many median intervals is a gap")
     gap_rate_sigma_deg_s: float = Field(5.0, gt=0, description="unknown rate change assumed over a bridged gap")
     gap_accel_sigma_m_s2: float = Field(1.0, gt=0, description="unknown acceleration change over a bridged gap")
 
 
+#: [gnss] keys that configure the reading and single-point solution of the RINEX files
+GNSS_RINEX_KEYS = ("obs", "nav", "systems", "mask_deg", "iono", "tropo")
+#: [gnss] keys used only when pseudoranges are fused (tight coupling)
+GNSS_TIGHT_KEYS = ("use_doppler", "pseudorange_sigma_scale", "doppler_sigma_scale", "clock_h0", "clock_h_2")
+#: [gnss] keys that describe fixes fused by loose coupling
+GNSS_LOOSE_KEYS = ("use_velocity", "velocity_delay_s", "velocity_sigma_scale", "sigma_floor_m")
+#: [gnss] keys that describe how ``file`` is read
+GNSS_FILE_KEYS = ("format", "quality", "time_offset_s")
+
+
+def _names(keys, section="gnss"):
+    return ", ".join(f"{section}.{k}" for k in keys)
+
+
+def _they(keys, singular, plural):
+    """``singular`` for one key, ``plural`` for several."""
+    return singular if len(keys) == 1 else plural
+
+
 class GnssSection(_Strict):
+    """GNSS input: fixes (loose coupling) or RINEX observations (tight).
+
+    Rules: loose coupling needs ``file`` or ``obs`` + ``nav``; tight coupling
+    needs ``obs`` + ``nav``.  Keys that would be ignored are refused when
+    changed from their defaults: the RINEX keys (obs, nav, systems, mask_deg,
+    iono, tropo) and the tight-coupling keys (use_doppler, the sigma scales,
+    clock_h0, clock_h_2) with loose coupling and a ``file``; the
+    tight-coupling keys with loose coupling from RINEX; the loose-coupling keys
+    (use_velocity, velocity_delay_s, velocity_sigma_scale, sigma_floor_m)
+    with tight coupling; format, quality and time_offset_s without a ``file``.
+    """
+
     coupling: Literal["loose", "tight"] = Field(
         "loose", description="loose: position (and velocity) fixes from `file` update the filter; tight: "
         "pseudoranges and Doppler from the RINEX `obs` and `nav` files do, satellite by satellite")
     file: Path | None = Field(None, description="GNSS fixes: the measurements of loose coupling (default: our "
                               "own single-point solution of `obs` and `nav`); with tight coupling the reference "
                               "for start-up and scoring (default there: the same single-point solution)")
-    format: Literal["inskit", "rtklib-pos"] = "inskit"
-    time_offset_s: float = 0.0
-    quality: list[int] = [1, 2]
+    format: Literal["inskit", "rtklib-pos"] = Field(
+        "inskit", description="layout of `file`: 'inskit' (our CSV of fixes, docs/formats.md) or 'rtklib-pos' "
+        "(an RTKLIB .pos solution, GPS time)")
+    time_offset_s: float = Field(0.0, description="added to every time tag of `file`")
+    quality: list[int] = Field([1, 2], description="rtklib-pos: the Q flags kept (1 fix, 2 float, 5 single, ...); "
+                               "other rows are dropped")
     height_offset_m: float = Field(0.0, description="added to the fixes' heights (e.g. the geoid separation, "
                                    "-21.4 m on walk_0827, turns u-blox heights above sea level into ellipsoidal)")
-    lever_arm_b_m: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    use_velocity: bool = False
-    velocity_delay_s: float = 0.0
-    velocity_sigma_scale: float = Field(1.0, gt=0)
-    sigma_floor_m: float = Field(0.0, ge=0)
-    obs: Path | None = Field(None, description="RINEX 2/3 observation file (tight coupling)")
+    lever_arm_b_m: tuple[float, float, float] = Field(
+        (0.0, 0.0, 0.0), description="antenna position relative to the IMU in body axes (forward, right, down)")
+    use_velocity: bool = Field(False, description="loose coupling: fuse the fixes' velocity as well as their "
+                               "position")
+    velocity_delay_s: float = Field(0.0, description="loose coupling: a fix's velocity describes the antenna this "
+                                    "long before its time tag (a lagging receiver velocity)")
+    velocity_sigma_scale: float = Field(1.0, gt=0, description="loose coupling: multiplies the fixes' velocity "
+                                        "sigmas")
+    sigma_floor_m: float = Field(0.0, ge=0, description="loose coupling: lower bound on the fixes' position sigmas "
+                                 "(0: as the file gives them)")
+    obs: Path | None = Field(None, description="RINEX 2/3 observation file (tight coupling, or loose coupling "
+                             "on our own single-point fixes)")
     nav: Path | None = Field(None, description="RINEX 2/3 navigation file with the broadcast ephemerides")
     systems: list[Literal["G", "E"]] = Field(["G", "E"], description="satellite systems used (GPS, Galileo)")
-    mask_deg: float = Field(10.0, ge=0, lt=90, description="elevation mask [deg]")
-    iono: Literal["klobuchar", "iono-free", "none"] = "klobuchar"
-    tropo: Literal["saastamoinen", "none"] = "saastamoinen"
+    mask_deg: float = Field(10.0, ge=0, lt=90, description="elevation mask")
+    iono: Literal["klobuchar", "iono-free", "none"] = Field(
+        "klobuchar", description="ionospheric correction: the broadcast Klobuchar model, the dual-frequency "
+        "ionosphere-free code combination, or none")
+    tropo: Literal["saastamoinen", "none"] = Field(
+        "saastamoinen", description="tropospheric correction: the Saastamoinen model of a standard atmosphere, "
+        "or none")
     use_doppler: bool = Field(True, description="pseudorange-rate (Doppler) updates beside the pseudoranges")
     pseudorange_sigma_scale: float = Field(1.0, gt=0, description="multiplies the elevation-dependent sigmas")
-    doppler_sigma_scale: float = Field(1.0, gt=0)
-    clock_h0: float = Field(2e-19, gt=0, description="receiver oscillator white-frequency Allan coefficient")
-    clock_h_2: float = Field(2e-20, gt=0, description="receiver oscillator random-walk-frequency coefficient")
+    doppler_sigma_scale: float = Field(1.0, gt=0, description="multiplies the elevation-dependent Doppler "
+                                       "(pseudorange-rate) sigmas")
+    clock_h0: float = Field(2e-19, gt=0, description="receiver oscillator white-frequency Allan coefficient [s]")
+    clock_h_2: float = Field(2e-20, gt=0, description="receiver oscillator random-walk-frequency coefficient [1/s]")
 
     @model_validator(mode="after")
     def _inputs(self):
@@ -72,40 +162,104 @@ class GnssSection(_Strict):
                              "files)")
         return self
 
+    @model_validator(mode="after")
+    def _ignored(self):
+        if self.coupling == "loose" and self.file is not None:
+            bad = _changed(self, GNSS_RINEX_KEYS + GNSS_TIGHT_KEYS)
+            if bad:
+                raise _key_error(bad[0], f"{_names(bad)} would be ignored: with coupling = \"loose\" and "
+                                 "gnss.file given, the fixes of `file` are fused and no RINEX file is read "
+                                 "(obs, nav, systems, mask_deg, iono and tropo serve tight coupling, or our own "
+                                 "single-point fixes when `file` is absent); remove "
+                                 f"{_they(bad, 'it', 'them')}, or set coupling = \"tight\"")
+        if self.coupling == "loose" and self.file is None:
+            bad = _changed(self, GNSS_TIGHT_KEYS)
+            if bad:
+                raise _key_error(bad[0], f"{_names(bad)} would be ignored: "
+                                 f"{_they(bad, 'it configures', 'they configure')} the pseudorange and Doppler "
+                                 "updates of tight coupling, and coupling = \"loose\" fuses our single-point "
+                                 "fixes instead; remove "
+                                 f"{_they(bad, 'it', 'them')}, or set coupling = \"tight\"")
+        if self.coupling == "tight":
+            bad = _changed(self, GNSS_LOOSE_KEYS)
+            if bad:
+                raise _key_error(bad[0], f"{_names(bad)} would be ignored: "
+                                 f"{_they(bad, 'it describes', 'they describe')} fixes fused by loose coupling; "
+                                 "with coupling = \"tight\" the fixes are only the reference for start-up and "
+                                 "scoring (tune use_doppler and the sigma scales instead)")
+        if self.file is None:
+            bad = _changed(self, GNSS_FILE_KEYS)
+            if bad:
+                raise _key_error(bad[0], f"{_names(bad)} would be ignored: "
+                                 f"{_they(bad, 'it describes', 'they describe')} how gnss.file is read, and no "
+                                 "`file` is given (the fixes are our single-point solution of obs and nav)")
+        return self
+
 
 class NoiseSection(_Strict):
-    gyro_arw_deg_sqrt_h: float = Field(0.3, gt=0)
-    accel_vrw_m_s_sqrt_h: float = Field(0.1, gt=0)
-    gyro_bias_sigma_deg_h: float = Field(50.0, gt=0)
-    accel_bias_sigma_ug: float = Field(1000.0, gt=0)
-    bias_tau_s: float = Field(300.0, gt=0)
-    scale_factor_rw_ppm_sqrt_s: float = Field(1.0, gt=0)
-    time_offset_rw_s_sqrt_s: float = Field(1e-5, gt=0, description="random walk of the estimated time offset")
+    """Sensor noise of the filter, in datasheet units (``inskit allan``
+    prints this section from a static log)."""
+
+    gyro_arw_deg_sqrt_h: float = Field(0.3, gt=0, description="gyro angle random walk (white rate noise)")
+    accel_vrw_m_s_sqrt_h: float = Field(0.1, gt=0, description="accelerometer velocity random walk (white "
+                                        "specific-force noise)")
+    gyro_bias_sigma_deg_h: float = Field(50.0, gt=0, description="steady-state sigma of the first-order "
+                                         "Gauss-Markov gyro bias (in-run variation)")
+    accel_bias_sigma_ug: float = Field(1000.0, gt=0, description="steady-state sigma of the first-order "
+                                       "Gauss-Markov accelerometer bias (in-run variation)")
+    bias_tau_s: float = Field(300.0, gt=0, description="correlation time of both Gauss-Markov biases (finite)")
+    scale_factor_rw_ppm_sqrt_s: float = Field(1.0, gt=0, description="random walk of the gyro and accelerometer "
+                                              "scale-factor errors (with filter.scale_factors)")
+    time_offset_rw_s_sqrt_s: float = Field(1e-5, gt=0, description="random walk of the estimated time offset "
+                                           "(with filter.time_offset)")
     from_static: bool = Field(
-        True, description="raise ARW/VRW to the white-noise density measured on the static start"
+        True, description="raise ARW/VRW to the white-noise density measured on the static start "
+        "(init.mode = \"static-then-track\")"
     )
 
 
+#: [init] keys of mode "given" (the initial state itself)
+INIT_GIVEN_KEYS = ("lat_deg", "lon_deg", "height_m", "v_ned_m_s", "rpy_deg")
+#: [init] keys of mode "static-then-track"
+INIT_STATIC_KEYS = ("min_static_s", "heading_speed_m_s")
+
+
 class InitSection(_Strict):
-    mode: Literal["static-then-track", "given"] = "static-then-track"
-    lat_deg: float | None = None
-    lon_deg: float | None = None
-    height_m: float | None = None
-    v_ned_m_s: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    rpy_deg: tuple[float, float, float] | None = None
+    """The initial state and its uncertainty.
+
+    Rules: mode "given" needs lat_deg, lon_deg, height_m and rpy_deg; the
+    keys of one mode changed from their defaults under the other mode are
+    refused (they would be ignored).
+    """
+
+    mode: Literal["static-then-track", "given"] = Field(
+        "static-then-track", description="static-then-track: level and gyro biases from the static start, "
+        "heading from the GNSS track once moving; given: the state of lat_deg ... rpy_deg")
+    lat_deg: float | None = Field(None, description="given: initial latitude")
+    lon_deg: float | None = Field(None, description="given: initial longitude")
+    height_m: float | None = Field(None, description="given: initial ellipsoidal height")
+    v_ned_m_s: tuple[float, float, float] = Field((0.0, 0.0, 0.0), description="given: initial velocity north, "
+                                                  "east, down")
+    rpy_deg: tuple[float, float, float] | None = Field(None, description="given: initial roll, pitch, yaw of the "
+                                                       "body axes")
     min_static_s: float = Field(5.0, gt=0, description="static-then-track: the rest the start-up needs at the "
                                 "log's start to level and find the gyro biases [s]")
     heading_speed_m_s: float = Field(3.0, gt=0, description="static-then-track: the GNSS track speed from which "
                                      "its course gives the heading (a walk needs about 1 m/s)")
-    sigma_pos_m: float = Field(0.05, gt=0)
-    sigma_vel_m_s: float = Field(0.05, gt=0)
-    sigma_roll_pitch_deg: float = Field(1.0, gt=0)
-    sigma_yaw_deg: float = Field(3.0, gt=0)
-    sigma_gyro_bias_deg_s: float = Field(0.05, gt=0)
-    sigma_accel_bias_m_s2: float = Field(0.05, gt=0)
-    sigma_scale_factor: float = Field(0.02, gt=0)
-    sigma_lever_arm_m: float = Field(0.1, gt=0)
-    sigma_time_offset_s: float = Field(0.05, gt=0)
+    sigma_pos_m: float = Field(0.05, gt=0, description="initial position sigma per axis")
+    sigma_vel_m_s: float = Field(0.05, gt=0, description="initial velocity sigma per axis")
+    sigma_roll_pitch_deg: float = Field(1.0, gt=0, description="initial roll and pitch sigma")
+    sigma_yaw_deg: float = Field(3.0, gt=0, description="initial yaw sigma")
+    sigma_gyro_bias_deg_s: float = Field(0.05, gt=0, description="initial gyro-bias sigma per axis (turn-on "
+                                         "bias class)")
+    sigma_accel_bias_m_s2: float = Field(0.05, gt=0, description="initial accelerometer-bias sigma per axis "
+                                         "(turn-on bias class)")
+    sigma_scale_factor: float = Field(0.02, gt=0, description="initial scale-factor sigma, a fraction (0.02 = "
+                                      "2 %; with filter.scale_factors)")
+    sigma_lever_arm_m: float = Field(0.1, gt=0, description="initial sigma of the estimated lever arm per axis "
+                                     "(with filter.lever_arm)")
+    sigma_time_offset_s: float = Field(0.05, gt=0, description="initial sigma of the estimated IMU-GNSS time "
+                                       "offset (with filter.time_offset)")
 
     @model_validator(mode="after")
     def _given_complete(self):
@@ -115,31 +269,62 @@ class InitSection(_Strict):
                 raise ValueError(f"mode 'given' needs {', '.join(missing)}")
             if abs(self.lat_deg) > 90:
                 raise ValueError(f"lat_deg {self.lat_deg} is outside [-90, 90]")
+            bad = _changed(self, INIT_STATIC_KEYS)
+            if bad:
+                raise _key_error(bad[0], f"{_names(bad, 'init')} would be ignored: "
+                                 f"{_they(bad, 'it tunes', 'they tune')} mode \"static-then-track\", and mode "
+                                 "is \"given\"")
+        else:
+            bad = _changed(self, INIT_GIVEN_KEYS)
+            if bad:
+                raise _key_error(bad[0], f"{_names(bad, 'init')} would be ignored: mode "
+                                 "\"static-then-track\" finds the initial state itself; set mode = \"given\" "
+                                 f"to start from {_they(bad, 'it', 'them')}")
         return self
 
 
 class ConstraintsSection(_Strict):
-    zupt: bool = True
-    zupt_sigma_m_s: float = Field(0.02, gt=0)
-    nhc: bool = True
-    nhc_sigma_m_s: float = Field(0.1, gt=0)
-    rate_hz: float = Field(10.0, gt=0, le=1000)
+    """Pseudo-measurements of a vehicle's motion."""
+
+    zupt: bool = Field(True, description="zero-velocity updates while the GNSS fixes show the vehicle at rest")
+    zupt_sigma_m_s: float = Field(0.02, gt=0, description="sigma of a zero-velocity update per axis")
+    nhc: bool = Field(True, description="non-holonomic constraint: no lateral or vertical velocity in body axes "
+                      "(a land vehicle; off for a handheld device)")
+    nhc_sigma_m_s: float = Field(0.1, gt=0, description="sigma of the lateral and vertical body velocity")
+    rate_hz: float = Field(10.0, gt=0, le=1000, description="rate of the zero-velocity and non-holonomic updates")
 
 
 class FilterSection(_Strict):
-    scheme: Literal["closed", "open", "uncoupled"] = "closed"
-    scale_factors: bool = True
-    lever_arm: bool = False
+    """The integration scheme and the error state."""
+
+    scheme: Literal["closed", "open", "uncoupled"] = Field(
+        "closed", description="closed: estimated errors fed back into the INS; open: the INS runs free and its "
+        "errors are estimated beside it; uncoupled: the INS is reset to each fix (no filter, loose coupling only)")
+    scale_factors: bool = Field(True, description="estimate gyro and accelerometer scale-factor errors (6 states)")
+    lever_arm: bool = Field(False, description="estimate the antenna lever arm (3 states), from gnss.lever_arm_b_m")
     time_offset: bool = Field(False, description="estimate the IMU-GNSS time offset as a state")
-    gate_probability: float | None = Field(0.9999, gt=0.5, lt=1.0)
-    gate_max_consecutive: int | None = Field(3, ge=1)
-    smoother_node_s: float = Field(0.25, gt=0)
+    gate_probability: float | None = Field(0.9999, gt=0.5, lt=1.0, description="chi-square gate of the "
+                                           "innovations: the probability that a consistent measurement passes")
+    gate_max_consecutive: int | None = Field(3, ge=1, description="recovery of a lost filter: after this many "
+                                             "mutually consistent rejections of one measurement (over at least "
+                                             "15 s) the covariance is inflated and the measurement applied")
+    smoother_node_s: float = Field(0.25, gt=0, description="spacing of the extra RTS smoother nodes between "
+                                   "updates (with --smooth)")
 
 
 class OutagesSection(_Strict):
-    protocol: Literal["none", "rtklibexplorer", "windows"] = "none"
+    """GNSS outages: fixes (or satellites) withheld to score the coasting INS.
+
+    Rules: windows_s needs protocol = "windows", and protocol = "windows"
+    needs windows_s; keep_satellites needs windows (protocol "windows" or
+    "rtklibexplorer") and tight coupling.
+    """
+
+    protocol: Literal["none", "rtklibexplorer", "windows"] = Field(
+        "none", description="none; rtklibexplorer: the dataset's eleven outages, 40 + 45 k to 54.75 + 45 k s "
+        "after the first GNSS epoch (k = 0..10); windows: the windows of windows_s")
     windows_s: list[tuple[float, float]] = Field(
-        default_factory=list, description="[start, end] seconds after the first GNSS epoch"
+        default_factory=list, description="[start, end] seconds after the first GNSS epoch (protocol = \"windows\")"
     )
     keep_satellites: int = Field(0, ge=0, le=12, description="tight coupling: satellites kept inside each "
                                  "window (the highest ones), 0 for a full outage")
@@ -152,29 +337,98 @@ class OutagesSection(_Strict):
                 raise ValueError(f"outage window [{a}, {b}] must end after it starts")
         return v
 
+    @model_validator(mode="after")
+    def _consistent(self):
+        if self.windows_s and self.protocol != "windows":
+            raise _key_error("windows_s", f"windows_s is given but protocol = \"{self.protocol}\", which would "
+                             "ignore it; set protocol = \"windows\" to withhold GNSS in these windows")
+        if self.protocol == "windows" and not self.windows_s:
+            raise _key_error("windows_s", "protocol = \"windows\" needs windows_s, [start, end] pairs in seconds "
+                             "after the first GNSS epoch, e.g. windows_s = [[15, 25], [30, 40]]")
+        if self.keep_satellites and self.protocol == "none":
+            raise _key_error("keep_satellites", f"keep_satellites = {self.keep_satellites} needs outage windows "
+                             "(protocol = \"windows\" or \"rtklibexplorer\"); with protocol = \"none\" it would "
+                             "be ignored")
+        return self
+
 
 class OutputSection(_Strict):
-    dir: Path | None = None
-    plots: bool = True
+    """Where the results go."""
+
+    dir: Path | None = Field(None, description="result folder, relative to this config file (default: out/<name> "
+                             "in the working directory; --out overrides it)")
+    plots: bool = Field(True, description="write the PNG plots (--no-plots turns them off)")
 
 
 class NavigateConfig(_Strict):
     """The whole ``inskit navigate`` configuration."""
 
-    name: str = "run"
-    imu: ImuSection
-    gnss: GnssSection
-    noise: NoiseSection = NoiseSection()
-    init: InitSection = InitSection()
-    constraints: ConstraintsSection = ConstraintsSection()
-    filter: FilterSection = FilterSection()
-    outages: OutagesSection = OutagesSection()
-    output: OutputSection = OutputSection()
-    base_dir: Path = Path(".")
+    name: str = Field("run", description="name of the run (the default output folder is out/<name>)")
+    imu: ImuSection = Field(..., description="the IMU log")
+    gnss: GnssSection = Field(..., description="the GNSS input")
+    noise: NoiseSection = Field(NoiseSection(), description="sensor noise of the filter")
+    init: InitSection = Field(InitSection(), description="initial state and uncertainty")
+    constraints: ConstraintsSection = Field(ConstraintsSection(), description="motion constraints")
+    filter: FilterSection = Field(FilterSection(), description="integration scheme and error state")
+    outages: OutagesSection = Field(OutagesSection(), description="GNSS outage protocol")
+    output: OutputSection = Field(OutputSection(), description="results")
+    base_dir: Path = Field(Path("."), description="(set by the loader, not a key of the file) the folder "
+                           "relative paths are taken from: the config file's")
+
+    @model_validator(mode="after")
+    def _keep_needs_tight(self):
+        if self.outages.keep_satellites and self.gnss.coupling != "tight":
+            raise _key_error("outages.keep_satellites", f"keep_satellites = {self.outages.keep_satellites} "
+                             "keeps satellites inside the outage windows, which only tight coupling fuses; with "
+                             "coupling = \"loose\" a fix is withheld whole and it would be ignored")
+        return self
 
     def resolve(self, p: Path) -> Path:
+        """``p`` relative to the config file's folder (absolute paths unchanged)."""
         p = Path(p)
         return p if p.is_absolute() else (self.base_dir / p)
+
+
+#: keys of the models that are not keys of a config file
+INTERNAL_KEYS = ("base_dir",)
+
+_NUM = r"(\d+(?:\.\d*)?|\.\d+)"
+_WINDOW = re.compile(rf"^\s*{_NUM}\s*-\s*{_NUM}\s*$")
+_OUTAGES_EXAMPLE = ("none, rtklibexplorer, or windows:START-END[,START-END...] in seconds after the first GNSS "
+                    "epoch, e.g. windows:15-25,30-40")
+
+
+def outages_from_spec(spec: str, option: str = "--outages") -> dict:
+    """The ``[outages]`` keys of a command-line outage spec.
+
+    ``none`` (no outages: also clears ``keep_satellites``),
+    ``rtklibexplorer`` (the dataset's protocol) or ``windows:15-25,30-40``
+    (windows in seconds after the first GNSS epoch).  The windows of the
+    config file are replaced, never merged.
+
+    Raises
+    ------
+    InputError
+        A malformed spec, with an example.
+    """
+    s = str(spec).strip()
+    if s == "none":
+        return {"protocol": "none", "windows_s": [], "keep_satellites": 0}
+    if s == "rtklibexplorer":
+        return {"protocol": "rtklibexplorer", "windows_s": []}
+    if not s.startswith("windows:"):
+        raise InputError(f"{option}: {spec!r} is not an outage protocol; use {_OUTAGES_EXAMPLE}")
+    windows = []
+    for item in s[len("windows:"):].split(","):
+        m = _WINDOW.match(item)
+        if not m:
+            raise InputError(f"{option}: {item.strip()!r} in {spec!r} is not a window START-END of two numbers >= 0; "
+                             f"use {_OUTAGES_EXAMPLE}")
+        a, b = float(m.group(1)), float(m.group(2))
+        if not b > a:
+            raise InputError(f"{option}: the window {item.strip()!r} must end after it starts; use {_OUTAGES_EXAMPLE}")
+        windows.append([a, b])
+    return {"protocol": "windows", "windows_s": windows}
 
 
 def load_config(path, overrides=None) -> NavigateConfig:
@@ -184,7 +438,19 @@ def load_config(path, overrides=None) -> NavigateConfig:
     return config_from_dict(data, base_dir=Path(path).parent, source=str(path), overrides=overrides)
 
 
+def _message(source, exc: ValidationError):
+    """One line naming the field; a consistency rule names its own key."""
+    errors = exc.errors()
+    e = errors[0]
+    if e["type"] != _KEY_ERROR:
+        return validation_message(source, exc)
+    where = ".".join([str(x) for x in e["loc"]] + [e["ctx"]["key"]])
+    more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
+    return f"{source}: field '{where}': {e['ctx']['text']}{more}"
+
+
 def config_from_dict(data, *, base_dir=Path("."), source="config", overrides=None) -> NavigateConfig:
+    """Validate a config given as a nested dict (``overrides`` merged per section)."""
     data = dict(data)
     for sect, vals in (overrides or {}).items():
         if isinstance(vals, dict):
@@ -195,7 +461,7 @@ def config_from_dict(data, *, base_dir=Path("."), source="config", overrides=Non
     try:
         cfg = NavigateConfig.model_validate(data)
     except ValidationError as exc:
-        raise ConfigError(validation_message(source, exc)) from None
+        raise ConfigError(_message(source, exc)) from None
     if cfg.noise.bias_tau_s == math.inf:
         raise ConfigError(f"{source}: noise.bias_tau_s must be finite (use a long time constant for a random walk)")
     return cfg

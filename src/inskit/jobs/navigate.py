@@ -450,6 +450,8 @@ def summary(res: NavigateResult) -> dict:
         "duration_s": float(res.imu.time[-1] - res.imu.time[0]),
         "elapsed_s": res.elapsed_s,
         "imu_time_offset_s": res.config.imu.time_offset_s,
+        "first_fix_time_s": float(res.gnss.time[0]),  # time zero of the outage windows and tables
+        "config_dir": str(Path(res.config.base_dir).resolve()),  # where the config's relative paths start
         **main,
         "outage_table": res.score_smoothed.table if res.score_smoothed else res.score_forward.table,
         "forward": {**fwd, "outage_table": res.score_forward.table},
@@ -613,7 +615,7 @@ def clear_previous_run(out_dir: Path) -> list:
         listed = []
     removed = []
     root = Path(out_dir).resolve()
-    for name in list(listed) + ["summary.json"]:
+    for name in list(listed) + ["summary.json", "report.html"]:  # the report is written after the summary
         f = (Path(out_dir) / Path(name).name)
         if f.resolve().parent == root and f.exists():
             f.unlink()

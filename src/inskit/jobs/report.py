@@ -1,0 +1,727 @@
+"""A self-contained HTML report of one navigate run folder.
+
+:func:`build_report` reads what ``inskit navigate`` wrote (``summary.json``,
+``solution_forward.csv`` and ``solution_smoothed.csv``, and when present
+``innovations.csv`` and ``config_used.json``) and writes ONE HTML page: the
+health verdict with its reasons and warnings, a table of the key figures, the
+track on a plain local east/north map, the position/velocity/attitude sigmas,
+the innovations normalised by their sigma with the +-3 gate, the sensor-error
+estimates with their sigmas, the outage table and the configuration used.
+
+Why plotly rather than bokeh
+----------------------------
+* plotly ships its whole JavaScript library as one bundle that can be
+  **inlined** into the page (``include_plotlyjs=True`` for the first figure,
+  then reused by the others), so the report opens with networking off: no
+  CDN, no tile server, nothing fetched.  Bokeh's inline resources work too but
+  come as several bundles and extensions (tables, widgets) to keep in step.
+* Its ``scatter`` traces are SVG, not WebGL (``scattergl``), so they draw in
+  headless and GPU-less browsers and print as vectors.
+* Hover, box zoom and pan come with every figure, and subplots share one time
+  axis through ``matches``; across figures a few lines of inline script pass
+  the time range on (one linked time axis for the whole page).
+
+Long series are decimated to at most :data:`MAX_POINTS` points per trace by
+keeping the minimum and the maximum of every bin (:func:`decimate`), so the
+worst case is never clipped and the page stays small (about 4.3 MB on the
+drive_0708 example, 3.6 MB of which is plotly itself).
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .. import earth
+from ..errors import InputError
+from ..files import write_text
+from ..units import DEG
+
+#: most points drawn per trace (min/max decimation above this)
+MAX_POINTS = 5000
+
+#: bins of the min/max envelope of a long time series (two points a bin)
+TIME_SERIES_BINS = 600
+
+#: points per track trace and per innovation trace
+TRACK_POINTS = 3000
+INNOVATION_POINTS = 2000
+
+#: measurement names that carry GNSS (their update times mark the fixes)
+GNSS_MEASUREMENTS = ("gnss_pos", "gnss_vel", "pseudorange", "pseudorange_rate")
+
+_VERDICT_COLOURS = {"healthy": ("#1b5e20", "#e8f5e9"), "suspect": ("#8a5a00", "#fff4d6"),
+                    "unhealthy": ("#b71c1c", "#fdecea")}
+
+
+# --- data ------------------------------------------------------------------------
+def decimate(n, ys, max_points=MAX_POINTS):
+    """Indices that keep at most ``max_points`` of ``n`` samples and, for every
+    series in ``ys``, the minimum and maximum of each bin (the extremes of the
+    whole series included), plus the first and last sample.
+
+    Parameters
+    ----------
+    n : int
+        Number of samples.
+    ys : sequence of (n,) ndarray
+        Series whose extremes must survive (NaN ignored).
+    max_points : int
+        Upper bound on the number of indices returned.
+
+    Returns
+    -------
+    (m,) ndarray of int
+        Sorted unique indices, ``m <= max_points``.
+    """
+    if n <= max_points:
+        return np.arange(n)
+    ys = [np.asarray(y, float) for y in ys] or [np.arange(n, dtype=float)]
+    nbins = max(1, (max_points - 2) // (2 * len(ys)))
+    size = -(-n // nbins)
+    pad = nbins * size - n
+    keep = [np.array([0, n - 1])]
+    starts = np.arange(nbins) * size
+    for y in ys:
+        yp = np.concatenate([y, np.full(pad, np.nan)]).reshape(nbins, size)
+        ok = ~np.all(np.isnan(yp), axis=1)
+        if not ok.any():
+            continue
+        lo = np.where(np.isnan(yp), np.inf, yp).argmin(axis=1)
+        hi = np.where(np.isnan(yp), -np.inf, yp).argmax(axis=1)
+        keep += [(starts + lo)[ok], (starts + hi)[ok]]
+    idx = np.unique(np.concatenate(keep))
+    return idx[idx < n]
+
+
+def envelope(t, y, nbins):
+    """Min/max envelope of ``y(t)`` on ``nbins`` equal time bins: two values a
+    bin (its minimum, then its maximum), drawn at the quarter and three-quarter
+    points of the bin, so a trace needs only ``x0, dx`` and the values.  An
+    empty bin gives NaN (a gap, as in the data).
+
+    Parameters
+    ----------
+    t : (n,) ndarray
+        Increasing times [s].
+    y : (n,) ndarray
+        Values (NaN ignored).
+    nbins : int
+        Number of bins; the result has ``2 * nbins`` values.
+
+    Returns
+    -------
+    x0, dx : float
+        Time of the first value and the spacing [s].
+    v : (2 * nbins,) ndarray
+        Minimum and maximum of each bin, interleaved.
+    """
+    t, y = np.asarray(t, float), np.asarray(y, float)
+    w = (t[-1] - t[0]) / nbins if t[-1] > t[0] else 1.0
+    k = np.minimum(((t - t[0]) / w).astype(np.int64), nbins - 1)
+    lo = np.full(nbins, np.inf)
+    hi = np.full(nbins, -np.inf)
+    ok = ~np.isnan(y)
+    np.minimum.at(lo, k[ok], y[ok])
+    np.maximum.at(hi, k[ok], y[ok])
+    v = np.column_stack([lo, hi]).reshape(-1)
+    v[~np.isfinite(v)] = np.nan
+    return t[0] + 0.25 * w, 0.5 * w, v
+
+
+def _round(x, digits=5):
+    """Round to ``digits`` significant figures of the series' largest value
+    (short JSON; NaN kept)."""
+    x = np.asarray(x, float)
+    finite = np.isfinite(x)
+    if not finite.any():
+        return x
+    m = np.max(np.abs(x[finite]))
+    d = digits - 1 - (int(np.floor(np.log10(m))) if m > 0 else 0)
+    return np.round(x, max(d, 0) if d > 0 else d)
+
+
+def _read_json(path, what):
+    try:
+        text = Path(path).read_text()
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read {what} ({exc.strerror or exc})") from None
+    try:
+        obj = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise InputError(f"{path}: line {exc.lineno}: not valid JSON ({exc.msg}); expected the complete {what} "
+                         f"(truncated or damaged file?)") from None
+    if not isinstance(obj, dict):
+        raise InputError(f"{path}: expected a JSON object ({what}), got {type(obj).__name__}")
+    return obj
+
+
+def read_innovations(path):
+    """``innovations.csv`` as a dict of name -> dict of arrays (``t, row, nu,
+    sigma, accepted``), or None if the file is absent."""
+    import pandas as pd
+
+    path = Path(path)
+    if not path.exists():
+        return None
+    try:
+        df = pd.read_csv(path)
+    except Exception as exc:  # pandas raises several types for a damaged CSV
+        raise InputError(f"{path}: not a readable CSV table ({exc})") from None
+    need = ["measurement", "t", "row", "nu", "sigma", "accepted"]
+    missing = [c for c in need if c not in df.columns]
+    if missing:
+        raise InputError(f"{path}: line 1: missing column(s) {', '.join(missing)}; expected {', '.join(need)}")
+    out = {}
+    for name, g in df.groupby("measurement", sort=False):
+        out[str(name)] = {c: g[c].to_numpy(float) for c in ("t", "row", "nu", "sigma", "accepted")}
+    return out
+
+
+def _find_fix_file(run_dir, cfg, config_dir=None):
+    """The GNSS fix file named in ``config_used.json`` if it can be found (its
+    path is relative to the config file, which the run folder does not record:
+    try the folder the default ``output.dir`` implies, the run folder, its
+    parent and the working directory)."""
+    g = (cfg or {}).get("gnss") or {}
+    f = g.get("file")
+    if not f:
+        return None
+    p = Path(f)
+    if p.is_absolute():
+        return p if p.exists() else None
+    bases = [Path(config_dir)] if config_dir else []  # recorded by navigate in summary.json
+    out = Path(str(((cfg or {}).get("output") or {}).get("dir") or ""))
+    rd = Path(run_dir).resolve()
+    if out.parts and rd.parts[-len(out.parts):] == out.parts:
+        bases.append(Path(*rd.parts[:-len(out.parts)]))
+    bases += [rd, rd.parent, Path.cwd()]
+    for b in bases:
+        if (b / p).exists():
+            return b / p
+    return None
+
+
+def _read_fixes(path, cfg):
+    """Fix times and lla from the GNSS file (rtklib .pos or our CSV), or None."""
+    from .. import io
+    from ..io.rtklib import read_pos
+
+    g = cfg.get("gnss") or {}
+    try:
+        if g.get("format") == "rtklib-pos":
+            gnss, _ = read_pos(path, quality=tuple(g.get("quality") or (1, 2)),
+                                  time_offset_s=float(g.get("time_offset_s") or 0.0))
+            return gnss.time, gnss.lla
+        d = io.read_gnss(path)
+        return d.time + float(g.get("time_offset_s") or 0.0), d.lla
+    except InputError:
+        return None
+
+
+def _infer_t0(summary, innov, t_sol):
+    """Time of the first GNSS fix (the zero of the outage table), inferred
+    from the GNSS update times when the fix file is not at hand: the shift
+    that puts each outage-table end fix on an update and no update inside the
+    windows.  Returns (t0, how)."""
+    tg = np.unique(np.concatenate([innov[m]["t"] for m in GNSS_MEASUREMENTS if innov and m in innov] or [[]]))
+    rows = summary.get("outage_table") or []
+    if len(tg) and rows:
+        fix = np.array([r["fix_time_s"] for r in rows], float)
+        a = np.array([r["start_s"] for r in rows], float)
+        b = np.array([r["end_s"] for r in rows], float)
+        cand = tg - fix[0]
+        best, score = None, -1
+        for c in cand[:2000]:
+            hit = np.abs(tg[np.clip(np.searchsorted(tg, c + fix), 0, len(tg) - 1)] - (c + fix)) < 0.02
+            lo, hi = np.searchsorted(tg, c + a + 0.02), np.searchsorted(tg, c + b - 0.02)
+            s = int(np.sum(hit & (hi <= lo)))
+            if s > score:
+                best, score = c, s
+        if score == len(rows):
+            return float(best), "first GNSS fix (inferred from the GNSS update times and the outage table)"
+    if len(tg):
+        return float(tg[0]), "first GNSS update"
+    return float(t_sol[0]), "start of the solution"
+
+
+class _Run:
+    """Everything the report needs from one run folder."""
+
+    def __init__(self, run_dir):
+        from .. import io
+
+        d = Path(run_dir)
+        if not d.is_dir():
+            raise InputError(f"{d}: not a folder (expected a navigate run folder holding summary.json)")
+        if not (d / "summary.json").exists():
+            raise InputError(f"{d}: not a navigate run folder: summary.json is missing (run `inskit navigate "
+                             f"CONFIG --out {d}` first)")
+        self.dir = d
+        self.summary = _read_json(d / "summary.json", "run summary (summary.json)")
+        if not (d / "solution_forward.csv").exists():
+            raise InputError(f"{d}: solution_forward.csv is missing (expected beside summary.json)")
+        self.forward = io.read_solution(d / "solution_forward.csv")
+        self.smoothed = io.read_solution(d / "solution_smoothed.csv") if (d / "solution_smoothed.csv").exists() \
+            else None
+        self.innov = read_innovations(d / "innovations.csv")
+        self.config = _read_json(d / "config_used.json", "configuration (config_used.json)") \
+            if (d / "config_used.json").exists() else None
+        self.fixes, self.fix_file = None, None
+        if self.config:
+            p = _find_fix_file(d, self.config, self.summary.get("config_dir"))
+            if p is not None:
+                self.fixes = _read_fixes(p, self.config)
+                self.fix_file = p if self.fixes is not None else None
+        if self.summary.get("first_fix_time_s") is not None:  # recorded by navigate
+            self.t0, self.t0_how = float(self.summary["first_fix_time_s"]), "first GNSS fix (summary.json)"
+        elif self.fixes is not None and len(self.fixes[0]):
+            self.t0, self.t0_how = float(self.fixes[0][0]), f"first GNSS fix (from {self.fix_file.name})"
+        else:
+            self.t0, self.t0_how = _infer_t0(self.summary, self.innov, self.forward.time)
+        self.windows = [(self.t0 + r["start_s"], self.t0 + r["end_s"]) for r in self.summary.get("outage_table") or []]
+        self.name = str(self.summary.get("name") or d.name)
+
+
+# --- figures ---------------------------------------------------------------------
+def _layout(fig, height, title):
+    fig.update_layout(template="plotly_white", height=height, title=dict(text=title, x=0.01, font=dict(size=15)),
+                      margin=dict(l=70, r=20, t=50, b=45), legend=dict(orientation="h", y=-0.12),
+                      hovermode="closest", font=dict(size=12))
+    return fig
+
+
+def _shade(fig, run, rows):
+    for a, b in run.windows:
+        for r in range(1, rows + 1):
+            fig.add_vrect(x0=a - run.t0, x1=b - run.t0, fillcolor="#9e9e9e", opacity=0.18, line_width=0,
+                          layer="below", row=r, col=1)
+
+
+def _line(go, t, y, name, color, dash=None, legendgroup=None, showlegend=True, nbins=None):
+    """A time-series trace: exact up to ``2 * nbins`` samples, else the min/max
+    envelope of :func:`envelope` (extremes kept, time to half a bin)."""
+    nbins = nbins or TIME_SERIES_BINS
+    style = dict(name=name, mode="lines", line=dict(color=color, width=1.2, dash=dash), legendgroup=legendgroup,
+                 showlegend=showlegend)
+    if len(t) <= 2 * nbins:
+        return go.Scatter(x=_round(t, 6), y=_round(y, 4), **style), False
+    x0, dx, v = envelope(t, y, nbins)
+    return go.Scatter(x0=float(np.round(x0, 4)), dx=float(dx), y=_round(v, 4), **style), True
+
+
+def _fig_track(run, go):
+    fig = go.Figure()
+    ref = run.forward.lla[0]
+    dec = False
+    for sol, label, colour in ((run.forward, "forward filter", "#1f77b4"),
+                               (run.smoothed, "RTS smoother", "#2ca02c")):
+        if sol is None:
+            continue
+        ned = earth.lla_to_ned(sol.lla, ref)
+        idx = decimate(len(sol.time), [ned[:, 0], ned[:, 1]], TRACK_POINTS)
+        dec |= len(idx) < len(sol.time)
+        fig.add_trace(go.Scatter(x=_round(ned[idx, 1], 6), y=_round(ned[idx, 0], 6), mode="lines", name=label,
+                                 line=dict(color=colour, width=1.3),
+                                 hovertemplate="E %{x:.2f} m, N %{y:.2f} m"))
+        if run.windows and label == "forward filter":
+            t = sol.time[idx]
+            xs, ys = [], []
+            for a, b in run.windows:
+                m = (t >= a) & (t <= b)
+                xs += list(_round(ned[idx, 1])[m]) + [None]
+                ys += list(_round(ned[idx, 0])[m]) + [None]
+            fig.add_trace(go.Scatter(x=xs, y=ys, mode="lines", name="forward, in GNSS outage",
+                                     line=dict(color="#d62728", width=2.4)))
+    if run.fixes is not None:
+        tf, lla = run.fixes
+        ned = earth.lla_to_ned(lla, ref)
+        out = np.zeros(len(tf), bool)
+        for a, b in run.windows:
+            out |= (tf >= a) & (tf <= b)
+        for m, label, colour in ((~out, f"GNSS fixes ({run.fix_file.name})", "#7f7f7f"),
+                                 (out, "GNSS fixes withheld (outages)", "#ff7f0e")):
+            if m.any():
+                k = np.flatnonzero(m)
+                k = k[decimate(len(k), [ned[k, 0], ned[k, 1]], TRACK_POINTS)]
+                fig.add_trace(go.Scatter(x=_round(ned[k, 1]), y=_round(ned[k, 0]), mode="markers", name=label,
+                                         marker=dict(size=3, color=colour)))
+    elif run.innov:
+        for name in GNSS_MEASUREMENTS[:1] + GNSS_MEASUREMENTS[2:3]:
+            if name not in run.innov:
+                continue
+            v = run.innov[name]
+            tu, first = np.unique(v["t"], return_index=True)
+            acc = v["accepted"][first] > 0.5
+            s = run.forward.interpolate(tu)
+            ned = earth.lla_to_ned(s.lla, ref)
+            for m, label, colour in ((acc, f"{name} updates (solution at the update)", "#7f7f7f"),
+                                     (~acc, f"{name} rejected", "#ff7f0e")):
+                if m.any():
+                    k = np.flatnonzero(m)
+                    k = k[decimate(len(k), [ned[k, 0], ned[k, 1]], TRACK_POINTS)]
+                    fig.add_trace(go.Scatter(x=_round(ned[k, 1]), y=_round(ned[k, 0]), mode="markers", name=label,
+                                             marker=dict(size=3, color=colour)))
+            break
+    _layout(fig, 640, "Track: east/north from the first point [m]")
+    fig.update_xaxes(title_text="east [m]")
+    fig.update_yaxes(title_text="north [m]", scaleanchor="x", scaleratio=1)
+    return fig, dec
+
+
+def _fig_sigmas(run, go, make_subplots):
+    blocks = (("position", ("sigma_n_m", "sigma_e_m", "sigma_d_m"), 1.0, "m"),
+              ("velocity", ("sigma_vn_m_s", "sigma_ve_m_s", "sigma_vd_m_s"), 1.0, "m/s"),
+              ("attitude", ("sigma_att_n_rad", "sigma_att_e_rad", "sigma_att_d_rad"), 1 / DEG, "deg"))
+    blocks = [b for b in blocks if all(c in run.forward.extra for c in b[1])]
+    if not blocks:
+        return None, False
+    fig = make_subplots(rows=len(blocks), cols=1, shared_xaxes=True, vertical_spacing=0.05)
+    colours = ("#1f77b4", "#ff7f0e", "#2ca02c")
+    dec = False
+    for r, (what, cols, k, unit) in enumerate(blocks, start=1):
+        for sol, label, dash in ((run.forward, "forward", None), (run.smoothed, "smoothed", "dot")):
+            if sol is None:
+                continue
+            for c, axis, colour in zip(cols, ("N", "E", "D"), colours):
+                tr, d = _line(go, sol.time - run.t0, sol.extra[c] * k, f"{label} {axis}", colour, dash,
+                              legendgroup=f"{label}{axis}", showlegend=r == 1)
+                dec |= d
+                fig.add_trace(tr, row=r, col=1)
+        fig.update_yaxes(title_text=f"{what} 1σ [{unit}]", rangemode="tozero", row=r, col=1)
+    _shade(fig, run, len(blocks))
+    _layout(fig, 250 * len(blocks) + 80, "Filter sigmas (1σ, N/E/D; grey: GNSS outages)")
+    fig.update_xaxes(title_text=f"time after {run.t0_how.split(' (')[0]} [s]", row=len(blocks), col=1)
+    return fig, dec
+
+
+def _fig_innovations(run, go, make_subplots):
+    if not run.innov:
+        return None, False
+    names = list(run.innov)
+    fig = make_subplots(rows=len(names), cols=1, shared_xaxes=True, vertical_spacing=0.06 / max(1, len(names) - 1)
+                        if len(names) > 1 else 0.0, subplot_titles=names)
+    dec = False
+    for r, name in enumerate(names, start=1):
+        v = run.innov[name]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            z = np.where(v["sigma"] > 0, v["nu"] / v["sigma"], np.nan)
+        for m, label, colour in ((v["accepted"] > 0.5, "accepted", "#1f77b4"),
+                                 (v["accepted"] <= 0.5, "rejected", "#d62728")):
+            k = np.flatnonzero(m & np.isfinite(z))
+            if not len(k):
+                continue
+            kk = k[decimate(len(k), [z[k]], INNOVATION_POINTS)]
+            dec |= len(kk) < len(k)
+            fig.add_trace(go.Scatter(x=_round(v["t"][kk] - run.t0, 6), y=_round(z[kk], 3), mode="markers",
+                                     name=label, legendgroup=label, showlegend=r == 1,
+                                     marker=dict(size=3, color=colour),
+                                     customdata=v["row"][kk].astype(int),
+                                     hovertemplate="t %{x:.2f} s, ν/σ %{y:.2f}, row %{customdata}"),
+                          row=r, col=1)
+        for g in (-3, 3):
+            fig.add_hline(y=g, line=dict(color="#555", width=1, dash="dash"), row=r, col=1)
+        fig.update_yaxes(title_text="ν/σ", row=r, col=1)
+    _shade(fig, run, len(names))
+    _layout(fig, 200 * len(names) + 100, "Innovations normalised by their sigma (dashed: ±3 gate)")
+    fig.update_xaxes(title_text=f"time after {run.t0_how.split(' (')[0]} [s]", row=len(names), col=1)
+    return fig, dec
+
+
+#: estimate blocks: column prefix, title, factor from the file's unit to the shown one, shown unit
+_ESTIMATES = (("bg", "gyro bias", 1 / DEG * 3600, "deg/h"), ("ba", "accel bias", 1e3 / 9.80665, "mg"),
+              ("sg", "gyro scale factor", 1e2, "%"), ("sa", "accel scale factor", 1e2, "%"))
+
+
+def _estimate_series(run):
+    ex = run.forward.extra
+    fin = run.summary.get("final_estimates") or {}
+    out = []
+    for key, title, k, unit in _ESTIMATES:
+        cols = [c for c in ex if c.startswith(key + "_") and c[len(key) + 1:len(key) + 2] in "xyz"]
+        if cols:
+            out.append((key, title, k, unit, cols, (fin.get(key) or {}).get("sigma")))
+    if "clock_bias_m" in ex:
+        sig = (fin.get("clock") or {}).get("sigma")
+        out.append(("clock_b", "receiver clock bias", 1.0, "m", ["clock_bias_m"], sig[:1] if sig else None))
+    if "clock_drift_m_s" in ex:
+        sig = (fin.get("clock") or {}).get("sigma")
+        out.append(("clock_d", "receiver clock drift", 1.0, "m/s", ["clock_drift_m_s"],
+                    sig[1:2] if sig and len(sig) > 1 else None))
+    return out
+
+
+def _fig_estimates(run, go, make_subplots):
+    series = _estimate_series(run)
+    if not series:
+        return None, False
+    fig = make_subplots(rows=len(series), cols=1, shared_xaxes=True, vertical_spacing=0.04,
+                        subplot_titles=[f"{s[1]} [{s[3]}]" for s in series])
+    colours = ("#1f77b4", "#ff7f0e", "#2ca02c")
+    t = run.forward.time - run.t0
+    dec = False
+    for r, (key, title, k, unit, cols, sig) in enumerate(series, start=1):
+        for j, c in enumerate(cols):
+            tr, d = _line(go, t, run.forward.extra[c] * k, c, colours[j % 3], showlegend=True)
+            dec |= d
+            fig.add_trace(tr, row=r, col=1)
+            if sig is not None and j < len(sig) and sig[j] is not None:
+                fig.add_trace(go.Scatter(x=[float(t[-1])], y=[float(run.forward.extra[c][-1] * k)], mode="markers",
+                                         marker=dict(color=colours[j % 3], size=7, symbol="diamond"),
+                                         error_y=dict(type="data", array=[float(sig[j]) * k], thickness=2,
+                                                      width=6),
+                                         name=f"{c} final ±1σ", showlegend=False,
+                                         hovertemplate=f"final {c}: %{{y:.4g}} ± {float(sig[j]) * k:.3g} {unit}"),
+                              row=r, col=1)
+        fig.update_yaxes(title_text=unit, row=r, col=1)
+    _shade(fig, run, len(series))
+    _layout(fig, 200 * len(series) + 100, "Sensor-error estimates (final value ±1σ at the right end)")
+    fig.update_xaxes(title_text=f"time after {run.t0_how.split(' (')[0]} [s]", row=len(series), col=1)
+    return fig, dec
+
+
+# --- page ------------------------------------------------------------------------
+_CSS = """
+*{box-sizing:border-box}
+body{margin:0;background:#fff;color:#212121;font:14px/1.45 system-ui,-apple-system,"Segoe UI",Roboto,sans-serif}
+main{max-width:1200px;margin:0 auto;padding:16px 20px 40px}
+h1{font-size:24px;margin:8px 0 4px}
+h2{font-size:18px;margin:28px 0 8px;border-bottom:1px solid #ddd;padding-bottom:4px}
+.verdict{display:inline-block;padding:3px 12px;border-radius:4px;font-weight:600;border:1px solid}
+.meta{color:#555}
+table{border-collapse:collapse;margin:6px 0;font-variant-numeric:tabular-nums}
+th,td{border:1px solid #ddd;padding:3px 8px;text-align:right}
+th{background:#f5f5f5}
+td.l,th.l{text-align:left}
+.figure{margin:12px 0;break-inside:avoid;page-break-inside:avoid}
+.note{color:#555;font-size:12px}
+pre{background:#f8f8f8;border:1px solid #ddd;padding:8px;overflow:auto;font-size:12px;max-height:480px}
+.cols{display:flex;flex-wrap:wrap;gap:24px}
+@media print{
+  body{font-size:11px}
+  main{max-width:none;padding:0}
+  .modebar-container{display:none!important}
+  pre{max-height:none;overflow:visible;white-space:pre-wrap}
+  h2{break-after:avoid;page-break-after:avoid}
+  .verdict,th{-webkit-print-color-adjust:exact;print-color-adjust:exact}
+}
+"""
+
+# one linked time axis across the time figures, and a record of where each
+# figure was drawn (data-* attributes, for checks of the rendered page)
+_JS = """
+(function(){
+  var figs = Array.prototype.slice.call(document.querySelectorAll('.tplot .plotly-graph-div'));
+  var busy = false;
+  figs.forEach(function(src){
+    src.on('plotly_relayout', function(ev){
+      if (busy) return;
+      var upd = null;
+      Object.keys(ev).forEach(function(k){
+        var m = k.match(/^xaxis\\d*\\.range\\[([01])\\]$/);
+        if (m) { upd = upd || {}; upd['xaxis.range[' + m[1] + ']'] = ev[k]; }
+        if (/^xaxis\\d*\\.autorange$/.test(k)) { upd = {'xaxis.autorange': true}; }
+      });
+      if (!upd) return;
+      busy = true;
+      var p = figs.filter(function(f){ return f !== src; }).map(function(f){ return Plotly.relayout(f, upd); });
+      Promise.all(p).then(function(){ busy = false; }, function(){ busy = false; });
+    });
+  });
+  function mark(){
+    var ok = 0;
+    document.querySelectorAll('.figure').forEach(function(f){
+      var r = f.getBoundingClientRect();
+      f.setAttribute('data-top', Math.round(r.top + window.scrollY));
+      f.setAttribute('data-height', Math.round(r.height));
+      if (f.querySelector('.main-svg')) ok += 1;
+    });
+    document.body.setAttribute('data-figures-drawn', ok);
+  }
+  window.addEventListener('load', function(){ setTimeout(mark, 0); });
+  mark();
+})();
+"""
+
+
+def _e(x):
+    return html.escape(str(x))
+
+
+def _num(x, fmt=".3f", scale=1.0):
+    return "n/a" if x is None else format(float(x) * scale, fmt)
+
+
+def _key_table(s):
+    rows = [("outage-end horizontal RMS", _num(s.get("outage_end_horizontal_rms_m")), "m"),
+            ("outage-end horizontal median", _num(s.get("outage_end_horizontal_median_m")), "m"),
+            ("outage-end horizontal max", _num(s.get("outage_end_horizontal_max_m")), "m"),
+            ("outage-end vertical RMS", _num(s.get("outage_end_vertical_rms_m")), "m"),
+            ("worst-in-outage horizontal RMS", _num(s.get("outage_worst_horizontal_rms_m")), "m"),
+            ("GNSS-on horizontal RMS", _num(s.get("gnss_on_horizontal_rms_m"), ".2f", 100), "cm"),
+            ("GNSS-on vertical RMS", _num(s.get("gnss_on_vertical_rms_m"), ".2f", 100), "cm"),
+            ("GNSS fixes scored", _e(s.get("gnss_on_fixes", "n/a")), ""),
+            ("outages", _e(s.get("outages", "n/a")), ""),
+            ("IMU epochs", _e(s.get("epochs", "n/a")), ""),
+            ("duration", _num(s.get("duration_s"), ".1f"), "s"),
+            ("filter states", _e(s.get("states", "n/a")), ""),
+            ("run time", _num(s.get("elapsed_s"), ".2f"), "s")]
+    fw = s.get("forward")
+    if s.get("solution") == "smoothed" and isinstance(fw, dict):
+        rows.insert(5, ("forward filter: outage-end horizontal RMS", _num(fw.get("outage_end_horizontal_rms_m")),
+                        "m"))
+    body = "".join(f"<tr><td class=l>{a}</td><td>{b}</td><td class=l>{c}</td></tr>" for a, b, c in rows)
+    return f"<table><tr><th class=l>figure</th><th>value</th><th class=l>unit</th></tr>{body}</table>"
+
+
+def _counts_table(s):
+    meas = s.get("measurements") or {}
+    hm = (s.get("health") or {}).get("measurements") or {}
+    if not meas and not hm:
+        return ""
+    rows = []
+    for name in list(meas) + [n for n in hm if n not in meas]:
+        m, h = meas.get(name) or {}, hm.get(name) or {}
+        rows.append(f"<tr><td class=l>{_e(name)}</td><td>{_e(m.get('used', ''))}</td>"
+                    f"<td>{_e(m.get('rejected', ''))}</td><td>{_e(m.get('skipped', ''))}</td>"
+                    f"<td>{_e(m.get('rows', ''))}</td><td>{_e(m.get('rows_rejected', ''))}</td>"
+                    f"<td>{_num(h.get('mean_nis'), '.2f')}</td><td>{_num(h.get('dof'), '.2f')}</td></tr>")
+    return ("<table><tr><th class=l>measurement</th><th>used</th><th>rejected</th><th>skipped</th><th>rows</th>"
+            "<th>rows rejected</th><th>mean NIS</th><th>dof</th></tr>" + "".join(rows) + "</table>")
+
+
+def _outage_table(s, solution):
+    rows = s.get("outage_table") or []
+    if not rows:
+        return "<p>No GNSS outages in this run.</p>"
+    body = "".join(
+        f"<tr><td>{r['k']}</td><td>{r['start_s']:.2f}</td><td>{r['end_s']:.2f}</td>"
+        f"<td>{_num(r.get('horizontal_m'))}</td><td>{_num(r.get('vertical_m'))}</td>"
+        f"<td>{_num(r.get('worst_horizontal_m'))}</td><td>{_num(r.get('worst_time_s'), '.2f')}</td></tr>"
+        for r in rows)
+    return (f"<p class=note>Errors of the {_e(solution)} solution against the withheld fixes; windows in seconds "
+            "after the first GNSS fix.</p><table><tr><th>outage</th><th>start [s]</th><th>end [s]</th>"
+            "<th>end horiz [m]</th><th>end vert [m]</th><th>worst horiz [m]</th><th>worst at [s]</th></tr>"
+            + body + "</table>")
+
+
+def _estimates_table(s):
+    fin = s.get("final_estimates") or {}
+    if not fin:
+        return ""
+    rows = []
+    for key, v in fin.items():
+        vals, sig = v.get("values") or [], v.get("sigma") or []
+        for j, x in enumerate(vals):
+            sj = sig[j] if j < len(sig) else None
+            rows.append(f"<tr><td class=l>{_e(key)}[{j}]</td><td>{_num(x, '.6g')}</td><td>{_num(sj, '.3g')}</td>"
+                        f"<td class=l>{_e(v.get('unit', ''))}</td></tr>")
+    return ("<table><tr><th class=l>state</th><th>final value</th><th>1σ</th><th class=l>unit (file)</th></tr>"
+            + "".join(rows) + "</table>")
+
+
+def _config_section(run):
+    if run.config is not None:
+        return ("<p class=note>From config_used.json (the validated configuration; relative paths are relative to "
+                "the configuration file).</p><pre>" + _e(json.dumps(run.config, indent=2)) + "</pre>")
+    s = run.summary
+    keep = {k: s[k] for k in ("scheme", "solution", "coupling", "states", "imu_time_offset_s", "noise_used",
+                              "startup", "rinex", "imu_gaps") if k in s}
+    return ("<p class=note>config_used.json is not in the run folder; what summary.json records about the set-up:"
+            "</p><pre>" + _e(json.dumps(keep, indent=2)) + "</pre>")
+
+
+def _header(run):
+    s = run.summary
+    h = s.get("health") or {}
+    verdict = str(h.get("verdict", "unknown"))
+    fg, bg = _VERDICT_COLOURS.get(verdict, ("#333", "#eee"))
+    items = "".join(f"<li><b>reason:</b> {_e(r)}</li>" for r in h.get("reasons") or [])
+    items += "".join(f"<li>warning: {_e(w)}</li>" for w in h.get("warnings") or [])
+    meta = (f"{_e(s.get('coupling', ''))} coupling, {_e(s.get('scheme', ''))} scheme, "
+            f"{_e(s.get('solution', 'forward'))} solution scored; run folder {_e(run.dir.resolve())}")
+    return (f"<header><h1>inskit run report: {_e(run.name)}</h1><p class=meta>{meta}</p>"
+            f"<p>Health: <span class=verdict id=verdict style=\"color:{fg};background:{bg};border-color:{fg}\">"
+            f"{_e(verdict)}</span></p>" + (f"<ul>{items}</ul>" if items else "<p>No reasons or warnings.</p>")
+            + "</header>")
+
+
+def build_report(run_dir, out=None):
+    """Write the HTML report of a navigate run folder.
+
+    Parameters
+    ----------
+    run_dir : path
+        A folder written by ``inskit navigate`` (must hold ``summary.json`` and
+        ``solution_forward.csv``).
+    out : path, optional
+        The HTML file (default ``run_dir/report.html``), written atomically.
+
+    Returns
+    -------
+    dict
+        ``report`` (path), ``bytes``, ``plots`` (figure names, in page order),
+        ``seconds``.
+
+    Raises
+    ------
+    InputError
+        Not a run folder, or a damaged ``summary.json`` / CSV.
+    """
+    t_start = time.perf_counter()
+    import plotly.graph_objects as go
+    from plotly.subplots import make_subplots
+
+    run = _Run(run_dir)
+    out = Path(out) if out is not None else run.dir / "report.html"
+    figs = [("track", "Track", *_fig_track(run, go), False),
+            ("sigmas", "Position, velocity and attitude sigmas", *_fig_sigmas(run, go, make_subplots), True),
+            ("innovations", "Innovations", *_fig_innovations(run, go, make_subplots), True),
+            ("estimates", "Sensor-error estimates", *_fig_estimates(run, go, make_subplots), True)]
+    parts, names, first, any_dec = [], [], True, False
+    for name, title, fig, dec, timed in figs:
+        if fig is None:
+            continue
+        any_dec |= dec
+        div = fig.to_html(full_html=False, include_plotlyjs=first, div_id=f"fig-{name}",
+                          config={"displaylogo": False, "responsive": True,
+                                  "modeBarButtonsToRemove": ["toImage"]})
+        first = False
+        parts.append(f"<section class=\"figure{' tplot' if timed else ''}\" id=\"sec-{name}\">"
+                     f"<h2>{_e(title)}</h2>{div}</section>")
+        names.append(name)
+    s = run.summary
+    notes = [f"Time axes start at the {_e(run.t0_how)} (t = {run.t0:.3f} s); the time plots share one linked axis "
+             "(zoom one, the others follow)."]
+    notes.append(f"Series longer than {MAX_POINTS:,} points are decimated to at most {MAX_POINTS:,} per trace by "
+                 "keeping each bin's minimum and maximum, so peaks and worst cases are shown"
+                 + (" (decimation applied in this report)." if any_dec else " (none needed here)."))
+    if run.fixes is None:
+        notes.append("GNSS fixes: the fix file named in the configuration was not found from the run folder; the "
+                     "track marks the solution at the GNSS update times from innovations.csv instead."
+                     if run.innov else "GNSS fixes: not available in this run folder.")
+    if run.innov is None:
+        notes.append("innovations.csv is not in the run folder: no innovation plot.")
+    page = [
+        "<!DOCTYPE html><html lang=en><head><meta charset=utf-8>",
+        "<meta name=viewport content=\"width=device-width, initial-scale=1\">",
+        f"<title>inskit report: {_e(run.name)}</title><style>{_CSS}</style></head><body><main>",
+        _header(run),
+        "<h2>Key figures</h2><div class=cols><div>", _key_table(s), "</div><div>", _counts_table(s),
+        "</div></div>",
+        "<p class=note>" + "<br>".join(notes) + "</p>",
+        *parts,
+        "<h2>Final estimates</h2>", _estimates_table(s),
+        "<h2>Outages</h2>", _outage_table(s, s.get("solution", "forward")),
+        "<h2>Configuration used</h2>", _config_section(run),
+        f"<p class=note>Written by inskit report from {_e(run.dir.name)}/summary.json.</p>",
+        f"</main><script>{_JS}</script></body></html>",
+    ]
+    text = "\n".join(page)
+    write_text(out, text)
+    return {"report": str(out), "bytes": out.stat().st_size, "plots": names,
+            "seconds": time.perf_counter() - t_start}

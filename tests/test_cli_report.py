@@ -1,0 +1,56 @@
+"""``inskit report``: the command over inskit.jobs.report (registered on a
+bare click group, as inskit.cli will do)."""
+
+import json
+from pathlib import Path
+
+import click
+import pytest
+from click.testing import CliRunner
+
+from inskit.cli_report import register
+from inskit.errors import InputError
+
+def _group():
+    g = click.Group()
+    register(g)
+    return g
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory):
+    """A small real run: the tightly coupled walk (about 5 s)."""
+    from inskit.jobs import navigate as N
+    from inskit.jobs.config import load_config
+
+    root = Path(__file__).resolve().parents[1]
+    cfg = load_config(root / "examples" / "walk_0827_tight.toml", {"output": {"plots": False}})
+    res = N.navigate(cfg)
+    out = tmp_path_factory.mktemp("walk")
+    N.write_outputs(res, out, N.summary(res))
+    return out
+
+
+def test_report_json(run_dir, tmp_path):
+    out = tmp_path / "r.html"
+    r = CliRunner().invoke(_group(), ["report", str(run_dir), "--out", str(out), "--json"])
+    assert r.exit_code == 0, r.output
+    obj = json.loads(r.stdout)
+    assert set(obj) == {"report", "bytes", "plots", "seconds"}
+    assert obj["report"] == str(out) and obj["bytes"] == out.stat().st_size
+    assert obj["plots"] == ["track", "sigmas", "innovations", "estimates"]
+    text = out.read_text()
+    assert "clock_bias_m" in text and "unhealthy" in text  # the walk's clock estimate and its verdict
+
+
+def test_report_default_path_and_table(run_dir):
+    r = CliRunner().invoke(_group(), ["report", str(run_dir)])
+    assert r.exit_code == 0, r.output
+    assert (run_dir / "report.html").exists()
+    assert r.stdout.startswith(f"report: {run_dir / 'report.html'}")
+
+
+def test_report_not_a_run_folder(tmp_path):
+    r = CliRunner().invoke(_group(), ["report", str(tmp_path)])
+    assert r.exit_code != 0
+    assert isinstance(r.exception, InputError) and "summary.json is missing" in str(r.exception)

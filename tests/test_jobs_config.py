@@ -1,0 +1,259 @@
+"""The navigate configuration: the generated reference is current and
+complete, keys that would be ignored are errors naming the key, the CLI's
+--outages spec maps onto [outages], and [output] dir is relative to the
+config file."""
+
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from inskit.errors import ConfigError, InputError
+from inskit.jobs import config_doc
+from inskit.jobs.config import NavigateConfig, config_from_dict, load_config, outages_from_spec
+
+ROOT = Path(__file__).resolve().parents[1]
+DOC = ROOT / "docs" / "config.md"
+LOOSE = {"imu": {"file": "imu.csv"}, "gnss": {"file": "gnss.csv"}}
+TIGHT = {"imu": {"file": "imu.csv"}, "gnss": {"coupling": "tight", "obs": "a.obs", "nav": "a.nav"}}
+RINEX_LOOSE = {"imu": {"file": "imu.csv"}, "gnss": {"obs": "a.obs", "nav": "a.nav"}}
+
+
+def _cfg(base, **sections):
+    data = {k: dict(v) for k, v in base.items()}
+    for k, v in sections.items():
+        data[k] = {**data.get(k, {}), **v}
+    return config_from_dict(data, source="c.toml")
+
+
+# --- the generated reference ------------------------------------------------------
+def test_docs_config_md_is_fresh():
+    fresh = config_doc.render()
+    assert DOC.is_file() and DOC.read_text() == fresh, (
+        f"docs/config.md is stale: regenerate it with `{config_doc.REGENERATE}` from the repository root")
+
+
+def test_every_key_has_a_meaning():
+    assert config_doc.missing_meanings() == [], "give these fields a description= (scenario: SCENARIO_MEANINGS)"
+
+
+def _section_keys(text, heading):
+    """The keys of the table under ``heading`` (up to the next heading)."""
+    part = text.split(f"\n{heading}\n", 1)[1].split("\n#", 1)[0]
+    return [line.split("`")[1] for line in part.splitlines() if line.startswith("| `")]
+
+
+@pytest.mark.parametrize("name", ["imu", "gnss", "noise", "init", "constraints", "filter", "outages", "output"])
+def test_every_navigate_key_is_documented_in_its_section(name):
+    model = NavigateConfig.model_fields[name].annotation
+    assert _section_keys(config_doc.render(), f"### `[{name}]`") == list(model.model_fields)
+
+
+def test_scenario_sections_including_raw_gnss_are_documented():
+    from inskit.simulation.scenario import BlockageSpec, RawGnssSection
+
+    text = config_doc.render()
+    # the blockage windows are their own array of tables
+    assert _section_keys(text, "### `[raw_gnss]`") == [k for k in RawGnssSection.model_fields if k != "blockage"]
+    assert _section_keys(text, "### `[[raw_gnss.blockage]]`") == list(BlockageSpec.model_fields)
+    for heading in ("### `[start]`", "### `[[segment]]`", "### `[[vibration]]`"):
+        assert heading in text
+
+
+def test_rows_carry_unit_default_bounds_and_allowed_values():
+    from inskit.jobs.config import GnssSection, NoiseSection, OutagesSection
+
+    noise = {r["key"]: r for r in config_doc.rows(NoiseSection)}
+    assert noise["gyro_arw_deg_sqrt_h"]["unit"] == "deg/sqrt(h)"
+    assert noise["accel_vrw_m_s_sqrt_h"]["unit"] == "m/s/sqrt(h)"
+    assert noise["accel_bias_sigma_ug"]["unit"] == "micro-g"
+    assert noise["scale_factor_rw_ppm_sqrt_s"]["unit"] == "ppm/sqrt(s)"
+    assert noise["bias_tau_s"]["default"] == "`300.0`" and noise["bias_tau_s"]["allowed"] == "> 0"
+    gnss = {r["key"]: r for r in config_doc.rows(GnssSection)}
+    assert gnss["mask_deg"]["unit"] == "deg" and gnss["mask_deg"]["allowed"] == ">= 0, < 90"
+    assert gnss["coupling"]["allowed"] == '`"loose"`, `"tight"`'
+    assert gnss["clock_h_2"]["unit"] == "1/s"  # no suffix: the [unit] of the description
+    assert gnss["file"]["default"] == "unset" and gnss["file"]["type"] == "path (optional)"
+    out = {r["key"]: r for r in config_doc.rows(OutagesSection)}
+    assert out["windows_s"]["type"] == "array of [number, number]" and out["windows_s"]["unit"] == "s"
+
+
+def test_check_mode_reports_a_stale_file(tmp_path, capsys):
+    p = tmp_path / "config.md"
+    p.write_text("# old\n")
+    assert config_doc.main(["--check", str(p)]) == 1
+    assert config_doc.REGENERATE in capsys.readouterr().err
+    assert config_doc.main(["--write", str(p)]) == 0
+    assert config_doc.main(["--check", str(p)]) == 0
+
+
+# --- keys that would be ignored are errors -------------------------------------------
+def test_examples_and_the_blockage_configs_still_load():
+    load_config(ROOT / "examples" / "drive_0708.toml")
+    load_config(ROOT / "examples" / "walk_0827_tight.toml")
+    from inskit.jobs.reproduce_tight import BLOCKAGE_NAVIGATE
+
+    config_from_dict(BLOCKAGE_NAVIGATE)
+    config_from_dict({**BLOCKAGE_NAVIGATE, "gnss": {**BLOCKAGE_NAVIGATE["gnss"], "coupling": "tight",
+                                                    "obs": "obs.rnx", "nav": "nav.rnx", "systems": ["G"]}})
+
+
+def test_windows_without_the_windows_protocol(tmp_path):
+    p = tmp_path / "c.toml"
+    p.write_text('[imu]\nfile = "a.csv"\n[gnss]\nfile = "b.csv"\n[outages]\nwindows_s = [[15, 25]]\n')
+    with pytest.raises(ConfigError, match=r"c\.toml: field 'outages\.windows_s': windows_s is given but "
+                                          r"protocol = \"none\", which would ignore it; set protocol = \"windows\""):
+        load_config(p)
+    with pytest.raises(ConfigError, match=r"field 'outages\.windows_s': .*protocol = \"rtklibexplorer\""):
+        _cfg(LOOSE, outages={"protocol": "rtklibexplorer", "windows_s": [[15, 25]]})
+
+
+def test_windows_protocol_with_no_windows():
+    with pytest.raises(ConfigError, match=r"c\.toml: field 'outages\.windows_s': protocol = \"windows\" needs "
+                                          r"windows_s.*e\.g\. windows_s = \[\[15, 25\], \[30, 40\]\]"):
+        _cfg(LOOSE, outages={"protocol": "windows"})
+    assert _cfg(LOOSE, outages={"protocol": "windows", "windows_s": [[15, 25]]}).outages.windows_s == [(15.0, 25.0)]
+
+
+def test_keep_satellites_without_windows_or_without_tight_coupling():
+    with pytest.raises(ConfigError, match=r"field 'outages\.keep_satellites': keep_satellites = 2 needs outage "
+                                          r"windows"):
+        _cfg(TIGHT, outages={"keep_satellites": 2})
+    with pytest.raises(ConfigError, match=r"field 'outages\.keep_satellites': .*only tight coupling fuses"):
+        _cfg(LOOSE, outages={"protocol": "rtklibexplorer", "keep_satellites": 2})
+    cfg = _cfg(TIGHT, outages={"protocol": "windows", "windows_s": [[10, 20]], "keep_satellites": 2})
+    assert cfg.outages.keep_satellites == 2
+
+
+@pytest.mark.parametrize("key, value", [("obs", "a.obs"), ("mask_deg", 15.0), ("systems", ["G"]),
+                                        ("iono", "none"), ("use_doppler", False), ("doppler_sigma_scale", 2.5)])
+def test_rinex_and_tight_keys_with_loose_coupling_on_a_file(key, value):
+    with pytest.raises(ConfigError, match=rf"c\.toml: field 'gnss\.{key}': gnss\.{key} would be ignored: with "
+                                          r"coupling = \"loose\" and gnss\.file given"):
+        _cfg(LOOSE, gnss={key: value})
+
+
+def test_a_default_value_written_out_is_not_an_error():
+    # decided: only a change from the default is refused (it would change nothing, used or not)
+    assert _cfg(LOOSE, gnss={"mask_deg": 10.0, "systems": ["G", "E"], "use_doppler": True}).gnss.mask_deg == 10.0
+
+
+def test_tight_keys_with_loose_coupling_from_rinex():
+    # obs, nav, mask_deg ... serve our own single-point fixes here; the pseudorange-update keys do not
+    assert _cfg(RINEX_LOOSE, gnss={"mask_deg": 15.0, "systems": ["G"]}).gnss.mask_deg == 15.0
+    with pytest.raises(ConfigError, match=r"field 'gnss\.clock_h0': gnss\.clock_h0 would be ignored: it "
+                                          r"configures the pseudorange and Doppler updates of tight coupling"):
+        _cfg(RINEX_LOOSE, gnss={"clock_h0": 1e-20})
+
+
+def test_loose_keys_with_tight_coupling():
+    with pytest.raises(ConfigError, match=r"field 'gnss\.use_velocity': gnss\.use_velocity, "
+                                          r"gnss\.velocity_delay_s would be ignored: they describe fixes fused by "
+                                          r"loose coupling"):
+        _cfg(TIGHT, gnss={"use_velocity": True, "velocity_delay_s": 0.1})
+
+
+def test_file_keys_without_a_file():
+    with pytest.raises(ConfigError, match=r"field 'gnss\.format': gnss\.format would be ignored: it describes how "
+                                          r"gnss\.file is read, and no `file` is given"):
+        _cfg(TIGHT, gnss={"format": "rtklib-pos"})
+
+
+def test_init_keys_of_the_other_mode():
+    with pytest.raises(ConfigError, match=r"field 'init\.lat_deg': init\.lat_deg, init\.rpy_deg would be ignored: "
+                                          r"mode \"static-then-track\""):
+        _cfg(LOOSE, init={"lat_deg": 45.0, "rpy_deg": [0, 0, 90]})
+    given = {"mode": "given", "lat_deg": 45.0, "lon_deg": 7.0, "height_m": 300.0, "rpy_deg": [0, 0, 90]}
+    with pytest.raises(ConfigError, match=r"field 'init\.heading_speed_m_s': .*mode is \"given\""):
+        _cfg(LOOSE, init={**given, "heading_speed_m_s": 1.0})
+    assert _cfg(LOOSE, init=given).init.lat_deg == 45.0
+
+
+# --- --outages on the command line -------------------------------------------------
+def test_outages_spec_parsing():
+    assert outages_from_spec("windows:15-25,30-40") == {"protocol": "windows", "windows_s": [[15.0, 25.0],
+                                                                                            [30.0, 40.0]]}
+    assert outages_from_spec(" windows: 0.5 - 10 ") == {"protocol": "windows", "windows_s": [[0.5, 10.0]]}
+    assert outages_from_spec("rtklibexplorer") == {"protocol": "rtklibexplorer", "windows_s": []}
+    assert outages_from_spec("none") == {"protocol": "none", "windows_s": [], "keep_satellites": 0}
+
+
+@pytest.mark.parametrize("spec", ["windows", "windows:", "windows:15-", "windows:15-25,", "windows:25-15",
+                                  "windows:15..25", "windows:-5-10", "windows:a-b", "rtk", "None"])
+def test_malformed_outages_spec_is_an_input_error_with_an_example(spec):
+    with pytest.raises(InputError, match=r"--outages: .*e\.g\. windows:15-25,30-40"):
+        outages_from_spec(spec)
+
+
+class _Stop(Exception):
+    pass
+
+
+@pytest.fixture
+def captured(monkeypatch):
+    """Replace the navigate job by one that records the config and stops."""
+    import inskit.jobs.navigate as N
+
+    seen = []
+
+    def fake(cfg, **kw):
+        seen.append(cfg)
+        raise _Stop
+
+    monkeypatch.setattr(N, "navigate", fake)
+    return seen
+
+
+def _config(tmp_path, text=""):
+    p = tmp_path / "cfg" / "c.toml"
+    p.parent.mkdir(exist_ok=True)
+    p.write_text('[imu]\nfile = "imu.csv"\n[gnss]\nfile = "gnss.csv"\n' + text)
+    return p
+
+
+@pytest.mark.parametrize("spec, protocol, windows", [
+    ("windows:15-25,30-40", "windows", [(15.0, 25.0), (30.0, 40.0)]),
+    ("rtklibexplorer", "rtklibexplorer", []),
+    ("none", "none", []),
+])
+def test_cli_outages_map_onto_the_config(tmp_path, captured, spec, protocol, windows):
+    from inskit.cli import cli
+
+    cfg_file = _config(tmp_path, '[outages]\nprotocol = "windows"\nwindows_s = [[1, 2]]\n')
+    r = CliRunner().invoke(cli, ["navigate", str(cfg_file), "--outages", spec, "--out", str(tmp_path / "o")])
+    assert isinstance(r.exception, _Stop), r.output
+    assert captured[0].outages.protocol == protocol and captured[0].outages.windows_s == windows
+
+
+def test_cli_malformed_outages(tmp_path, captured):
+    from inskit.cli import cli
+
+    r = CliRunner().invoke(cli, ["navigate", str(_config(tmp_path)), "--outages", "windows:25-15",
+                                 "--out", str(tmp_path / "o")])
+    assert isinstance(r.exception, InputError) and not captured
+    assert "--outages: the window '25-15' must end after it starts" in str(r.exception)
+    assert "e.g. windows:15-25,30-40" in str(r.exception)
+
+
+def test_cli_malformed_outages_is_one_line_and_exit_2(tmp_path, capsys):
+    from inskit.cli import main
+
+    with pytest.raises(SystemExit) as e:
+        main(["navigate", str(_config(tmp_path)), "--outages", "sometimes", "--out", str(tmp_path / "o")])
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and err.count("\n") == 1
+    assert err.startswith("inskit: error: --outages: 'sometimes' is not an outage protocol")
+
+
+# --- [output] dir ------------------------------------------------------------------
+def test_output_dir_is_relative_to_the_config_file(tmp_path, captured, monkeypatch):
+    from inskit.cli import cli
+
+    cwd = tmp_path / "elsewhere"
+    cwd.mkdir()
+    monkeypatch.chdir(cwd)
+    cfg_file = _config(tmp_path, '[output]\ndir = "results/run1"\n')
+    r = CliRunner().invoke(cli, ["navigate", str(cfg_file)])
+    assert isinstance(r.exception, _Stop), r.output
+    assert (cfg_file.parent / "results" / "run1").is_dir()  # the output folder was checked writable there
+    assert not (cwd / "results").exists()

@@ -1,0 +1,192 @@
+"""The HTML run report (inskit.jobs.report), checked in a real headless
+browser (Debian's chromium): it renders every figure with networking off, logs
+no console error, fetches nothing, and its decimation keeps the extremes."""
+
+import json
+import os
+import shutil
+import subprocess
+from html.parser import HTMLParser
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from inskit.errors import InputError
+from inskit.jobs.report import build_report, decimate, envelope
+
+ROOT = Path(__file__).resolve().parents[1]
+EXAMPLE = ROOT / "examples" / "drive_0708.toml"
+CHROMIUM = shutil.which("chromium") or (
+    "/usr/bin/chromium" if os.path.exists("/usr/bin/chromium") else None)
+WIDTH, HEIGHT = 1280, 4400
+
+
+@pytest.fixture(scope="module")
+def run_dir(tmp_path_factory):
+    """A real navigate run of the drive_0708 example (no PNG plots)."""
+    from inskit.jobs import navigate as N
+    from inskit.jobs.config import load_config
+
+    cfg = load_config(EXAMPLE, {"output": {"plots": False}})
+    res = N.navigate(cfg)
+    out = tmp_path_factory.mktemp("run")
+    N.write_outputs(res, out, N.summary(res))
+    return out
+
+
+@pytest.fixture(scope="module")
+def report(run_dir):
+    return build_report(run_dir)
+
+
+def _chromium(url, tmp, *extra):
+    if CHROMIUM is None:
+        pytest.skip("Debian's chromium is not installed (CI installs it in .ci/run: apt-get install chromium)")
+    args = [CHROMIUM, "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+            "--disable-background-networking", "--disable-component-update", "--disable-sync",
+            f"--user-data-dir={tmp / 'profile'}", f"--window-size={WIDTH},{HEIGHT}",
+            "--virtual-time-budget=10000", "--enable-logging=stderr", "--v=0", *extra, url]
+    p = subprocess.run(args, capture_output=True, text=True, timeout=120)
+    return p
+
+
+def _console_errors(stderr):
+    """Console errors in chromium's log: uncaught exceptions, console.error."""
+    return [ln for ln in stderr.splitlines()
+            if "Uncaught" in ln or ("CONSOLE" in ln and ("ERROR:" in ln or "error" in ln.lower().split("console")[0]))]
+
+
+def _render(path, tmp, *extra):
+    """Screenshot + DOM after the scripts ran; returns (rgb array, dom, errors)."""
+    png = tmp / "shot.png"
+    url = Path(path).resolve().as_uri()
+    p1 = _chromium(url, tmp, f"--screenshot={png}", *extra)
+    p2 = _chromium(url, tmp, "--dump-dom", *extra)
+    assert png.exists(), p1.stderr[-2000:]
+    import matplotlib.image as mpimg
+
+    img = mpimg.imread(png)[..., :3]
+    return img, p2.stdout, _console_errors(p1.stderr) + _console_errors(p2.stderr)
+
+
+def _bands(dom):
+    """Where the page says it drew each figure: name -> (top, height) [px]."""
+    import re
+
+    return {m[0]: (int(m[1]), int(m[2])) for m in
+            re.findall(r'id="sec-(\w+)" data-top="(\d+)" data-height="(\d+)"', dom)}
+
+
+def _check_figures(img, dom, plots):
+    bands = _bands(dom)
+    assert list(bands) == plots
+    assert f'data-figures-drawn="{len(plots)}"' in dom
+    for name, (top, h) in bands.items():
+        assert top + h <= img.shape[0], f"{name} below the screenshot"
+        band = img[top + 40: top + h - 10]
+        ink = np.mean(np.any(band < 0.85, axis=2))
+        colours = len(np.unique((band * 15).astype(np.uint8).reshape(-1, 3), axis=0))
+        # plot lines, markers, axes and shaded outage windows: a blank band has ~0 ink and 1 colour
+        assert ink > 0.01, f"{name}: band {top}..{top + h} px is blank ({ink:.4f} ink)"
+        assert colours > 20, f"{name}: only {colours} colours"
+
+
+def test_report_renders_in_headless_chromium(report, tmp_path):
+    img, dom, errors = _render(report["report"], tmp_path)
+    assert not errors, errors
+    _check_figures(img, dom, report["plots"])
+
+
+def test_report_renders_with_networking_off(report, tmp_path):
+    img, dom, errors = _render(report["report"], tmp_path, "--proxy-server=127.0.0.1:9")
+    assert not errors, errors
+    _check_figures(img, dom, report["plots"])
+
+
+def test_console_errors_are_caught(tmp_path):
+    """The console check can fail: a page that throws is reported."""
+    page = tmp_path / "bad.html"
+    page.write_text("<html><body><p>x</p><script>throw new Error('boom-report-check');</script></body></html>")
+    p = _chromium(page.resolve().as_uri(), tmp_path, f"--screenshot={tmp_path / 'bad.png'}")
+    errors = _console_errors(p.stderr)
+    assert any("boom-report-check" in e for e in errors)
+
+
+class _Links(HTMLParser):
+    def __init__(self):
+        super().__init__()
+        self.urls = []
+
+    def handle_starttag(self, tag, attrs):
+        for k, v in attrs:
+            if k in ("src", "href", "srcset", "poster", "data") and v:
+                self.urls.append((tag, k, v))
+
+
+def test_report_is_self_contained_and_small(report, run_dir):
+    text = Path(report["report"]).read_text()
+    parser = _Links()
+    parser.feed(text)
+    remote = [u for u in parser.urls if u[2].strip().lower().startswith(("http:", "https:", "//"))]
+    assert not remote, remote
+    assert "<script src" not in text.lower()
+    assert "url(http" not in text.lower().replace(" ", "")
+    assert report["plots"] == ["track", "sigmas", "innovations", "estimates"]
+    assert report["bytes"] == Path(report["report"]).stat().st_size < 5e6
+    s = json.loads((run_dir / "summary.json").read_text())
+    assert s["health"]["verdict"] in text and "2.769" in text  # verdict and outage-end RMS on the page
+
+
+def test_report_works_without_innovations_and_config(run_dir, tmp_path):
+    d = tmp_path / "bare"
+    d.mkdir()
+    for f in ("summary.json", "solution_forward.csv"):
+        shutil.copy(run_dir / f, d / f)
+    r = build_report(d, tmp_path / "bare.html")
+    assert r["plots"] == ["track", "sigmas", "estimates"]
+    text = Path(r["report"]).read_text()
+    assert "config_used.json is not in the run folder" in text and "noise_used" in text
+
+
+def test_not_a_run_folder(tmp_path):
+    with pytest.raises(InputError, match="summary.json is missing") as e:
+        build_report(tmp_path)
+    assert str(tmp_path) in str(e.value)
+
+
+def test_truncated_summary(run_dir, tmp_path):
+    d = tmp_path / "cut"
+    d.mkdir()
+    text = (run_dir / "summary.json").read_text()
+    (d / "summary.json").write_text(text[: len(text) // 2])
+    shutil.copy(run_dir / "solution_forward.csv", d / "solution_forward.csv")
+    with pytest.raises(InputError, match=r"summary.json: line \d+: not valid JSON"):
+        build_report(d)
+
+
+def test_decimate_keeps_extremes():
+    rng = np.random.default_rng(1)
+    n = 200_000
+    y = rng.normal(size=n)
+    y[123_457] = 50.0
+    y[7] = -40.0
+    z = np.cumsum(rng.normal(size=n))
+    idx = decimate(n, [y, z], 5000)
+    assert len(idx) <= 5000 and idx[0] == 0 and idx[-1] == n - 1
+    assert 123_457 in idx and 7 in idx
+    assert np.argmax(z) in idx and np.argmin(z) in idx
+    assert np.all(np.diff(idx) > 0)
+
+
+def test_envelope_keeps_extremes_and_gaps():
+    t = np.arange(100_000) * 0.01
+    y = np.sin(t)
+    y[54_321] = 9.0
+    y[(t > 300) & (t < 320)] = np.nan
+    x0, dx, v = envelope(t, y, 600)
+    assert len(v) == 1200
+    assert np.nanmax(v) == 9.0 and np.nanmin(v) == pytest.approx(-1.0, abs=1e-6)
+    k = int(np.nanargmax(v))
+    assert abs(x0 + k * dx - t[54_321]) <= 2 * dx  # drawn within a bin of its time
+    assert np.isnan(v[int((310 - x0) / dx)])  # a gap in the data stays a gap
