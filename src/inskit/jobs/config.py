@@ -360,6 +360,26 @@ class OutputSection(_Strict):
     plots: bool = Field(True, description="write the PNG plots (--no-plots turns them off)")
 
 
+class OdometerSection(_Strict):
+    """Wheel speed (odometer) aiding: the speed along the vehicle's forward
+    axis at the wheel point, with an estimated scale-factor error."""
+
+    file: Path = Field(..., description="odometer log: CSV with time_s (IMU time base) and speed_m_s")
+    time_offset_s: float = Field(0.0, description="added to the log's time tags [s]")
+    sigma_m_s: float = Field(0.05, gt=0, description="white noise of one speed reading [m/s]")
+    rate_hz: float | None = Field(None, gt=0, description="use at most this many readings per second "
+                                  "(default: every reading)")
+    lever_arm_b_m: tuple[float, float, float] = Field((0.0, 0.0, 0.0), description="IMU to the wheel point, "
+                                                      "body axes [m]")
+    estimate_scale: bool = Field(True, description="estimate the odometer scale-factor error as a state")
+    scale_sigma0: float = Field(0.01, gt=0, description="initial sigma of the scale-factor error [-]")
+    scale_rw: float = Field(1e-6, ge=0, description="random walk of the scale-factor error [1/sqrt(s)]")
+    with_nhc: bool = Field(False, description="apply the non-holonomic constraint at the wheel with each "
+                           "reading (then leave constraints.nhc off)")
+    nhc_sigma_m_s: float = Field(0.1, gt=0, description="sigma of the lateral and vertical rows with with_nhc "
+                                 "[m/s]")
+
+
 class NavigateConfig(_Strict):
     """The whole ``inskit navigate`` configuration."""
 
@@ -372,6 +392,7 @@ class NavigateConfig(_Strict):
     filter: FilterSection = Field(FilterSection(), description="integration scheme and error state")
     outages: OutagesSection = Field(OutagesSection(), description="GNSS outage protocol")
     output: OutputSection = Field(OutputSection(), description="results")
+    odometer: OdometerSection | None = Field(None, description="wheel-speed aiding (optional)")
     base_dir: Path = Field(Path("."), description="(set by the loader, not a key of the file) the folder "
                            "relative paths are taken from: the config file's")
 

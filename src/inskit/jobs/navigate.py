@@ -151,6 +151,25 @@ def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = N
     return imu.slice(k0), gnss
 
 
+def odometer_measurement(cfg: NavigateConfig, imu: ImuData):
+    """The odometer plug-in over the ``[odometer]`` log, thinned to
+    ``rate_hz``; refuses a log that does not overlap the IMU's."""
+    from ..integration import Odometer
+
+    o = cfg.odometer
+    path = cfg.resolve(o.file)
+    t, v = io.read_speed(path)
+    t = t + o.time_offset_s
+    if t[-1] < imu.time[0] or t[0] > imu.time[-1]:
+        raise InputError(f"{path.name}: odometer times {t[0]:.3f}..{t[-1]:.3f} s do not overlap the IMU's "
+                         f"{imu.time[0]:.3f}..{imu.time[-1]:.3f} s: mismatched time bases? (odometer.time_offset_s)")
+    if o.rate_hz is not None and len(t) > 1:
+        keep = np.r_[True, np.diff(np.floor(t * o.rate_hz)) > 0]
+        t, v = t[keep], v[keep]
+    return Odometer(t, v, o.sigma_m_s, lever_arm_b=o.lever_arm_b_m, with_nhc=o.with_nhc,
+                    nhc_sigma_m_s=o.nhc_sigma_m_s)
+
+
 def tight_measurements(cfg: NavigateConfig, raw: RawGnss, windows, lever):
     """Pseudorange (and Doppler) plug-ins over the range table; inside outage
     windows only the ``keep_satellites`` highest satellites stay."""
@@ -351,12 +370,22 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         initial = NavState.from_euler(imu.time[0], [i.lat_deg * DEG, i.lon_deg * DEG, i.height_m], i.v_ned_m_s,
                                       np.radians(i.rpy_deg))
     clock_start = None
+    extra_blocks, odo = [], None
+    if cfg.odometer is not None:
+        odo = odometer_measurement(cfg, imu)
+        if cfg.odometer.with_nhc and cfg.constraints.nhc:
+            raise InputError("odometer.with_nhc applies the non-holonomic constraint at the wheel: turn "
+                             "constraints.nhc off (it would be applied twice)")
+        if cfg.odometer.estimate_scale:
+            from ..integration import OdometerScale
+
+            extra_blocks.append(OdometerScale(cfg.odometer.scale_sigma0, cfg.odometer.scale_rw))
     if tight:
         meas_gnss, use_rows = tight_measurements(cfg, raw, windows, lever)
         clk_blocks, clock_start = clock_blocks(cfg, raw, initial, lever, use_rows)
-        settings = build_settings(cfg, startup, measured, clk_blocks)
+        settings = build_settings(cfg, startup, measured, list(clk_blocks) + extra_blocks)
     else:
-        settings = build_settings(cfg, startup, measured)
+        settings = build_settings(cfg, startup, measured, extra_blocks)
     if cfg.filter.scheme == "uncoupled":
         if smooth:
             raise InputError("the RTS smoother needs a filter: the uncoupled scheme has none")
@@ -377,6 +406,8 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
             meas.append(ZeroVelocity(static_intervals(gnss_used), c.rate_hz, c.zupt_sigma_m_s))
         if c.nhc:
             meas.append(NonHolonomic([(imu.time[0], imu.time[-1])], c.rate_hz, c.nhc_sigma_m_s))
+        if odo is not None:
+            meas.append(odo)
         extra = {g.row: gap_process_noise(settings.layout, g.length_s, np.radians(cfg.imu.gap_rate_sigma_deg_s),
                                           cfg.imu.gap_accel_sigma_m_s2) for g in gaps}
         out = run_filter(imu, initial, meas, settings, smoother=smooth, progress=progress, extra_noise=extra)
