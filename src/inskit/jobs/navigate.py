@@ -280,15 +280,20 @@ def static_noise_density(imu: ImuData, t_end):
     return arw, vrw
 
 
-def build_settings(cfg: NavigateConfig, startup: Startup | None, measured=None, extra_blocks=()) -> FilterSettings:
-    n = cfg.noise
+def sensor_noise(n, measured=None) -> SensorNoise:
+    """The filter's sensor noise (SI) from a ``[noise]`` section (datasheet
+    units), the white noise raised to what the static start measured."""
     arw = n.gyro_arw_deg_sqrt_h * DEG / 60.0
     vrw = n.accel_vrw_m_s_sqrt_h / 60.0
     if measured:
         arw = max(arw, measured["gyro_arw_rad_sqrt_s"])
         vrw = max(vrw, measured["accel_vrw_m_s_sqrt_s"])
-    noise = SensorNoise(arw, vrw, n.gyro_bias_sigma_deg_h * DEG_PER_HOUR, n.accel_bias_sigma_ug * MICRO_G,
-                        n.bias_tau_s, n.scale_factor_rw_ppm_sqrt_s * 1e-6, n.time_offset_rw_s_sqrt_s)
+    return SensorNoise(arw, vrw, n.gyro_bias_sigma_deg_h * DEG_PER_HOUR, n.accel_bias_sigma_ug * MICRO_G,
+                       n.bias_tau_s, n.scale_factor_rw_ppm_sqrt_s * 1e-6, n.time_offset_rw_s_sqrt_s)
+
+
+def build_settings(cfg: NavigateConfig, startup: Startup | None, measured=None, extra_blocks=()) -> FilterSettings:
+    noise = sensor_noise(cfg.noise, measured)
     i = cfg.init
     unc = InitialUncertainty((i.sigma_pos_m,) * 3, i.sigma_vel_m_s, i.sigma_roll_pitch_deg * DEG,
                              i.sigma_yaw_deg * DEG, i.sigma_gyro_bias_deg_s * DEG, i.sigma_accel_bias_m_s2,
