@@ -18,12 +18,19 @@ def _sol(n=5, lon_deg=179.999, dlon_deg=0.01, lat_deg=10.0):
     return NavSolution.from_euler(t, lla, np.zeros((n, 3)), np.zeros((n, 3)))
 
 
-def test_interrupted_write_leaves_nothing_under_the_final_name(tmp_path, monkeypatch):
-    path = tmp_path / "sol.csv"
+@pytest.mark.parametrize("name", ["sol.csv", "sol.parquet"])
+def test_interrupted_write_leaves_nothing_under_the_final_name(tmp_path, monkeypatch, name):
+    """Ctrl-C while the bytes go out (inside the writers' atomic block)."""
+    import pyarrow.csv as pcsv
+    import pyarrow.parquet as pq
 
-    def boom(self, *a, **k):
+    path = tmp_path / name
+
+    def boom(*a, **k):
         raise KeyboardInterrupt
 
+    monkeypatch.setattr(pcsv, "write_csv", boom)
+    monkeypatch.setattr(pq, "write_table", boom)
     monkeypatch.setattr(pd.DataFrame, "to_csv", boom)
     with pytest.raises(KeyboardInterrupt):
         io.write_solution(path, _sol())

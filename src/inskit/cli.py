@@ -173,7 +173,10 @@ def _summary_table(s):
 @click.option("--force", is_flag=True, help="Overwrite --plot if it exists.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def evaluate(solution_file, truth_file, plot_file, force, as_json):
-    """Errors of a navigation solution against a truth file."""
+    """Errors of a navigation solution against a truth file.
+
+    Either file may be CSV (.csv, .csv.gz) or Parquet (.parquet, as navigate
+    writes at full rate); the format is told by content."""
     from . import analysis, io
 
     _check_plot_file(plot_file, force)
@@ -220,6 +223,12 @@ def bench(quick, as_json):
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Output folder (default from config).")
 @click.option("--force", is_flag=True, help="Overwrite an output folder that already holds results.")
 @click.option("--no-plots", is_flag=True, help="Skip the PNG plots.")
+@click.option("--output-format", type=click.Choice(["parquet", "csv", "both"]),
+              help="Solution files: Parquet at every IMU epoch, CSV at --output-rate, or both (default: the "
+              "config's [output] format, else both).")
+@click.option("--output-rate", type=click.FloatRange(min=0, min_open=True), metavar="HZ",
+              help="Rows per second of the CSV solution files (default: [output] rate_hz, else 10 Hz); a rate at "
+              "or above the IMU rate writes every epoch.")
 @click.option("--truth", "truth_file", type=click.Path(dir_okay=False),
               help="A truth file (e.g. from inskit simulate): add the errors against it to the summary.")
 @click.option("--strict", is_flag=True, help="Exit with status 3 when the run's health verdict is unhealthy.")
@@ -227,7 +236,8 @@ def bench(quick, as_json):
               "the run (as `inskit report`).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_arm, imu_time_offset, scheme, outages,
-             smooth, calibrate_time_offset, out_dir, force, no_plots, truth_file, strict, with_report, as_json):
+             smooth, calibrate_time_offset, out_dir, force, no_plots, output_format, output_rate, truth_file, strict,
+             with_report, as_json):
     """INS/GNSS integration from a TOML config file or flags."""
     from .jobs import config as C
     from .jobs import navigate as N
@@ -257,6 +267,10 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
         over.setdefault("outages", {}).update(C.outages_from_spec(outages))
     if no_plots:
         over.setdefault("output", {})["plots"] = False
+    if output_format:
+        over.setdefault("output", {})["format"] = output_format
+    if output_rate is not None:
+        over.setdefault("output", {})["rate_hz"] = output_rate
     if config_file:
         cfg = C.load_config(config_file, over)
     else:
@@ -268,7 +282,8 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
     target = Path(out_dir) if out_dir else (cfg.resolve(cfg.output.dir) if cfg.output.dir else Path("out") / cfg.name)
     if target.exists() and any(target.iterdir()) and not force:
         raise InputError(f"{target}: already holds results; refusing to overwrite them (use --force or --out)")
-    for name in ("solution_forward.csv", "solution_smoothed.csv", "summary.json"):
+    for name in ("solution_forward.csv", "solution_smoothed.csv", "solution_forward.parquet",
+                 "solution_smoothed.parquet", "summary.json"):
         inputs = [cfg.resolve(f) for f in (cfg.imu.file, cfg.gnss.file, cfg.gnss.obs, cfg.gnss.nav) if f is not None]
         for inp in inputs + ([Path(config_file)] if config_file else []):
             if same_file(target / name, inp):
@@ -564,12 +579,16 @@ from .cli_platform import platform as _platform_group  # noqa: E402
 from .cli_platform import reproduce_integration_filters as _reproduce_integration_filters  # noqa: E402
 from .cli_gnss import register as _register_gnss  # noqa: E402
 from .cli_report import register as _register_report  # noqa: E402
+from .cli_reproduce import register as _register_reproduce  # noqa: E402
+from .cli_study import register as _register_study  # noqa: E402
 
 _register_gyrofree(cli, reproduce)
 cli.add_command(_platform_group, "platform")
 reproduce.add_command(_reproduce_integration_filters, "integration-filters")
 _register_gnss(cli, reproduce)
 _register_report(cli)
+_register_reproduce(reproduce)
+_register_study(cli)
 
 
 def main(argv=None):

@@ -2,6 +2,10 @@
 
 * :mod:`.coarse`: levelling on a static start and heading from the GNSS track
   (the integration filter's start-up), static-interval detection.
+* :mod:`.inmotion`: start-up on a log without rest (levelling on the
+  specific force less the GNSS acceleration, heading from the course) and
+  the bank of yaw hypotheses for a large heading error; ``auto_startup``
+  chooses between static and in-motion.
 * :mod:`.analytic`: the one-step analytic alignment of source 002:
   accelerometer basis, gyro basis, their blend by m, the criterion J, eq. 29.
 * :mod:`.optimize`: the blending gain by a genetic algorithm and by a scalar

@@ -8,7 +8,7 @@ yaw equals the GNSS course; the gyros carry that yaw back to the start.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
@@ -110,6 +110,19 @@ class Startup:
         End of the static interval used for levelling [s].
     heading_time : float
         When the heading was taken from the track [s].
+    mode : str
+        The start-up used: ``"static-then-track"`` or ``"in-motion"``.
+    reason : str
+        Why that start-up (the automatic choice of :func:`inskit.alignment.inmotion.auto_startup`).
+    sigma : dict or None
+        Initial sigmas the start-up found from the data, in config units
+        (``sigma_pos_m``, ``sigma_vel_m_s``, ``sigma_roll_pitch_deg``,
+        ``sigma_yaw_deg``); None: the configured ones stand.
+    bank : dict or None
+        The yaw-hypothesis bank's result (:func:`inskit.alignment.inmotion.yaw_bank`), if it ran.
+    at_yaw : callable or None
+        ``at_yaw(yaw) -> NavState``: the same start-up with another initial
+        yaw [rad] (what the bank tries).
     """
 
     state: NavState
@@ -117,6 +130,23 @@ class Startup:
     accel_bias: np.ndarray
     static_end: float
     heading_time: float
+    mode: str = "static-then-track"
+    reason: str = ""
+    sigma: dict | None = None
+    bank: dict | None = None
+    at_yaw: object = field(default=None, repr=False, compare=False)
+
+    def summary(self, t0) -> dict:
+        """The ``startup`` entry of the job summary (times relative to ``t0`` [s])."""
+        e = self.state.euler / DEG
+        out = {"mode": self.mode, "reason": self.reason, "roll_deg": float(e[0]), "pitch_deg": float(e[1]),
+               "yaw_deg": float(e[2]), "static_s": float(self.static_end - t0),
+               "heading_from_track_at_s": float(self.heading_time - t0)}
+        if self.sigma:
+            out["sigma"] = {k: float(v) for k, v in self.sigma.items()}
+        if self.bank:
+            out["yaw_bank"] = self.bank
+        return out
 
 
 @njit(cache=True)
@@ -169,7 +199,15 @@ def startup_state(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), *, 
     # IMU position = antenna fix minus the lever arm
     p_imu = earth.ned_to_lla(-(C_nb @ np.asarray(lever_arm_b, float)), lla0)
     state = NavState.from_euler(imu.time[0], p_imu, np.zeros(3), rpy0)
-    return Startup(state, gyro_bias, accel_bias, static_end, t_head)
+
+    def at_yaw(yaw):
+        rpy = np.array([roll, pitch, float(yaw)])
+        p = earth.ned_to_lla(-(rot.dcm_from_euler(rpy) @ np.asarray(lever_arm_b, float)), lla0)
+        return NavState.from_euler(imu.time[0], p, np.zeros(3), rpy)
+
+    return Startup(state, gyro_bias, accel_bias, static_end, t_head, reason=f"static for "
+                   f"{static_end - imu.time[0]:.1f} s at the start (at least {min_static_s:g} s needed)",
+                   at_yaw=at_yaw)
 
 
 #: absolute per-window limits of "at rest" (1 s windows, RMS over the axes of the standard deviation):

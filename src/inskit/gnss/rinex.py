@@ -194,7 +194,7 @@ def _parse_fields(buf, rows, col, width, path, what, d_exponent=False):
     s = np.ascontiguousarray(f).view(f"S{width}").ravel()
     s[blank] = b"nan"
     try:
-        return s.astype(np.float64)
+        out = s.astype(np.float64)
     except ValueError:
         for j, v in enumerate(s):
             try:
@@ -205,6 +205,12 @@ def _parse_fields(buf, rows, col, width, path, what, d_exponent=False):
                     f"({what}), got {v.decode('latin-1').strip()!r}"
                 ) from None
         raise  # pragma: no cover - numpy and float() disagree
+    bad = np.flatnonzero(~np.isfinite(out) & ~blank)  # 'nan', 'inf', '1E999': no field of RINEX is infinite
+    if bad.size:
+        j = int(bad[0])
+        raise InputError(f"{path}: line {int(rows[j]) + 1}: columns {col + 1}-{col + width}: expected a finite "
+                         f"number ({what}), got {s[j].decode('latin-1').strip()!r}")
+    return out
 
 
 def _sat_names(raw, default_system):
@@ -462,7 +468,7 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
             e = len(ep_fields)
             ep_fields.append(fields)
             ep_flag.append(flag)
-            ep_clock.append(line[68:80])
+            ep_clock.append((i, 68, line[68:80]))
             first = i + n_sat_lines
             end = first + nsat * per_sat
             if end > n_lines:
@@ -510,7 +516,7 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
             e = len(ep_fields)
             ep_fields.append(fields)
             ep_flag.append(flag)
-            ep_clock.append(line[41:56])
+            ep_clock.append((i, 41, line[41:56]))
             rec_line.extend(range(i + 1, end))
             rec_epoch.extend([e] * nsat)
             i = end
@@ -526,7 +532,16 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
                           dtype=float).reshape(-1) + t_offset
     else:
         time = np.zeros(0)
-    clock = np.array([float(c) if c.strip() else np.nan for c in ep_clock]) if n_epoch else np.zeros(0)
+    clock = np.full(n_epoch, np.nan)
+    for k, (ln, col, c) in enumerate(ep_clock):
+        if c.strip():
+            try:
+                clock[k] = float(c)
+            except ValueError:
+                clock[k] = np.nan
+            if not np.isfinite(clock[k]):
+                raise InputError(f"{path}: line {ln + 1}: columns {col + 1}-{col + len(c)}: expected the receiver "
+                                 f"clock offset (a finite number) or blanks, got {c.strip()!r}")
 
     rec_line_a = np.asarray(rec_line, dtype=np.int64)
     rec_epoch_a = np.asarray(rec_epoch, dtype=np.int64)
@@ -611,6 +626,9 @@ _NAV_SLOTS = (
     "svacc", "health", "slot25", "slot26",
     "ttm", "slot28", "slot29", "slot30",
 )
+#: Fields every GPS and Galileo record needs for the satellite's clock and position (IS-GPS-200 Table 20-IV).
+_NAV_ORBIT_PARAMS = ("af0", "af1", "af2", "crs", "dn", "m0", "cuc", "e", "cus", "sqrt_a", "toe_sow", "cic",
+                     "omega0", "cis", "i0", "crc", "omega", "omega_dot", "idot", "week")
 #: System-specific meaning of the shared slots (NaN for the other system).
 _NAV_SPECIFIC = {
     "G": {"slot20": "codes_l2", "slot22": "l2p_flag", "slot25": "tgd", "slot26": "iodc", "slot28": "fit_h"},
@@ -767,6 +785,9 @@ def read_nav(path, *, systems=("G", "E")) -> NavData:
                 raise InputError(f"{path}: line {n + body}: the file ends inside the record starting at line "
                                  f"{k + body + 1} (expected 8 lines): truncated file?")
             raise InputError(f"{path}: line {k + body + 1}: record has {nxt - k} line(s), expected 8 for system {s}")
+        if nxt - k > 8:  # a repeated or stray line would shift every later field of the record
+            raise InputError(f"{path}: line {k + body + 9}: the record starting at line {k + body + 1} has "
+                             f"{nxt - k} lines, expected 8 for system {s} (a line repeated or inserted?)")
         take.append(j)
     if skipped:
         text = ", ".join(f"{v} {_SYSTEM_NAMES.get(s, s)}" for s, v in sorted(skipped.items()))
@@ -824,5 +845,20 @@ def read_nav(path, *, systems=("G", "E")) -> NavData:
     bad = np.flatnonzero(~np.isfinite(toe) | ~np.isfinite(params["sqrt_a"]))
     if bad.size:
         raise InputError(f"{path}: line {int(lineno[bad[0]]) + 1}: navigation record without toe or sqrt(A)")
+    # a blank orbit or clock field would give NaN satellite positions later, far from its cause
+    for name in _NAV_ORBIT_PARAMS:
+        bad = np.flatnonzero(~np.isfinite(params[name]))
+        if bad.size:
+            i = int(bad[0])
+            raise InputError(f"{path}: line {int(lineno[i]) + 1}: navigation record of {sats[i]} has no value for "
+                             f"{name} (a blank field); expected a number in every orbit and clock field")
+    # an orbit no satellite can fly betrays a corrupted record (IS-GPS-200 Table 20-III ranges: e < 0.03
+    # broadcast, sqrt(A) 2530-8192 sqrt(m)); only the impossible is refused here
+    bad = np.flatnonzero(~(params["sqrt_a"] > 0) | ~((params["e"] >= 0) & (params["e"] < 1)))
+    if bad.size:
+        i = int(bad[0])
+        raise InputError(f"{path}: line {int(lineno[i]) + 1}: navigation record of {sats[i]} has sqrt(A) = "
+                         f"{float(params['sqrt_a'][i]):g} sqrt(m) and e = {float(params['e'][i]):g}; expected "
+                         "sqrt(A) > 0 and 0 <= e < 1 (a corrupted record?)")
     return NavData(path=str(path), sats=np.array(sats, dtype="<U3"), system=rsys, toc=toc, toe=toe,
                    params=params, iono_alpha=alpha, iono_beta=beta, skipped=skipped, header=header)

@@ -49,7 +49,9 @@ def read_table(path) -> tuple[Path, pd.DataFrame]:
     with open(path, "rb") as fh:
         gz = fh.read(2) == b"\x1f\x8b"
     try:
-        df = pd.read_csv(path, skipinitialspace=True, compression="gzip" if gz else "infer")
+        # only an empty cell is missing: 'nan', 'NA', 'null' stay text, so a message can show what the cell holds
+        df = pd.read_csv(path, skipinitialspace=True, compression="gzip" if gz else "infer",
+                         keep_default_na=False, na_values=[""])
     except pd.errors.EmptyDataError:
         raise InputError(f"{path}: the file is empty; expected a header line and data rows") from None
     except (pd.errors.ParserError, UnicodeDecodeError, EOFError, OSError) as exc:
@@ -166,6 +168,15 @@ def read_imu(path, *, check_units=True, sampled="instant") -> ImuData:
     )
 
 
+def _norm(x):
+    """Row norms of an (n, 3) array that do not overflow below 1.8e308 and
+    stay finite above it: an inf norm would make NaN percentiles, which pass
+    every rule of :func:`check_imu_units`."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        n = np.hypot(np.hypot(x[:, 0], x[:, 1]), x[:, 2])
+    return np.minimum(n, np.finfo(float).max)
+
+
 def check_imu_units(path, w, f, gcol, acol, gunit, aunit):
     """Refuse magnitudes that betray a wrong unit (see :func:`read_imu`).
 
@@ -191,26 +202,26 @@ def check_imu_units(path, w, f, gcol, acol, gunit, aunit):
       which knows the latitude, recognises the Earth rate scaled by 57.3 in
       a static log of a gyro good enough to see it.
     """
-    fn = np.median(np.linalg.norm(f, axis=1))
+    fn = float(np.median(_norm(f)))
     if aunit in ("m_s2",) and fn < _ACCEL_G_LIKE:
         raise InputError(
-            f"{path}: column '{acol}': the median specific force is {fn:.3f} m/s^2, which looks like "
+            f"{path}: column '{acol}': the median specific force is {fn:.4g} m/s^2, which looks like "
             "values in g; rename the columns accel_*_g (or pass check_units=False / --no-unit-check)"
         )
     if aunit == "g" and fn / G0 > _ACCEL_MS2_LIKE:
         raise InputError(
-            f"{path}: column '{acol}': the median specific force is {fn / G0:.3f} g, which looks like "
+            f"{path}: column '{acol}': the median specific force is {fn / G0:.4g} g, which looks like "
             "values in m/s^2; rename the columns accel_*_m_s2 (or pass check_units=False / --no-unit-check)"
         )
     if gunit != "rad_s":
         return
-    wn = np.linalg.norm(w, axis=1)
+    wn = _norm(w)
     hint = ("rename the columns gyro_*_deg_s (or pass check_units=False / --no-unit-check); note that deg/s under "
             "a rad/s header is caught only when the log turns: a static log cannot show it")
     if np.percentile(wn, 99) > _GYRO_RAD_MAX or np.median(wn) > _GYRO_RAD_MEDIAN:
         raise InputError(
-            f"{path}: column '{gcol}': angular rates reach {np.percentile(wn, 99):.1f} rad/s "
-            f"(median {np.median(wn):.2f}), which looks like values in deg/s; {hint}"
+            f"{path}: column '{gcol}': angular rates reach {np.percentile(wn, 99):.4g} rad/s "
+            f"(median {np.median(wn):.3g}), which looks like values in deg/s; {hint}"
         )
     k = 50  # samples per block of the sustained-turn test
     nb = len(wn) // k
@@ -306,12 +317,22 @@ def write_gnss(path, gnss: GnssData, *, overwrite=False):
 
 
 def read_solution(path) -> NavSolution:
-    """Read a navigation solution or truth file.
+    """Read a navigation solution or truth file: CSV (``.csv``, gzip-compressed
+    ``.csv.gz``) or Parquet (``.parquet``, as ``inskit navigate`` writes at
+    full rate), told apart by content (Parquet's ``PAR1`` magic), not name.
 
     Columns: ``time_s, lat_deg, lon_deg, height_m, vn_m_s, ve_m_s, vd_m_s,
     roll_deg, pitch_deg, yaw_deg``; any further numeric columns are kept in
-    ``NavSolution.extra`` under their own names.
+    ``NavSolution.extra`` under their own names.  A bad value is named by its
+    line (CSV, header = line 1) or its row (Parquet, first data row = row 0).
     """
+    from .parquet import is_parquet
+
+    p = Path(path)
+    if is_parquet(p):
+        return _read_solution_parquet(p)
+    if p.suffix == ".parquet" and p.is_file():
+        raise InputError(f"{p}: named .parquet but not a Parquet file (no PAR1 magic at its start)")
     path, df = read_table(path)
     require_columns(path, df, SOLUTION_COLUMNS)
     a = numeric_columns(path, df, SOLUTION_COLUMNS)
@@ -326,42 +347,76 @@ def read_solution(path) -> NavSolution:
     return NavSolution(a[:, 0], lla, a[:, 4:7], rot.quat_from_euler(rpy), extra)
 
 
-def write_solution(path, sol: NavSolution, *, overwrite=False):
+def _read_solution_parquet(path) -> NavSolution:
+    """:func:`read_solution` of a Parquet file (the same checks, by row)."""
+    from .parquet import read_parquet_columns
+
+    cols, _ = read_parquet_columns(path)
+    missing = [c for c in SOLUTION_COLUMNS if c not in cols]
+    if missing:
+        raise InputError(f"{path}: missing column(s) {', '.join(missing)}; found {', '.join(cols)}")
+    n = len(cols["time_s"])
+    if n == 0:
+        raise InputError(f"{path}: has columns but no rows")
+    for c, v in cols.items():
+        bad = ~np.isfinite(v)
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise InputError(f"{path}: row {i}: column '{c}' holds {v[i]!r}; expected a finite number")
+    t = cols["time_s"]
+    d = np.diff(t)
+    if (d <= 0).any():
+        i = int(np.argmax(d <= 0)) + 1
+        raise InputError(f"{path}: row {i}: time_s={float(t[i])!r} does not increase from row {i - 1} "
+                         f"({float(t[i - 1])!r}); timestamps must strictly increase")
+    for c, lim in (("lat_deg", (-90.0, 90.0)), ("lon_deg", (-180.0, 360.0))):
+        bad = (cols[c] < lim[0]) | (cols[c] > lim[1])
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise InputError(f"{path}: row {i}: {c}={float(cols[c][i])!r} is outside [{lim[0]:g}, {lim[1]:g}] "
+                             "degrees")
+    lla = np.column_stack([cols["lat_deg"] * DEG, cols["lon_deg"] * DEG, cols["height_m"]])
+    v_n = np.column_stack([cols["vn_m_s"], cols["ve_m_s"], cols["vd_m_s"]])
+    rpy = np.column_stack([cols["roll_deg"], cols["pitch_deg"], cols["yaw_deg"]]) * DEG
+    extra = {c: v for c, v in cols.items() if c not in SOLUTION_COLUMNS}
+    return NavSolution(t, lla, v_n, rot.quat_from_euler(rpy), extra)
+
+
+def write_solution(path, sol: NavSolution, *, overwrite=False, rate_hz=None, columns=("all",), metadata=None):
     """Write a navigation solution; ``extra`` columns follow the standard ones.
 
+    The format follows the name: ``.parquet`` (typed float64 columns, units in
+    the schema metadata, :func:`inskit.io.parquet.write_parquet`), else CSV
+    (``.csv``, gzip for ``.csv.gz``), written by a vectorised writer with 15
+    significant digits (:func:`inskit.io.parquet.write_csv_fast`).
+
+    Parameters
+    ----------
+    path : str or Path
+    sol : NavSolution
+    overwrite : bool
+    rate_hz : float, optional
+        Keep one row per ``1 / rate_hz`` seconds (plus the first and the last
+        row, :func:`inskit.io.parquet.decimation_index`); default every row.
+    columns : str or sequence of str
+        ``"all"``, ``"navigation"``, ``"navigation+sigma"``, ``"sigma"``,
+        ``"estimates"`` and column names (:func:`inskit.io.parquet.select_columns`).
+    metadata : dict, optional
+        Parquet only: run keys stored in the schema metadata.
+
     Refuses to write a NaN (a solution with NaN is a bug upstream).
+
+    Returns
+    -------
+    Path
     """
+    from .parquet import prepare, write_csv_fast, write_parquet
+
     path = check_writable(path, overwrite)
-    lat = sol.lla[:, 0]
-    bad = np.nonzero(~(np.abs(lat) <= np.pi / 2 + 1e-12))[0]
-    if len(bad):
-        raise InputError(f"{path}: refusing to write latitude {np.degrees(lat[bad[0]]):.6f} deg at row {bad[0]} "
-                         "(outside [-90, 90]: the solution passed a pole in a frame that cannot)")
-    rpy = sol.euler / DEG
-    cols = {
-        "time_s": sol.time,
-        "lat_deg": lat / DEG,
-        "lon_deg": -((-sol.lla[:, 1] + np.pi) % (2.0 * np.pi) - np.pi) / DEG,  # wrapped into (-180, 180]
-        "height_m": sol.lla[:, 2],
-        "vn_m_s": sol.v_n[:, 0],
-        "ve_m_s": sol.v_n[:, 1],
-        "vd_m_s": sol.v_n[:, 2],
-        "roll_deg": rpy[:, 0],
-        "pitch_deg": rpy[:, 1],
-        "yaw_deg": rpy[:, 2],
-    }
-    for k, v in sol.extra.items():
-        v = np.asarray(v)
-        if v.ndim == 1:
-            cols[k] = v
-        else:
-            for j in range(v.shape[1]):
-                cols[f"{k}_{j}"] = v[:, j]
-    df = pd.DataFrame(cols)
-    if df.isna().any().any():
-        c = df.columns[df.isna().any()][0]
-        raise InputError(f"{path}: refusing to write a NaN (column '{c}'); the solution is invalid")
-    write_csv(path, df, "%.15g")
+    cols = prepare(sol, path, rate_hz=rate_hz, columns=columns)
+    if path.suffix == ".parquet":
+        return write_parquet(path, cols, metadata)
+    return write_csv_fast(path, cols)
 
 
 def read_speed(path):
@@ -382,3 +437,27 @@ def read_speed(path):
         raise InputError(f"{path}: line {i + 2}: column 'speed_m_s' holds {plain_number(a[i, 1])}, above 150 m/s: "
                          "km/h or another unit? expected metres per second")
     return a[:, 0].copy(), a[:, 1].copy()
+
+
+SPEED_COURSE_COLUMNS = ["time_s", "speed_m_s", "course_deg", "sigma_speed_m_s", "sigma_course_deg"]
+
+
+def read_speed_course(path):
+    """Read GNSS speed over ground and course over ground (NMEA RMC/VTG,
+    phone logs): columns ``time_s, speed_m_s, course_deg, sigma_speed_m_s,
+    sigma_course_deg`` (course clockwise from true north).
+
+    Returns
+    -------
+    (time, speed, course_rad, sigma_speed, sigma_course_rad) : five (n,) arrays
+    """
+    path, df = read_table(path)
+    require_columns(path, df, SPEED_COURSE_COLUMNS, " (GNSS speed and course)")
+    a = numeric_columns(path, df, SPEED_COURSE_COLUMNS)
+    check_time_column(path, a[:, 0])
+    if (a[:, 1] < 0).any():
+        i = int(np.argmax(a[:, 1] < 0))
+        raise InputError(f"{path}: line {i + 2}: column 'speed_m_s' is {plain_number(a[i, 1])}; a speed over "
+                         "ground is >= 0 (the direction is in course_deg)")
+    _check_positive(path, df, a[:, 3:5], SPEED_COURSE_COLUMNS[3:5])
+    return a[:, 0].copy(), a[:, 1].copy(), np.radians(a[:, 2]), a[:, 3].copy(), np.radians(a[:, 4])

@@ -95,10 +95,17 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
     num = {}
     for c in names[2:]:
         col = pd.to_numeric(df[c], errors="coerce").to_numpy(float)
-        if np.isnan(col).any() and c in need + ["vn(m/s)", "ve(m/s)", "vu(m/s)", "sdvn", "sdve", "sdvu"]:
-            i = int(np.argmax(np.isnan(col)))
-            raise InputError(f"{path}: line {linenos[i]}: column '{c}' has {df[c].iloc[i]!r}; expected a number")
+        if (~np.isfinite(col)).any() and c in need + ["vn(m/s)", "ve(m/s)", "vu(m/s)", "sdvn", "sdve", "sdvu"]:
+            i = int(np.argmax(~np.isfinite(col)))
+            raise InputError(f"{path}: line {linenos[i]}: column '{c}' has {df[c].iloc[i]!r}; expected a finite "
+                             "number")
         num[c] = col
+    for c, limit in (("latitude(deg)", 90.0), ("longitude(deg)", 360.0)):
+        bad = np.abs(num[c]) > limit
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise InputError(f"{path}: line {linenos[i]}: column '{c}' has {df[c].iloc[i]!r}; expected a value in "
+                             f"[-{limit:g}, {limit:g}] degrees")
     keep = np.isin(num["Q"].astype(int), list(quality))
     if not keep.any():
         raise InputError(f"{path}: no rows with quality Q in {list(quality)}")

@@ -152,6 +152,11 @@ class GnssSection(_Strict):
     clock_h0: float = Field(2e-19, gt=0, description="receiver oscillator white-frequency Allan coefficient [s]")
     clock_h_2: float = Field(2e-20, gt=0, description="receiver oscillator random-walk-frequency coefficient [1/s]")
 
+    speed_course: Path | None = Field(None, description="GNSS speed and course over ground (CSV: time_s, speed_m_s, "
+                                      "course_deg, sigma_speed_m_s, sigma_course_deg), fused as horizontal "
+                                      "velocity; withheld in outage windows like the fixes")
+    speed_course_min_speed_m_s: float = Field(0.5, ge=0, description="below this speed (or 3 sigma of it) the "
+                                              "course is meaningless and the reading is skipped [m/s]")
     @model_validator(mode="after")
     def _inputs(self):
         if self.coupling == "loose" and self.file is None and (self.obs is None or self.nav is None):
@@ -228,13 +233,18 @@ class InitSection(_Strict):
     """The initial state and its uncertainty.
 
     Rules: mode "given" needs lat_deg, lon_deg, height_m and rpy_deg; the
-    keys of one mode changed from their defaults under the other mode are
-    refused (they would be ignored).
+    keys of one mode changed from their defaults under another mode are
+    refused (they would be ignored).  The data-driven modes ("auto",
+    "static-then-track", "in-motion") run a bank of yaw hypotheses when the
+    initial yaw sigma exceeds 10 deg (the filter's small-angle limit).
     """
 
-    mode: Literal["static-then-track", "given"] = Field(
-        "static-then-track", description="static-then-track: level and gyro biases from the static start, "
-        "heading from the GNSS track once moving; given: the state of lat_deg ... rpy_deg")
+    mode: Literal["auto", "static-then-track", "in-motion", "given"] = Field(
+        "auto", description="auto: static-then-track when the log starts with min_static_s of rest, else "
+        "in-motion (the summary's startup entry says which and why); static-then-track: level and gyro biases "
+        "from the static start, heading from the GNSS track once moving; in-motion: level on the specific force "
+        "less the GNSS-derived acceleration, heading from the GNSS course, position and velocity from the fixes, "
+        "sigmas from the data (the sigma_* keys then act as floors); given: the state of lat_deg ... rpy_deg")
     lat_deg: float | None = Field(None, description="given: initial latitude")
     lon_deg: float | None = Field(None, description="given: initial longitude")
     height_m: float | None = Field(None, description="given: initial ellipsoidal height")
@@ -242,14 +252,25 @@ class InitSection(_Strict):
                                                   "east, down")
     rpy_deg: tuple[float, float, float] | None = Field(None, description="given: initial roll, pitch, yaw of the "
                                                        "body axes")
-    min_static_s: float = Field(5.0, gt=0, description="static-then-track: the rest the start-up needs at the "
-                                "log's start to level and find the gyro biases [s]")
-    heading_speed_m_s: float = Field(3.0, gt=0, description="static-then-track: the GNSS track speed from which "
-                                     "its course gives the heading (a walk needs about 1 m/s)")
+    min_static_s: float = Field(5.0, gt=0, description="static-then-track, auto: the rest the start-up needs at "
+                                "the log's start to level and find the gyro biases [s]")
+    heading_speed_m_s: float = Field(3.0, gt=0, description="static-then-track, in-motion, auto: the GNSS track "
+                                     "speed from which its course gives the heading (a car: 3; a walk: 0.8)")
+    course_average_s: float = Field(3.0, gt=0, description="in-motion, auto: span of fixes over which the course "
+                                    "is averaged once above heading_speed_m_s [s]")
+    level_window_s: float = Field(2.0, gt=0, description="in-motion, auto: span of IMU data from the start over "
+                                  "which the acceleration-corrected specific force is levelled [s]")
+    yaw_deg: float | None = Field(None, description="in-motion, auto: a first yaw guess instead of the track's "
+                                  "course (a handheld device not pointing along its track, a magnetometer); taken "
+                                  "as unknown on the circle, so the yaw bank searches around it")
+    yaw_hypotheses: int = Field(12, ge=1, le=72, description="number of yaw hypotheses of the bank, spread evenly "
+                                "over 360 deg (1: no bank); after it the yaw sigma is half their spacing")
+    bank_s: float = Field(40.0, gt=0, description="data each yaw hypothesis is run over before the best (smallest "
+                          "mean NIS of the GNSS updates) is kept [s]")
     sigma_pos_m: float = Field(0.05, gt=0, description="initial position sigma per axis")
     sigma_vel_m_s: float = Field(0.05, gt=0, description="initial velocity sigma per axis")
     sigma_roll_pitch_deg: float = Field(1.0, gt=0, description="initial roll and pitch sigma")
-    sigma_yaw_deg: float = Field(3.0, gt=0, description="initial yaw sigma")
+    sigma_yaw_deg: float = Field(3.0, gt=0, description="initial yaw sigma (above 10 deg the yaw bank runs)")
     sigma_gyro_bias_deg_s: float = Field(0.05, gt=0, description="initial gyro-bias sigma per axis (turn-on "
                                          "bias class)")
     sigma_accel_bias_m_s2: float = Field(0.05, gt=0, description="initial accelerometer-bias sigma per axis "
@@ -263,23 +284,33 @@ class InitSection(_Strict):
 
     @model_validator(mode="after")
     def _given_complete(self):
+        inmotion_keys = ("course_average_s", "level_window_s", "yaw_deg")  # keys of the in-motion start-up only
         if self.mode == "given":
             missing = [k for k in ("lat_deg", "lon_deg", "height_m", "rpy_deg") if getattr(self, k) is None]
             if missing:
                 raise ValueError(f"mode 'given' needs {', '.join(missing)}")
             if abs(self.lat_deg) > 90:
                 raise ValueError(f"lat_deg {self.lat_deg} is outside [-90, 90]")
-            bad = _changed(self, INIT_STATIC_KEYS)
+            bad = _changed(self, INIT_STATIC_KEYS + inmotion_keys + ("yaw_hypotheses", "bank_s"))
             if bad:
                 raise _key_error(bad[0], f"{_names(bad, 'init')} would be ignored: "
-                                 f"{_they(bad, 'it tunes', 'they tune')} mode \"static-then-track\", and mode "
-                                 "is \"given\"")
+                                 f"{_they(bad, 'it tunes', 'they tune')} mode \"static-then-track\", "
+                                 "\"in-motion\" or \"auto\", and mode is \"given\"")
         else:
             bad = _changed(self, INIT_GIVEN_KEYS)
             if bad:
                 raise _key_error(bad[0], f"{_names(bad, 'init')} would be ignored: mode "
-                                 "\"static-then-track\" finds the initial state itself; set mode = \"given\" "
-                                 f"to start from {_they(bad, 'it', 'them')}")
+                                 "\"static-then-track\", \"in-motion\" and \"auto\" find the initial state "
+                                 f"themselves; set mode = \"given\" to start from {_they(bad, 'it', 'them')}")
+            if self.mode == "static-then-track":
+                bad = _changed(self, inmotion_keys)
+                if bad:
+                    raise _key_error(bad[0], f"{_names(bad, 'init')} would be ignored: "
+                                     f"{_they(bad, 'it tunes', 'they tune')} the in-motion start-up, and mode is "
+                                     "\"static-then-track\" (use mode = \"in-motion\" or \"auto\")")
+            if self.mode == "in-motion" and _changed(self, ("min_static_s",)):
+                raise _key_error("min_static_s", "init.min_static_s would be ignored: mode \"in-motion\" uses no "
+                                 "static start (use mode = \"auto\" to choose by the rest at the start)")
         return self
 
 
@@ -358,6 +389,43 @@ class OutputSection(_Strict):
     dir: Path | None = Field(None, description="result folder, relative to this config file (default: out/<name> "
                              "in the working directory; --out overrides it)")
     plots: bool = Field(True, description="write the PNG plots (--no-plots turns them off)")
+    format: Literal["parquet", "csv", "both"] = Field(
+        "both", description="solution files: parquet (solution_forward.parquet, and _smoothed, every IMU epoch, "
+        "float64 columns with their units in the schema metadata), csv (solution_forward.csv at rate_hz), or both "
+        "(the CSV keeps `inskit report` and scripts that read CSV working); --output-format overrides it")
+    rate_hz: float = Field(
+        10.0, gt=0, description="rows per second of the CSV solution files (the first row at or after each "
+        "multiple of 1/rate_hz, plus the first and last rows); a rate at or above the IMU rate writes every "
+        "epoch. 10 Hz matches the ZUPT/NHC update rate and makes 1 h of 31 columns 21 MB instead of 211 MB "
+        "at 100 Hz; Parquet files always hold every epoch; --output-rate overrides it")
+    columns: list[str] = Field(
+        ["all"], description="columns of the solution files: groups \"all\", \"navigation\" (time, position, "
+        "velocity, attitude), \"navigation+sigma\", \"sigma\", \"estimates\" (biases, scale factors, lever arm, "
+        "clock ...) and column names, combined (a single string is a one-element list); the navigation columns "
+        "are always written")
+
+    @field_validator("columns", mode="before")
+    @classmethod
+    def _one_string(cls, v):
+        return [v] if isinstance(v, str) else v
+
+    @field_validator("columns")
+    @classmethod
+    def _known_groups(cls, v):
+        if not v:
+            raise ValueError("give at least one group or column name (e.g. \"navigation\")")
+        for s in v:
+            if not s or not re.fullmatch(r"[A-Za-z0-9_+]+", s):
+                raise ValueError(f"{s!r} is not a group or a column name (letters, digits, _ and +)")
+        return v
+
+    @model_validator(mode="after")
+    def _rate_needs_csv(self):
+        if self.format == "parquet" and "rate_hz" in _changed(self, ["rate_hz"]):
+            raise _key_error("rate_hz", f"rate_hz = {self.rate_hz:g} sets the rate of the CSV files, but format = "
+                             "\"parquet\" writes none (Parquet holds every epoch); use format = \"both\" or "
+                             "\"csv\", or drop rate_hz")
+        return self
 
 
 class OdometerSection(_Strict):

@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import io
-from ..alignment.coarse import Startup, startup_state, static_intervals
+from ..alignment.coarse import Startup, static_intervals
 from ..errors import InputError
 from ..files import write_text
 from ..io.rtklib import read_pos, read_rtklibexplorer_imu
@@ -168,6 +168,18 @@ def odometer_measurement(cfg: NavigateConfig, imu: ImuData):
         t, v = t[keep], v[keep]
     return Odometer(t, v, o.sigma_m_s, lever_arm_b=o.lever_arm_b_m, with_nhc=o.with_nhc,
                     nhc_sigma_m_s=o.nhc_sigma_m_s)
+
+
+def speed_course_measurement(cfg: NavigateConfig, windows, lever):
+    """GNSS speed and course over ground as horizontal-velocity updates,
+    withheld inside the outage windows like the fixes."""
+    from ..integration import GnssSpeedCourse
+
+    path = cfg.resolve(cfg.gnss.speed_course)
+    t, s, c, ss, sc = io.read_speed_course(path)
+    t = t + cfg.gnss.time_offset_s
+    return GnssSpeedCourse(t, s, c, ss, sc, lever_arm_b=lever, use=~withheld_mask(t, windows),
+                           min_speed_m_s=cfg.gnss.speed_course_min_speed_m_s)
 
 
 def tight_measurements(cfg: NavigateConfig, raw: RawGnss, windows, lever):
@@ -363,11 +375,26 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     lever = np.asarray(cfg.gnss.lever_arm_b_m, float)
     startup = None
     measured = {}
-    if cfg.init.mode == "static-then-track":
-        startup = startup_state(imu, gnss_used, lever, min_static_s=cfg.init.min_static_s,
-                                heading_speed_m_s=cfg.init.heading_speed_m_s)
+    scfg, bank_on = cfg, False  # scfg: the config with the sigmas the start-up found (build_settings reads them)
+    if cfg.init.mode != "given":
+        from ..alignment.inmotion import STARTUP_SIGMAS, auto_startup, bank_needed
+
+        i = cfg.init
+        startup = auto_startup(imu, gnss_used, lever, mode=i.mode, min_static_s=i.min_static_s,
+                               heading_speed_m_s=i.heading_speed_m_s, course_average_s=i.course_average_s,
+                               level_window_s=i.level_window_s,
+                               yaw_guess=None if i.yaw_deg is None else i.yaw_deg * DEG,
+                               gyro_bias_sigma=i.sigma_gyro_bias_deg_s * DEG, accel_bias_sigma=i.sigma_accel_bias_m_s2,
+                               floors={k: getattr(i, k) for k in STARTUP_SIGMAS})
         initial = startup.state
-        if cfg.noise.from_static:
+        sig = dict(startup.sigma or {})
+        bank_on = (cfg.filter.scheme != "uncoupled"
+                   and bank_needed(startup, sig.get("sigma_yaw_deg", i.sigma_yaw_deg) * DEG, i.yaw_hypotheses))
+        if bank_on:  # after the bank the yaw is within half the spacing
+            sig["sigma_yaw_deg"] = 180.0 / i.yaw_hypotheses
+        if sig:
+            scfg = cfg.model_copy(update={"init": i.model_copy(update=sig)})
+        if cfg.noise.from_static and startup.mode == "static-then-track":
             arw, vrw = static_noise_density(imu, startup.static_end)
             measured = {"gyro_arw_rad_sqrt_s": arw, "accel_vrw_m_s_sqrt_s": vrw}
     else:
@@ -388,9 +415,9 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     if tight:
         meas_gnss, use_rows = tight_measurements(cfg, raw, windows, lever)
         clk_blocks, clock_start = clock_blocks(cfg, raw, initial, lever, use_rows)
-        settings = build_settings(cfg, startup, measured, list(clk_blocks) + extra_blocks)
+        settings = build_settings(scfg, startup, measured, list(clk_blocks) + extra_blocks)
     else:
-        settings = build_settings(cfg, startup, measured, extra_blocks)
+        settings = build_settings(scfg, startup, measured, extra_blocks)
     if cfg.filter.scheme == "uncoupled":
         if smooth:
             raise InputError("the RTS smoother needs a filter: the uncoupled scheme has none")
@@ -413,8 +440,22 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
             meas.append(NonHolonomic([(imu.time[0], imu.time[-1])], c.rate_hz, c.nhc_sigma_m_s))
         if odo is not None:
             meas.append(odo)
+        if cfg.gnss.speed_course is not None:
+            meas.append(speed_course_measurement(cfg, windows, lever))
         extra = {g.row: gap_process_noise(settings.layout, g.length_s, np.radians(cfg.imu.gap_rate_sigma_deg_s),
                                           cfg.imu.gap_accel_sigma_m_s2) for g in gaps}
+        if bank_on:  # the start-up's yaw is too uncertain for the small-angle model: a bank of hypotheses
+            from ..alignment.inmotion import after_bank, yaw_bank
+
+            bank = yaw_bank(imu, startup.at_yaw, float(initial.euler[2]), meas, settings,
+                            n=cfg.init.yaw_hypotheses, span_s=cfg.init.bank_s,
+                            score_measurements=("pseudorange",) if tight else ("gnss_pos",))
+            startup = after_bank(startup, bank)
+            initial = startup.state
+            if log:
+                log(f"yaw bank: {len(bank['scores'])} hypotheses over {bank['span_s']:.0f} s in "
+                    f"{bank['elapsed_s']:.1f} s; kept {bank['chosen_yaw_deg']:.1f} deg (mean NIS per dof "
+                    f"{bank['score']:.2f}, next best {bank['runner_up_score']})")
         out = run_filter(imu, initial, meas, settings, smoother=smooth, progress=progress, extra_noise=extra)
         sm = rts_smooth(out) if smooth else None
     score_f = score_outages(out.solution, gnss, windows, lever)
@@ -499,13 +540,7 @@ def summary(res: NavigateResult) -> dict:
         },
     }
     if res.startup is not None:
-        out["startup"] = {
-            "roll_deg": float(res.startup.state.euler[0] / DEG),
-            "pitch_deg": float(res.startup.state.euler[1] / DEG),
-            "yaw_deg": float(res.startup.state.euler[2] / DEG),
-            "static_s": float(res.startup.static_end - res.imu.time[0]),
-            "heading_from_track_at_s": float(res.startup.heading_time - res.imu.time[0]),
-        }
+        out["startup"] = res.startup.summary(res.imu.time[0])
     fw = res.forward
     if "time_offset" in fw.layout:
         out["estimated_time_offset_s"] = float(fw.estimate("time_offset")[-1, 0])
@@ -690,20 +725,35 @@ def write_innovations(innovations: dict, path) -> Path:
 
 
 def write_outputs(res: NavigateResult, out_dir: Path, s: dict) -> list:
-    """Solution CSVs and plots into ``out_dir``, each written whole or not at
+    """Solution files and plots into ``out_dir``, each written whole or not at
     all, then ``summary.json`` last (with the list of files), as the mark of a
-    complete run."""
+    complete run.
+
+    ``[output] format``: ``solution_forward.parquet`` (and ``_smoothed``) at
+    every IMU epoch, ``solution_forward.csv`` (and ``_smoothed``) at
+    ``[output] rate_hz``, or both; ``[output] columns`` selects the columns of
+    both (:func:`inskit.io.parquet.select_columns`).
+    """
     out_dir.mkdir(parents=True, exist_ok=True)
+    o = res.config.output
     files = []
-    io.write_solution(out_dir / "solution_forward.csv", res.forward.solution, overwrite=True)
-    files.append(out_dir / "solution_forward.csv")
-    if res.smoothed is not None:
-        io.write_solution(out_dir / "solution_smoothed.csv", res.smoothed.solution, overwrite=True)
-        files.append(out_dir / "solution_smoothed.csv")
+    tracks = [("forward", res.forward)] + ([("smoothed", res.smoothed)] if res.smoothed is not None else [])
+    for label, track in tracks:
+        sol = track.solution
+        if o.format in ("parquet", "both"):
+            files.append(io.write_solution(out_dir / f"solution_{label}.parquet", sol, overwrite=True,
+                                           columns=o.columns,
+                                           metadata={"config": res.config.name, "solution": label,
+                                                     "scheme": res.settings.scheme}))
+        if o.format in ("csv", "both"):
+            files.append(io.write_solution(out_dir / f"solution_{label}.csv", sol, overwrite=True,
+                                           rate_hz=o.rate_hz, columns=o.columns))
+    s["solution_files"] = {"format": o.format, "csv_rate_hz": o.rate_hz if o.format != "parquet" else None,
+                           "columns": list(o.columns)}
     files.append(write_innovations(res.forward.innovations, out_dir / "innovations.csv"))
     files.append(write_text(out_dir / "config_used.json",
                             res.config.model_dump_json(indent=2, exclude={"base_dir"})))
-    if res.config.output.plots:
+    if o.plots:
         from .plots import plot_all
 
         files += plot_all(res, out_dir)

@@ -1,5 +1,10 @@
 """Plots of an integration run: track, errors with 3-sigma envelopes,
-innovations, sensor-error estimates.  PNG files, no display needed."""
+innovations, sensor-error estimates.  PNG files, no display needed.
+
+Lines over the IMU epochs are drawn from decimated rows (at most
+:data:`MAX_LINE_POINTS` per line, an even stride): a 1100 px wide figure shows
+no more, and matplotlib's time grows with the points.  matplotlib is imported
+only inside the plotting functions."""
 
 from __future__ import annotations
 
@@ -9,6 +14,18 @@ from .. import earth
 from ..files import save_figure
 from ..units import DEG
 from .outages import antenna_positions
+
+
+#: most points of one line drawn over the IMU epochs
+MAX_LINE_POINTS = 4000
+
+
+def _every(n, max_points=MAX_LINE_POINTS):
+    """Row indices: an even stride over ``n`` rows keeping at most about
+    ``max_points`` of them, and always the last row."""
+    step = max(1, -(-n // max_points))
+    idx = np.arange(0, n, step)
+    return idx if (n == 0 or idx[-1] == n - 1) else np.append(idx, n - 1)
 
 
 def _plt():
@@ -41,10 +58,10 @@ def plot_all(res, out_dir):
     ax.plot(pg[res.used, 1], pg[res.used, 0], ".", ms=2, color="0.6", label="GNSS fixes used")
     if (~res.used).any():
         ax.plot(pg[~res.used, 1], pg[~res.used, 0], ".", ms=3, color="tab:red", label="GNSS withheld (outages)")
-    pf = earth.lla_to_ned(fwd.lla[::10], ref)
+    pf = earth.lla_to_ned(fwd.lla[_every(len(fwd.time), 4 * MAX_LINE_POINTS)], ref)
     ax.plot(pf[:, 1], pf[:, 0], lw=0.8, color="tab:blue", label="forward filter")
     if res.smoothed is not None:
-        ps = earth.lla_to_ned(res.smoothed.nav.lla[::10], ref)
+        ps = earth.lla_to_ned(res.smoothed.nav.lla[_every(len(res.smoothed.nav.time), 4 * MAX_LINE_POINTS)], ref)
         ax.plot(ps[:, 1], ps[:, 0], lw=0.8, color="tab:green", label="RTS smoother")
     ax.set_xlabel("east [m]")
     ax.set_ylabel("north [m]")
@@ -117,10 +134,11 @@ def plot_all(res, out_dir):
 
     # sensor-error estimates
     fig, axes = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
-    tt = fwd.time - t0
+    k = _every(len(fwd.time))
+    tt = fwd.time[k] - t0
     for a in "xyz":
-        axes[0].plot(tt, fwd.extra[f"bg_{a}_rad_s"] / DEG, lw=0.8, label=a)
-        axes[1].plot(tt, fwd.extra[f"ba_{a}_m_s2"], lw=0.8, label=a)
+        axes[0].plot(tt, fwd.extra[f"bg_{a}_rad_s"][k] / DEG, lw=0.8, label=a)
+        axes[1].plot(tt, fwd.extra[f"ba_{a}_m_s2"][k], lw=0.8, label=a)
     axes[0].set_ylabel("gyro bias [deg/s]")
     axes[1].set_ylabel("accel bias [m/s^2]")
     for ax in axes:

@@ -263,11 +263,16 @@ class _Run:
                              f"CONFIG --out {d}` first)")
         self.dir = d
         self.summary = _read_json(d / "summary.json", "run summary (summary.json)")
-        if not (d / "solution_forward.csv").exists():
-            raise InputError(f"{d}: solution_forward.csv is missing (expected beside summary.json)")
-        self.forward = io.read_solution(d / "solution_forward.csv")
-        self.smoothed = io.read_solution(d / "solution_smoothed.csv") if (d / "solution_smoothed.csv").exists() \
-            else None
+        def solution(stem):  # the full-rate Parquet when there is one, else the CSV
+            for ext in (".parquet", ".csv"):
+                if (d / f"{stem}{ext}").exists():
+                    return io.read_solution(d / f"{stem}{ext}")
+            return None
+
+        self.forward = solution("solution_forward")
+        if self.forward is None:
+            raise InputError(f"{d}: solution_forward.parquet or .csv is missing (expected beside summary.json)")
+        self.smoothed = solution("solution_smoothed")
         self.innov = read_innovations(d / "innovations.csv")
         self.config = _read_json(d / "config_used.json", "configuration (config_used.json)") \
             if (d / "config_used.json").exists() else None

@@ -1,0 +1,580 @@
+"""Monte Carlo studies and sensor-grade / filter-setting sweeps on Dask.
+
+A study is a TOML file (:class:`StudySpec`): a scenario, the cases (one for
+``kind = "monte-carlo"``; sensor grades x filter settings for
+``kind = "sweep"``), the number of runs per case, a base seed, a duration
+limit and optionally a GNSS outage ``(start, length)``.  Each run is one seeded
+simulation + filter pass of :mod:`.montecarlo`:
+
+* with an outage, the closed-loop (or open-loop) filter runs forward with the
+  fixes of the window withheld; the run is scored by the horizontal error at
+  the end of the outage (and the worst inside it, the vertical, velocity and
+  attitude errors at its end).  The simulated IMU carries the grade preset's
+  full error model, the filter the 15-state matched model of its stochastic
+  part (:func:`.montecarlo.matched_settings` of
+  :func:`.montecarlo.consistency_errors`), as :func:`.montecarlo.compare_schemes`
+  does;
+* without one, the run is :func:`.montecarlo.run_once` of the consistency job
+  (smoothed NEES of position, velocity, attitude and normalised final bias
+  errors).
+
+Execution (the ``map`` of :mod:`.montecarlo` made distributed and
+resumable): runs are submitted to a ``distributed`` cluster (a
+``LocalCluster`` of one single-threaded process per core by default, or an
+existing scheduler); each batch of completed runs is written at once as a
+small Parquet part file under ``DIR/runs/`` (atomically, temporary name +
+rename), so a killed client loses nothing but the runs in flight.  A rerun with
+the same spec and ``DIR`` reads the parts, skips every ``(case, run)`` already
+there and computes the rest.  At the end the rows are sorted by
+``(case, run)`` and written as ``DIR/runs.parquet``; the statistics per case as
+``DIR/summary.parquet`` (one row per case, figure and statistic),
+``DIR/summary.json`` (the ranking) and ``DIR/study.png``.
+
+Seeds: run ``r`` of case ``c`` uses the 64-bit integer drawn from
+``numpy.random.SeedSequence(seed, spawn_key=(c, r))`` (the same sequence as
+``SeedSequence(seed).spawn(...)[c].spawn(...)[r]``), so every number depends
+on the key only: not on the number of workers, the order of completion or
+which runs a resumed study still had to do.
+
+References
+----------
+Bar-Shalom, Li & Kirubarajan 2001, *Estimation with Applications to Tracking
+and Navigation*, §5.4 (NEES consistency); NumPy ``SeedSequence`` (NEP 19,
+independent streams by spawn key); Dask ``distributed`` futures API.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import time
+from dataclasses import dataclass, replace
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, ValidationError
+
+from .. import earth
+from .. import rotations as rot
+from ..config_files import read_toml, validation_message
+from ..errors import ConfigError, InputError
+from ..files import atomic_write, check_folder_writable, save_figure, write_text
+from .montecarlo import (ConsistencySpec, anees_band, consistency_errors, grade_initial_uncertainty,
+                         matched_settings, perturbed_start, run_once)
+from .outages import withheld_mask
+
+#: the sensor grades a study can sweep (:data:`inskit.simulation.sensors.PRESETS` plus ``ideal``)
+GRADES = ("ideal", "navigation", "tactical", "industrial-mems", "consumer-mems")
+#: figures of one outage run
+OUTAGE_FIGURES = ("outage_end_horizontal_m", "outage_worst_horizontal_m", "outage_end_vertical_m",
+                  "outage_end_velocity_m_s", "outage_end_attitude_deg")
+#: figures of one consistency run
+CONSISTENCY_FIGURES = ("nees_pos_mean", "nees_vel_mean", "nees_att_mean", "bias_rms_normalized")
+#: statistics over the runs of a case, in the order of ``summary.parquet``
+STATISTICS = ("count", "mean", "std", "min", "median", "p90", "max")
+
+
+class _M(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class OutageSpec(_M):
+    """A GNSS outage: the fixes inside ``[start_s, start_s + length_s]`` are withheld."""
+
+    start_s: float = Field(..., ge=0, description="start of the outage [s of scenario time]")
+    length_s: float = Field(60.0, gt=0, description="its length [s]; the run is scored at its end")
+
+
+class FilterCase(_M):
+    """One setting of the filter (a sweep may list several)."""
+
+    name: str = Field("matched", min_length=1, description="label in tables and plots")
+    scheme: Literal["closed", "open"] = Field("closed", description="closed- or open-loop error feedback")
+    noise_scale: float = Field(1.0, gt=0, description=(
+        "factor on the filter's white-noise and bias-instability terms (1: the matched model); "
+        "the simulated sensor is not changed"))
+    gating: bool = Field(False, description="chi-square innovation gate (probability 0.9999) on the fixes")
+
+
+class StudySpec(_M):
+    """A study file (TOML).  Every key:
+
+    ``scenario``: scenario file, relative to the study file; ``kind``:
+    ``"monte-carlo"`` (one case: one grade, one filter setting) or ``"sweep"``
+    (every grade x every filter setting); ``grades``: IMU grades (default
+    the scenario's); ``runs``: runs per case; ``seed``: base seed;
+    ``duration_s``: use only the first seconds of the scenario; ``[outage]``:
+    score by the errors at the end of this GNSS outage (without it: the
+    consistency figures of the ``consistency`` job); ``[[filter]]``: filter
+    settings (default one matched closed-loop filter).
+    """
+
+    scenario: str = Field(..., description="scenario TOML, relative to the study file")
+    kind: Literal["monte-carlo", "sweep"] = Field(..., description="one case, or grades x filter settings")
+    grades: list[Literal[GRADES]] | None = Field(None, min_length=1, description="IMU grades (default: the "
+                                                 "scenario's)")
+    runs: int = Field(..., ge=1, le=1_000_000, description="runs per case")
+    seed: int = Field(0, ge=0, description="base seed of every run's SeedSequence")
+    duration_s: float | None = Field(None, gt=0, description="use only the first seconds of the scenario")
+    outage: OutageSpec | None = Field(None, description="GNSS outage scored at its end")
+    filter: list[FilterCase] = Field(default_factory=lambda: [FilterCase()], min_length=1,
+                                     description="filter settings")
+
+
+def load_spec(path) -> tuple[StudySpec, Path]:
+    """The validated study of ``path`` and the path of its scenario.
+
+    Raises
+    ------
+    ConfigError
+        Missing file, bad TOML, an unknown or invalid key (named), a
+        ``monte-carlo`` study with more than one case, duplicate names.
+    """
+    path = Path(path)
+    data = read_toml(path, "study")
+    try:
+        spec = StudySpec.model_validate(data)
+    except ValidationError as exc:
+        raise ConfigError(validation_message(path, exc)) from None
+    if spec.kind == "monte-carlo" and (len(spec.grades or [None]) > 1 or len(spec.filter) > 1):
+        raise ConfigError(f"{path}: a 'monte-carlo' study has one grade and one [[filter]]; "
+                          "use kind = \"sweep\" for several")
+    names = [f.name for f in spec.filter]
+    if len(set(names)) != len(names):
+        raise ConfigError(f"{path}: [[filter]] names must be unique, got {names}")
+    if spec.grades is not None and len(set(spec.grades)) != len(spec.grades):
+        raise ConfigError(f"{path}: field 'grades': each grade once, got {spec.grades}")
+    scenario = (path.parent / spec.scenario).resolve()
+    if not scenario.is_file():
+        raise ConfigError(f"{path}: field 'scenario': no such file {scenario}")
+    return spec, scenario
+
+
+def run_seed(base, case, run) -> int:
+    """The seed of run ``run`` of case ``case``: a 64-bit integer from
+    ``SeedSequence(base, spawn_key=(case, run))`` (NEP 19)."""
+    ss = np.random.SeedSequence(int(base), spawn_key=(int(case), int(run)))
+    return int(ss.generate_state(1, np.uint64)[0])
+
+
+@dataclass
+class StudyCase:
+    """One case of a study: what every run of it needs (picklable; the
+    prepared truth and ideal IMU are rebuilt once per worker process)."""
+
+    index: int
+    grade: str
+    filter: str
+    spec: ConsistencySpec
+    outage: tuple[float, float] | None
+    lever_arm_b: tuple[float, float, float]
+    #: cases with the same key share one prepared truth and ideal IMU per process
+    prep_key: str = ""
+
+    @property
+    def figures(self):
+        return OUTAGE_FIGURES if self.outage is not None else CONSISTENCY_FIGURES
+
+
+#: per process: prep_key -> (trajectory, (t, ideal IMU, truth)), shared by the cases of a study
+_PREPARED: dict = {}
+
+
+def _spec(case: StudyCase) -> ConsistencySpec:
+    """The case's spec with the truth and ideal IMU prepared once per process
+    for all cases of the study (they differ in sensor and filter only)."""
+    hit = _PREPARED.get(case.prep_key)
+    if hit is None:
+        if len(_PREPARED) >= 4:  # a long-lived worker of many studies
+            _PREPARED.clear()
+        hit = _PREPARED[case.prep_key] = (case.spec.trajectory, case.spec.prepared())
+    # the trajectory too: it integrates its position lazily, once per object
+    return replace(case.spec, trajectory=hit[0], _prepared=hit[1])
+
+
+def _grade_errors(grade):
+    from ..simulation.sensors import ImuErrors, preset
+
+    return ImuErrors() if grade == "ideal" else preset(grade)
+
+
+def _initial(grade):
+    return grade_initial_uncertainty("tactical" if grade == "ideal" else grade)
+
+
+def _scaled(errors, k):
+    """The filter's view of a sensor model with its white noise and bias
+    instability scaled by ``k`` (filter tuning)."""
+    def s(e):
+        return replace(e, white_noise=e.white_noise * k, bias_instability=e.bias_instability * k)
+
+    return replace(errors, gyro=s(errors.gyro), accel=s(errors.accel))
+
+
+def build_cases(spec: StudySpec, scenario_path, key="") -> list[StudyCase]:
+    """The cases of a study, in a fixed order: grades (outer) x filter settings.
+    ``key`` names the shared preparation (the study's fingerprint)."""
+    from ..simulation.gnss import GnssErrors
+    from ..simulation.scenario import build_trajectory, gnss_errors, load_scenario
+
+    sc = load_scenario(scenario_path)
+    if any(sc.imu.lever_arm_b_m):
+        raise ConfigError(f"{scenario_path}: imu.lever_arm_b_m must be zero for a study (its truth is the IMU's "
+                          f"own trajectory), got {list(sc.imu.lever_arm_b_m)}")
+    tr = build_trajectory(sc, np.random.default_rng(spec.seed))
+    T = tr.duration if spec.duration_s is None else spec.duration_s
+    if T > tr.duration:
+        raise ConfigError(f"duration_s must be within (0, {tr.duration:.0f}] s for {scenario_path.name}, "
+                          f"got {spec.duration_s}")
+    outage = None
+    if spec.outage is not None:
+        outage = (spec.outage.start_s, spec.outage.start_s + spec.outage.length_s)
+        if outage[1] >= T:
+            raise ConfigError(f"outage: it ends at {outage[1]:g} s, after the end of the study data ({T:g} s)")
+    lever = tuple(float(x) for x in sc.gnss.lever_arm_b_m)
+    cases = []
+    for grade in spec.grades or [sc.imu.grade]:
+        for f in spec.filter:
+            full = _grade_errors(grade)
+            model = consistency_errors(full)
+            kw = dict(scheme=f.scheme, gate_probability=0.9999 if f.gating else None)
+            if outage is not None:  # the full sensor, the scenario's GNSS, forward filter
+                sim, g = full, gnss_errors(sc)
+                kw["lever_arm_b"] = lever
+            else:  # the consistency job's set-up: what the filter models, 1 Hz white GNSS, smoothed NEES
+                sim, lever = model, (0.0, 0.0, 0.0)
+                g = GnssErrors(rate_hz=1.0, white_h_m=1.0, white_v_m=2.0, velocity_sigma_m_s=0.0)
+                kw["smoother_node_s"] = 0.0
+            settings = matched_settings(_scaled(model, f.noise_scale), _initial(grade), **kw)
+            cs = ConsistencySpec(tr, sc.imu.rate_hz, sim, g, settings, spec.duration_s)
+            cases.append(StudyCase(len(cases), grade, f.name, cs, outage, lever, key))
+    return cases
+
+
+def _outage_figures(case: StudyCase, seed):
+    from ..integration import GnssPosition, run_filter
+    from ..simulation.gnss import simulate_gnss
+    from ..simulation.sensors import apply_imu_errors
+
+    spec = _spec(case)
+    t, ideal, truth = spec.prepared()
+    rng = np.random.default_rng(seed)
+    imu, _ = apply_imu_errors(ideal, spec.errors, rng)
+    gnss, _ = simulate_gnss(spec.trajectory, t[0], t[-1], spec.gnss_errors, rng)
+    use = ~withheld_mask(gnss.time, [case.outage])
+    start = perturbed_start(truth.state(0), spec.settings, rng)
+    sol = run_filter(imu, start, [GnssPosition(gnss, use, lever_arm_b=case.lever_arm_b)], spec.settings).nav
+    k = np.nonzero((t >= case.outage[0]) & (t <= case.outage[1]))[0]
+    d = earth.lla_to_ned(sol.lla[k], truth.lla[k])
+    h = np.hypot(d[:, 0], d[:, 1])
+    att = rot.attitude_error(sol.C_nb[k[-1]], truth.C_nb[k[-1]])
+    return {"outage_end_horizontal_m": h[-1], "outage_worst_horizontal_m": h.max(),
+            "outage_end_vertical_m": abs(d[-1, 2]),
+            "outage_end_velocity_m_s": np.linalg.norm(sol.v_n[k[-1]] - truth.v_n[k[-1]]),
+            "outage_end_attitude_deg": np.degrees(np.linalg.norm(att))}
+
+
+def run_case(case: StudyCase, run: int, base_seed: int) -> dict:
+    """One run of a case: its key, seed and figures (one row of ``runs.parquet``)."""
+    seed = run_seed(base_seed, case.index, run)
+    if case.outage is not None:
+        fig = _outage_figures(case, seed)
+    else:
+        r = run_once(_spec(case), seed)
+        fig = {f"nees_{b}_mean": np.mean(r.nees[b]) for b in ("pos", "vel", "att")}
+        fig["bias_rms_normalized"] = np.sqrt(np.mean(r.bias_normalized ** 2))
+    row = {"case": case.index, "run": int(run), "grade": case.grade, "filter": case.filter, "seed": seed}
+    row.update({k: float(v) for k, v in fig.items()})
+    return row
+
+
+def fingerprint(spec: StudySpec, scenario_path) -> str:
+    """SHA-256 of the validated spec and the scenario file's bytes: a resumed
+    study must be the same study."""
+    h = hashlib.sha256(json.dumps(spec.model_dump(mode="json"), sort_keys=True).encode())
+    h.update(Path(scenario_path).read_bytes())
+    return h.hexdigest()
+
+
+def _frame(rows, figures):
+    import pandas as pd
+
+    df = pd.DataFrame(rows, columns=["case", "run", "grade", "filter", "seed", *figures])
+    return df.astype({"case": "int32", "run": "int32", "seed": "uint64", "grade": str, "filter": str,
+                      **{f: "float64" for f in figures}})
+
+
+def read_parts(out_dir):
+    """Every row written so far under ``DIR/runs/`` (a DataFrame, sorted by
+    ``(case, run)``, duplicates dropped), or None."""
+    import pandas as pd
+
+    parts = sorted((Path(out_dir) / "runs").glob("part-*.parquet"))
+    if not parts:
+        return None
+    frames = []
+    for p in parts:
+        try:
+            frames.append(pd.read_parquet(p))
+        except Exception as exc:  # a part is written whole or not at all; anything else is damage
+            raise InputError(f"{p}: not a readable Parquet part of a study ({exc}); delete it to recompute "
+                             "its runs") from None
+    df = pd.concat(frames, ignore_index=True).drop_duplicates(["case", "run"])
+    return df.sort_values(["case", "run"], kind="stable").reset_index(drop=True)
+
+
+def _write_parquet(df, path):
+    with atomic_write(path) as tmp:
+        df.to_parquet(tmp, index=False, engine="pyarrow", compression="snappy")
+    return Path(path)
+
+
+def _open_client(scheduler, workers):
+    """A distributed client and the cluster it started (or None)."""
+    import logging
+
+    from distributed import Client, LocalCluster
+
+    if scheduler is not None:
+        if workers is not None:
+            raise ConfigError("--workers applies to the local cluster; an existing one (--scheduler) has its own")
+        try:
+            return Client(scheduler, timeout="20s"), None
+        except (OSError, TimeoutError) as exc:
+            raise InputError(f"--scheduler {scheduler}: could not connect ({exc})") from None
+    n = (os.cpu_count() or 1) if workers is None else int(workers)
+    if n < 1:
+        raise ConfigError(f"--workers must be at least 1, got {workers}")
+    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
+                           silence_logs=logging.ERROR)
+    return Client(cluster), cluster
+
+
+def statistics(df, figures):
+    """One row per case, figure and statistic (``summary.parquet``)."""
+    import pandas as pd
+
+    rows = []
+    for c, g in df.groupby("case", sort=True):
+        for f in figures:
+            x = g[f].to_numpy()
+            vals = {"count": float(len(x)), "mean": x.mean(), "std": x.std(ddof=1) if len(x) > 1 else 0.0,
+                    "min": x.min(), "median": np.median(x), "p90": np.percentile(x, 90), "max": x.max()}
+            for s in STATISTICS:
+                rows.append({"case": int(c), "grade": g["grade"].iloc[0], "filter": g["filter"].iloc[0],
+                             "figure": f, "statistic": s, "value": float(vals[s])})
+    out = pd.DataFrame(rows)
+    return out.astype({"case": "int32", "value": "float64"})
+
+
+def ranking(df, cases):
+    """Cases ranked: by the median horizontal error at the end of the outage
+    (outage studies), or by how far the ANEES of position, velocity and
+    attitude are from their dimension 3 (``mean |ln(ANEES / 3)|``)."""
+    out = []
+    for c in cases:
+        g = df[df["case"] == c.index]
+        e = {"case": c.index, "grade": c.grade, "filter": c.filter, "runs": int(len(g))}
+        if c.outage is not None:
+            x = g["outage_end_horizontal_m"].to_numpy()
+            e.update(metric="outage_end_horizontal_m", median=float(np.median(x)), p90=float(np.percentile(x, 90)),
+                     min=float(x.min()), max=float(x.max()),
+                     worst_inside_median=float(np.median(g["outage_worst_horizontal_m"])))
+            e["score"] = e["median"]
+        else:
+            lo, hi = anees_band(len(g), 3)
+            a = {b: float(g[f"nees_{b}_mean"].mean()) for b in ("pos", "vel", "att")}
+            e.update(metric="anees", anees=a, band_95_per_epoch=[lo, hi],
+                     bias_rms_normalized=float(np.sqrt(np.mean(g["bias_rms_normalized"] ** 2))))
+            e["score"] = float(np.mean([abs(np.log(v / 3.0)) for v in a.values()]))
+        out.append(e)
+    out.sort(key=lambda e: (e["score"], e["case"]))
+    for i, e in enumerate(out, 1):
+        e["rank"] = i
+    return out
+
+
+def _plot(df, cases, path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    outage = cases[0].outage is not None
+    fig_name = "outage_end_horizontal_m" if outage else "nees_pos_mean"
+    fig, ax = plt.subplots(figsize=(max(5.0, 1.3 * len(cases) + 2), 4.2))
+    data = [df.loc[df["case"] == c.index, fig_name].to_numpy() for c in cases]
+    pos = np.arange(1, len(cases) + 1)
+    ax.boxplot(data, positions=pos, whis=(0, 100), widths=0.5, showfliers=False)  # whiskers: min to max
+    rng = np.random.default_rng(0)
+    for p, x in zip(pos, data):
+        ax.plot(p + rng.uniform(-0.18, 0.18, len(x)), x, ".", ms=3, alpha=0.5, color="C0")
+        ax.plot(p, np.percentile(x, 90), "v", color="C3", ms=7)
+    ax.set_xticks(pos, [c.grade if len({k.filter for k in cases}) == 1 else f"{c.grade}\n{c.filter}"
+                        for c in cases], fontsize=8)
+    if outage:
+        a, b = cases[0].outage
+        ax.set_ylabel(f"horizontal error at the end of the {b - a:g} s outage [m]")
+        if all(len(x) and x.min() > 0 for x in data) and max(x.max() for x in data) > 30 * min(x.min() for x in data):
+            ax.set_yscale("log")
+    else:
+        ax.set_ylabel("run-mean NEES of position (3 = consistent)")
+        ax.axhline(3.0, color="k", lw=0.8, ls="--")
+    ax.set_title(f"{len(data[0])} runs per case; dots: runs, box: quartiles, whiskers: min-max, red: 90 %",
+                 fontsize=8)
+    ax.grid(True, axis="y", alpha=0.3)
+    fig.tight_layout()
+    return save_figure(fig, path)
+
+
+def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None, log=None) -> dict:
+    """Run (or resume) a study on a Dask cluster and write its results.
+
+    Parameters
+    ----------
+    spec_path : path
+        The study TOML (:class:`StudySpec`).
+    out_dir : path
+        Results folder: ``study.json`` (the spec's fingerprint), ``runs/part-*.parquet``
+        (as runs complete), then ``runs.parquet``, ``summary.parquet``,
+        ``summary.json`` and ``study.png``.  If it already holds parts of the
+        same study, only the missing ``(case, run)`` are computed.
+    scheduler : str, optional
+        Address of an existing scheduler (``tcp://host:8786``); default a
+        ``LocalCluster`` of ``workers`` single-threaded processes.
+    workers : int, optional
+        Local cluster size (default: every core).
+    progress : callable(total, done_before) -> callable(n), optional
+        Makes the progress callback, called with the number of runs just
+        written (after their part file is in place).  An exception it raises
+        stops the study as a killed client would (the parts stay).
+    log : callable(str), optional
+
+    Returns
+    -------
+    dict
+        ``ranking``, ``files``, ``runs_total``, ``runs_computed``,
+        ``runs_reused``, ``seconds`` and the cluster used (also in ``summary.json``).
+    """
+    log = log or (lambda s: None)
+    t_start = time.perf_counter()
+    spec, scenario_path = load_spec(spec_path)
+    out = check_folder_writable(out_dir)
+    fp = fingerprint(spec, scenario_path)
+    cases = build_cases(spec, scenario_path, fp)  # every config error before anything is written
+    meta_path = out / "study.json"
+    if meta_path.is_file():
+        try:
+            old = json.loads(meta_path.read_text()).get("fingerprint")
+        except (OSError, ValueError):
+            raise InputError(f"{meta_path}: unreadable; it is not a study folder of inskit") from None
+        if old != fp:
+            raise ConfigError(f"{out}: holds the results of a different study (the spec or its scenario changed); "
+                              "use another --out, or delete the folder to start over")
+    elif (out / "runs").is_dir() and any((out / "runs").glob("part-*.parquet")):
+        raise ConfigError(f"{out}: has run parts but no study.json; use another --out")
+    else:
+        write_text(meta_path, json.dumps({"fingerprint": fp, "spec": spec.model_dump(mode="json"),
+                                          "scenario": str(scenario_path)}, indent=1) + "\n")
+    (out / "runs").mkdir(exist_ok=True)
+    figures = cases[0].figures
+    prev = read_parts(out)
+    done = set() if prev is None else set(zip(prev["case"].tolist(), prev["run"].tolist()))
+    todo = [(c.index, r) for c in cases for r in range(spec.runs) if (c.index, r) not in done]
+    total = len(cases) * spec.runs
+    log(f"study: {len(cases)} case(s) x {spec.runs} runs = {total}; {total - len(todo)} already in {out}, "
+        f"{len(todo)} to run")
+    cluster_info = {}
+    t_cluster = t_runs = 0.0
+    if todo:
+        from distributed import as_completed
+
+        t0 = time.perf_counter()
+        client, cluster = _open_client(scheduler, workers)
+        try:
+            nworkers = len(client.scheduler_info(n_workers=-1)["workers"])
+            cluster_info = {"scheduler": scheduler or "local", "workers": nworkers}
+            t_cluster = time.perf_counter() - t0
+            log(f"study: {'cluster at ' + scheduler if scheduler else 'local cluster'}: {nworkers} worker(s) "
+                f"({t_cluster:.1f} s to start)")
+            t1 = time.perf_counter()
+            shipped = client.scatter(cases, broadcast=True)
+            futures = [client.submit(run_case, shipped[c], r, spec.seed, key=f"inskit-study-{fp[:16]}-{c}-{r}",
+                                     pure=False) for c, r in todo]
+            bar = progress(total, total - len(todo)) if progress else None
+            seq = 0
+            try:
+                for batch in as_completed(futures, with_results=True).batches():
+                    rows = [res for _, res in batch]
+                    name = f"part-{time.time_ns():020d}-{os.getpid()}-{seq:06d}.parquet"
+                    seq += 1
+                    _write_parquet(_frame(rows, figures), out / "runs" / name)
+                    if bar:
+                        bar(len(rows))
+            finally:
+                client.cancel(futures)
+            t_runs = time.perf_counter() - t1
+        finally:
+            client.close()
+            if cluster is not None:
+                cluster.close()
+    df = read_parts(out)
+    if df is None or len(df) != total:
+        raise InputError(f"{out}: expected {total} runs after the study, found {0 if df is None else len(df)}")
+    df = _frame(df.to_dict("records"), figures)  # one dtype set whatever the parts held
+    files = {"runs": _write_parquet(df, out / "runs.parquet"),
+             "summary": _write_parquet(statistics(df, figures), out / "summary.parquet")}
+    rank = ranking(df, cases)
+    files["plot"] = _plot(df, cases, out / "study.png")
+    res = {"study": str(Path(spec_path)), "kind": spec.kind, "scenario": str(scenario_path),
+           "duration_s": spec.duration_s, "seed": spec.seed, "runs_per_case": spec.runs,
+           "outage_s": list(cases[0].outage) if cases[0].outage else None, "ranking": rank,
+           "runs_total": total, "runs_computed": len(todo), "runs_reused": total - len(todo),
+           "execution": {**cluster_info, "cluster_start_s": t_cluster, "runs_s": t_runs,
+                         "seconds": time.perf_counter() - t_start},
+           "files": {k: str(v) for k, v in files.items()}}
+    files["json"] = out / "summary.json"
+    res["files"]["json"] = str(files["json"])
+    return _finish(res, files["json"])
+
+
+def _finish(res, path):
+    write_text(path, json.dumps(_plain(res), indent=1, allow_nan=False) + "\n")
+    return res
+
+
+def _plain(x):
+    if isinstance(x, dict):
+        return {str(k): _plain(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_plain(v) for v in x]
+    if isinstance(x, (np.floating, float)):
+        return float(x) if np.isfinite(x) else None
+    if isinstance(x, (np.integer,)):
+        return int(x)
+    return x
+
+
+def ranking_table(res) -> str:
+    """The ranking as a text table."""
+    rank = res["ranking"]
+    if rank and rank[0]["metric"] == "outage_end_horizontal_m":
+        a, b = res["outage_s"]
+        lines = [f"horizontal error at the end of the {b - a:g} s outage ({a:g}-{b:g} s), over the runs of each case",
+                 f"{'rank':>4}  {'grade':<16}{'filter':<12}{'runs':>6}{'median m':>11}{'90 % m':>11}{'max m':>11}"]
+        for e in rank:
+            lines.append(f"{e['rank']:>4}  {e['grade']:<16}{e['filter']:<12}{e['runs']:>6}{e['median']:>11.3f}"
+                         f"{e['p90']:>11.3f}{e['max']:>11.3f}")
+    else:
+        lines = ["ANEES (3 = consistent) of position, velocity, attitude, over the runs of each case",
+                 f"{'rank':>4}  {'grade':<16}{'filter':<12}{'runs':>6}{'pos':>8}{'vel':>8}{'att':>8}  band (1 epoch)"]
+        for e in rank:
+            a = e["anees"]
+            lines.append(f"{e['rank']:>4}  {e['grade']:<16}{e['filter']:<12}{e['runs']:>6}{a['pos']:>8.2f}"
+                         f"{a['vel']:>8.2f}{a['att']:>8.2f}  [{e['band_95_per_epoch'][0]:.2f}, "
+                         f"{e['band_95_per_epoch'][1]:.2f}]")
+    lines.append(f"runs: {res['runs_total']} ({res['runs_computed']} computed, {res['runs_reused']} reused); "
+                 f"{res['execution']['seconds']:.1f} s; files: {', '.join(res['files'].values())}")
+    return "\n".join(lines)

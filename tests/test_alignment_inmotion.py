@@ -1,0 +1,245 @@
+"""In-motion start-up (inskit.alignment.inmotion) and the job's automatic choice.
+
+A simulated car that starts at 15 m/s with no static period (industrial MEMS,
+1 Hz GNSS, the noise of examples/car.toml), started by the navigate job's own
+start-up from a wrong first yaw: the yaw bank must bring the heading within
+1 deg in under 60 s, and the position RMS within 20 % of a run started from
+the true state.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from inskit import earth
+from inskit import rotations as rot
+from inskit.alignment.inmotion import (BANK_ABOVE_YAW_SIGMA, UNKNOWN_YAW_SIGMA, auto_startup, gnss_acceleration,
+                                       gnss_velocity, inmotion_startup)
+from inskit.errors import ConfigError, InputError
+from inskit.jobs.config import config_from_dict
+from inskit.jobs.navigate import navigate
+from inskit.jobs.simulate import write_simulation
+from inskit.simulation.scenario import load_scenario, simulate
+from inskit.units import DEG
+
+YAW0_DEG = 40.0
+GNSS = """[gnss]
+rate_hz = 1.0
+white_h_m = 0.5
+white_v_m = 1.0
+correlated_h_m = 0.3
+correlated_v_m = 0.6
+correlation_time_s = 60.0
+velocity_sigma_m_s = 0.05
+lever_arm_b_m = [0.0, 0.0, -1.2]
+"""
+MOVING = f"""name = "car15"
+[start]
+lat_deg = 40.0966
+lon_deg = -105.1474
+height_m = 1600.0
+yaw_deg = {YAW0_DEG}
+speed_m_s = 15.0
+[imu]
+rate_hz = 100.0
+grade = "industrial-mems"
+{GNSS}
+[[segment]]
+type = "accelerate"
+speed_m_s = 20.0
+duration_s = 10.0
+[[segment]]
+type = "cruise"
+duration_s = 20.0
+[[segment]]
+type = "turn"
+angle_deg = 90.0
+radius_m = 60.0
+[[segment]]
+type = "cruise"
+duration_s = 30.0
+[[segment]]
+type = "turn"
+angle_deg = -90.0
+radius_m = 80.0
+[[segment]]
+type = "cruise"
+duration_s = 40.0
+"""
+STATIC_FIRST = MOVING.replace("speed_m_s = 15.0\n", "").replace(
+    "[[segment]]\ntype = \"accelerate\"\nspeed_m_s = 20.0",
+    "[[segment]]\ntype = \"static\"\nduration_s = 20.0\n[[segment]]\ntype = \"accelerate\"\nspeed_m_s = 20.0", 1)
+
+
+def _simulate(tmp, text, seed):
+    p = tmp / "s.toml"
+    p.write_text(text)
+    sim = simulate(load_scenario(p), seed=seed)
+    write_simulation(sim, tmp, plot=False)
+    return sim
+
+
+@pytest.fixture(scope="module")
+def car(tmp_path_factory):
+    d = tmp_path_factory.mktemp("car15")
+    return d, _simulate(d, MOVING, 11)
+
+
+def _cfg(d, **init):
+    return config_from_dict({"imu": {"file": str(d / "imu.csv")},
+                             "gnss": {"file": str(d / "gnss.csv"), "lever_arm_b_m": [0.0, 0.0, -1.2]},
+                             "noise": {"from_static": False}, "filter": {"scale_factors": False},
+                             **({"init": init} if init else {})})
+
+
+def _errors(res, truth):
+    """Horizontal position error [m] and yaw error [deg] of the forward solution at 1 Hz."""
+    sol = res.forward.nav
+    k = np.arange(0, len(sol.time), 100)
+    kt = np.clip(np.searchsorted(truth.time, sol.time[k] - 1e-9), 0, len(truth.time) - 1)
+    ned = np.array([earth.lla_to_ned(a, b) for a, b in zip(sol.lla[k], truth.lla[kt])])
+    yaw = np.degrees(rot.wrap_angle(sol.euler[k, 2] - truth.euler[kt, 2]))
+    return sol.time[k] - sol.time[0], np.hypot(ned[:, 0], ned[:, 1]), yaw
+
+
+def _converged_at(t, yaw_err, tol=1.0):
+    """First time after which the yaw error stays within ``tol`` deg."""
+    bad = np.nonzero(np.abs(yaw_err) > tol)[0]
+    return 0.0 if not len(bad) else (float(t[bad[-1] + 1]) if bad[-1] + 1 < len(t) else np.inf)
+
+
+@pytest.fixture(scope="module")
+def from_truth(car):
+    d, sim = car
+    s0 = sim.truth.state(0)
+    cfg = _cfg(d, mode="given", lat_deg=float(s0.lla[0] / DEG), lon_deg=float(s0.lla[1] / DEG),
+               height_m=float(s0.lla[2]), v_ned_m_s=[float(v) for v in s0.v_n],
+               rpy_deg=[float(v) for v in s0.euler / DEG])
+    t, dh, _ = _errors(navigate(cfg), sim.truth)
+    return float(np.sqrt(np.mean(dh ** 2)))
+
+
+# --- the GNSS-derived velocity and acceleration, levelling in motion ---------------------------------
+def test_gnss_velocity_and_acceleration_match_the_truth(car):
+    _, sim = car
+    g = sim.gnss
+    v, sig_h, _ = gnss_velocity(g)
+    assert sig_h == pytest.approx(0.05)  # the receiver velocity (the fixes are metre-level)
+    kt = np.searchsorted(sim.truth.time, g.time)
+    assert np.sqrt(np.mean((v[:, :2] - sim.truth.v_n[kt, :2]) ** 2)) < 2.0 * 0.05
+    a, span = gnss_acceleration(g.time, v)
+    assert span == pytest.approx(2.0)
+    # against the truth's velocity differenced the same way (the segment's smooth 15 -> 20 m/s profile, which
+    # peaks near 0.9 m/s^2): within 4 sigma of the difference noise sqrt(2) 0.05 / 2 s
+    vt = sim.truth.v_n[kt]
+    a_true = (vt[2:] - vt[:-2]) / 2.0
+    assert np.abs(a[1:-1, :2] - a_true[:, :2]).max() < 4 * np.sqrt(2) * 0.05 / 2.0
+    assert a_true[4:6, :2].max() > 0.5  # the check is not of a zero
+
+
+def test_levelling_in_motion_removes_the_acceleration(car):
+    """Accelerating tilts plain levelling by a/g in pitch; corrected, the tilt is within 3 of its own
+    sigma (GNSS acceleration noise and the 0.05 m/s^2 accelerometer-bias sigma)."""
+    _, sim = car
+    s = inmotion_startup(sim.imu, sim.gnss, (0.0, 0.0, -1.2))
+    assert s.mode == "in-motion" and s.heading_time == pytest.approx(0.0)
+    truth0 = sim.truth.state(0)
+    err = np.degrees(rot.attitude_error(s.state.C_nb, truth0.C_nb))
+    tilt_sigma = s.sigma["sigma_roll_pitch_deg"]
+    assert 0.1 < tilt_sigma < 1.0
+    assert abs(err[0]) < 3 * tilt_sigma and abs(err[1]) < 3 * tilt_sigma
+    w, f = sim.imu.rates()
+    plain = np.degrees(np.arctan2(f[1:201, 0].mean(), np.hypot(f[1:201, 1].mean(), f[1:201, 2].mean())))
+    k2 = int(np.searchsorted(sim.truth.time, 2.0))
+    a_mean = np.linalg.norm(sim.truth.v_n[k2] - sim.truth.v_n[0]) / 2.0  # mean along-track acceleration
+    assert a_mean > 0.1
+    assert plain - np.degrees(truth0.euler[1]) == pytest.approx(np.degrees(a_mean / 9.8), abs=0.05)
+    assert abs(err[1]) < 0.5 * np.degrees(a_mean / 9.8)
+    # yaw from the course at 15-20 m/s: 0.05 m/s noise -> ~0.1 deg per fix
+    assert abs(err[2]) < 3 * s.sigma["sigma_yaw_deg"] and s.sigma["sigma_yaw_deg"] < 1.0
+    assert s.sigma["sigma_vel_m_s"] == pytest.approx(0.05)
+    # the position: the fix at t0 less the lever arm, metre-level like the fix
+    dp = earth.lla_to_ned(s.state.lla, truth0.lla)
+    assert np.linalg.norm(dp) < 3 * np.linalg.norm(sim.gnss.sigma_ned[0])
+
+
+def test_a_first_yaw_guess_is_unknown_on_the_circle(car):
+    _, sim = car
+    s = inmotion_startup(sim.imu, sim.gnss, yaw_guess=1.0)
+    assert s.state.euler[2] == pytest.approx(1.0)
+    assert s.sigma["sigma_yaw_deg"] * DEG == pytest.approx(UNKNOWN_YAW_SIGMA)
+    assert UNKNOWN_YAW_SIGMA > BANK_ABOVE_YAW_SIGMA
+
+
+def test_no_heading_from_a_slow_track_says_what_to_do(car):
+    _, sim = car
+    with pytest.raises(InputError, match=r"never exceeds 30\.00 m/s .*init\.heading_speed_m_s .*init\.yaw_deg"):
+        inmotion_startup(sim.imu, sim.gnss, heading_speed_m_s=30.0)
+
+
+# --- the job: automatic choice, the yaw bank ----------------------------------------------------------
+def test_auto_chooses_in_motion_without_rest_and_the_course_is_enough(car, from_truth):
+    d, sim = car
+    res = navigate(_cfg(d))
+    s = res.startup
+    assert s.mode == "in-motion" and "0.0 s of rest" in s.reason and s.bank is None  # 0.1 deg: no bank needed
+    info = s.summary(res.imu.time[0])
+    assert info["mode"] == "in-motion" and info["static_s"] == 0.0
+    t, dh, yaw = _errors(res, sim.truth)
+    assert _converged_at(t, yaw) < 60.0
+    assert np.sqrt(np.mean(dh ** 2)) < 1.2 * from_truth
+
+
+def _bank_run(car, from_truth, offset_deg):
+    d, sim = car
+    res = navigate(_cfg(d, yaw_deg=YAW0_DEG + offset_deg))
+    s = res.startup
+    assert s.mode == "in-motion" and s.bank is not None
+    assert len(s.bank["scores"]) == 12 and s.bank["span_s"] == pytest.approx(40.0)
+    assert s.sigma["sigma_yaw_deg"] == pytest.approx(15.0)
+    # the kept hypothesis is the one nearest the truth (within half the spacing)
+    assert abs(rot.wrap_angle((s.bank["chosen_yaw_deg"] - YAW0_DEG) * DEG)) <= 15.0 * DEG + 1e-9
+    t, dh, yaw = _errors(res, sim.truth)
+    assert _converged_at(t, yaw) < 60.0
+    rms = float(np.sqrt(np.mean(dh ** 2)))
+    assert rms < 1.2 * from_truth, f"position RMS {rms:.3f} m against {from_truth:.3f} m from the truth"
+    return s
+
+
+@pytest.mark.parametrize("offset_deg", [90.0, 210.0, 105.0])
+def test_any_initial_yaw_converges(car, from_truth, offset_deg):
+    s = _bank_run(car, from_truth, offset_deg)
+    assert "yaw bank: hypothesis" in s.reason
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("offset_deg", [30.0 * k for k in range(12)])
+def test_any_initial_yaw_converges_full_sweep(car, from_truth, offset_deg):
+    _bank_run(car, from_truth, offset_deg)
+
+
+def test_auto_keeps_static_then_track_on_a_static_start(tmp_path):
+    sim = _simulate(tmp_path, STATIC_FIRST, 12)
+    s = auto_startup(sim.imu, sim.gnss, (0.0, 0.0, -1.2))
+    assert s.mode == "static-then-track" and s.reason.startswith("auto: static for ")
+    # 20 s at rest, then a smooth start: the track passes 0.3 m/s about 2 s later, less 1 s of margin
+    assert 19.0 < s.static_end < 23.0
+    assert s.sigma is None  # the configured sigmas stand, as before
+    assert abs(np.degrees(rot.wrap_angle(s.state.euler[2])) - YAW0_DEG) < 1.0
+    # the same log cut to start while moving goes in-motion
+    k = int(np.searchsorted(sim.imu.time, 25.0))
+    s2 = auto_startup(sim.imu.slice(k), sim.gnss.select(sim.gnss.time >= sim.imu.time[k]), (0.0, 0.0, -1.2))
+    assert s2.mode == "in-motion"
+
+
+def test_init_mode_keys_are_checked():
+    base = {"imu": {"file": "a.csv"}, "gnss": {"file": "b.csv"}}
+    assert config_from_dict(base).init.mode == "auto"
+    with pytest.raises(ConfigError, match=r"init\.yaw_deg would be ignored: it tunes the in-motion start-up"):
+        config_from_dict({**base, "init": {"mode": "static-then-track", "yaw_deg": 10.0}})
+    with pytest.raises(ConfigError, match=r"init\.min_static_s would be ignored"):
+        config_from_dict({**base, "init": {"mode": "in-motion", "min_static_s": 3.0}})
+    given = {"mode": "given", "lat_deg": 45.0, "lon_deg": 7.0, "height_m": 300.0, "rpy_deg": [0, 0, 90]}
+    with pytest.raises(ConfigError, match=r"init\.yaw_hypotheses would be ignored"):
+        config_from_dict({**base, "init": {**given, "yaw_hypotheses": 4}})

@@ -1,0 +1,568 @@
+"""Issue 12 acceptance: every bad input, seen as a user sees it.
+
+Each test runs the command a user types (``inskit.cli.main``, in process) on
+a broken input and asserts three things: the exit code (2 for the user's
+mistake, never 3, which means a bug in inskit), the one-line message (it names
+the file and the line or the field, and says what was expected) and what is
+on disk afterwards (no partial file under a final name, nothing overwritten).
+
+The unit tests of the readers are elsewhere (tests/test_io.py,
+tests/test_jobs_config.py, tests/test_gnss_rinex.py); here the end-to-end
+path is checked once per case, on a 52 s simulated drive (20 s static, a 90
+deg turn, cruise) made by the simulator in a module fixture.
+"""
+
+from __future__ import annotations
+
+import gzip
+import json
+import os
+import re
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from inskit.units import G0
+
+GNSS_DATA = Path(__file__).resolve().parent / "data" / "gnss"
+OBS = GNSS_DATA / "abpo0080_0000-0200.15o"
+NAV = GNSS_DATA / "abpo0080.15n"
+
+SCENARIO = """name = "drive"
+[start]
+lat_deg = 45
+lon_deg = 7
+height_m = 300
+[imu]
+rate_hz = 100
+grade = "industrial-mems"
+[gnss]
+rate_hz = 1
+white_h_m = 0.5
+white_v_m = 1.0
+[[segment]]
+type = "static"
+duration_s = 20
+[[segment]]
+type = "accelerate"
+speed_m_s = 10
+duration_s = 5
+[[segment]]
+type = "turn"
+angle_deg = 90
+radius_m = 30
+[[segment]]
+type = "cruise"
+duration_s = 20
+"""
+
+
+def run(capsys, *argv):
+    """``inskit ARGV`` in process: (exit code, stdout, stderr)."""
+    from inskit.cli import main
+
+    old = np.geterr()
+    try:
+        with pytest.raises(SystemExit) as exc:
+            main([str(a) for a in argv])
+    finally:
+        np.seterr(**old)  # main() silences numpy for the user; not for the other tests
+    out, err = capsys.readouterr()
+    return exc.value.code, out, err
+
+
+def refused(result, *needles):
+    """Exit 2, nothing on stdout, exactly one line ``inskit: error: ...``
+    holding every needle (plain substrings), no traceback, no numpy repr."""
+    code, out, err = result
+    assert code == 2, err
+    assert out == ""
+    assert err.count("\n") == 1 and err.startswith("inskit: error: "), err
+    for n in needles:
+        assert n in err, f"{n!r} not in {err!r}"
+    assert "Traceback" not in err and "np.float64" not in err
+    return err
+
+
+def empty_or_absent(folder):
+    """Nothing under a final name: the folder is absent or empty."""
+    folder = Path(folder)
+    return not folder.exists() or not any(folder.iterdir())
+
+
+@pytest.fixture(scope="module")
+def sim(tmp_path_factory):
+    """A simulated drive: imu.csv (increments), gnss.csv, truth.csv."""
+    from inskit.cli import cli
+
+    d = tmp_path_factory.mktemp("bad_inputs")
+    (d / "s.toml").write_text(SCENARIO)
+    cli.main(["simulate", str(d / "s.toml"), "--out", str(d / "sim"), "--no-plot"], standalone_mode=False)
+    return d / "sim"
+
+
+@pytest.fixture(scope="module")
+def rates(sim):
+    """The drive's IMU as rates [rad/s, m/s^2]: (time, w_b, f_b) without the first row."""
+    import pandas as pd
+
+    df = pd.read_csv(sim / "imu.csv")
+    t = df["time_s"].to_numpy()
+    dt = np.diff(t)[:, None]
+    w = df[[f"dtheta_{a}_rad" for a in "xyz"]].to_numpy()[1:] / dt
+    f = df[[f"dv_{a}_m_s" for a in "xyz"]].to_numpy()[1:] / dt
+    return t[1:], w, f
+
+
+def write_rates(path, t, w, f, gunit="rad_s", aunit="m_s2"):
+    cols = ["time_s"] + [f"gyro_{a}_{gunit}" for a in "xyz"] + [f"accel_{a}_{aunit}" for a in "xyz"]
+    np.savetxt(path, np.column_stack([t, w, f]), delimiter=",", header=",".join(cols), comments="", fmt="%.12g")
+    return path
+
+
+def lines_of(path):
+    return Path(path).read_text().splitlines(True)
+
+
+def navigate(capsys, sim, tmp_path, imu=None, gnss=None, *extra):
+    return run(capsys, "navigate", "--imu", imu or sim / "imu.csv", "--gnss", gnss or sim / "gnss.csv",
+               "--out", tmp_path / "nav", "--no-plots", *extra)
+
+
+# --- 1. missing columns ---------------------------------------------------------------
+def test_missing_columns(capsys, sim, tmp_path):
+    rows = lines_of(sim / "imu.csv")
+    bad = tmp_path / "imu.csv"
+    bad.write_text("".join(",".join(r.rstrip("\n").split(",")[:-1]) + "\n" for r in rows))  # no dv_z_m_s
+    err = refused(navigate(capsys, sim, tmp_path, imu=bad), str(bad), "no complete set of IMU columns",
+                  "dv_{x,y,z}_m_s", "found time_s,")
+    assert "dv_z_m_s" not in err.split("found")[1]
+    assert empty_or_absent(tmp_path / "nav")
+    g = tmp_path / "gnss.csv"
+    g.write_text(lines_of(sim / "gnss.csv")[0].replace("sigma_d_m", "sigma_down") + "".join(lines_of(sim / "gnss.csv")[1:]))
+    refused(navigate(capsys, sim, tmp_path, gnss=g), str(g), "missing column(s) sigma_d_m", "found time_s")
+    assert empty_or_absent(tmp_path / "nav")
+
+
+# --- 2. wrong units ---------------------------------------------------------------------
+def test_accelerations_in_g_under_an_m_s2_header(capsys, sim, rates, tmp_path):
+    t, w, f = rates
+    bad = write_rates(tmp_path / "imu_g.csv", t, w, f / G0)  # values in g, header says m/s^2
+    refused(navigate(capsys, sim, tmp_path, imu=bad), str(bad), "column 'accel_x_m_s2'",
+            "looks like values in g", "rename the columns accel_*_g")
+    assert empty_or_absent(tmp_path / "nav")
+    # the same numbers under the right header are read (and navigate)
+    good = write_rates(tmp_path / "imu_ok.csv", t, w, f / G0, aunit="g")
+    code, out, err = navigate(capsys, sim, tmp_path, good, None, "--json")
+    assert code == 0, err
+    assert json.loads(out)["epochs"] == len(t)
+
+
+def test_deg_s_under_a_rad_s_header_in_a_turn(capsys, sim, rates, tmp_path):
+    t, w, f = rates
+    bad = write_rates(tmp_path / "imu_deg.csv", t, np.degrees(w), f)  # the 90 deg turn: 13 deg/s for 7 s
+    refused(navigate(capsys, sim, tmp_path, imu=bad), str(bad), "column 'gyro_x_rad_s'",
+            "looks like values in deg/s", "gyro_*_deg_s")
+    assert empty_or_absent(tmp_path / "nav")
+    # mechanize says the same before writing anything
+    out = tmp_path / "sol.csv"
+    refused(run(capsys, "mechanize", bad, "--init", "45,7,300,0,0,0,0,0,0", "--out", out), "looks like values in deg/s")
+    assert not out.exists()
+
+
+# --- 3. time going back, repeated --------------------------------------------------------
+@pytest.mark.parametrize("kind", ["back", "repeated"])
+def test_time_going_back_or_repeated(capsys, sim, tmp_path, kind):
+    rows = lines_of(sim / "imu.csv")
+    i = 1000  # data row 999 sits on line 1001 (the header is line 1)
+    cells = rows[i].split(",")
+    prev_t = rows[i - 1].split(",")[0]
+    cells[0] = prev_t if kind == "repeated" else str(float(prev_t) - 0.5)
+    rows[i] = ",".join(cells)
+    bad = tmp_path / "imu.csv"
+    bad.write_text("".join(rows))
+    expected = (f"line {i + 1}: duplicate timestamp time_s=" if kind == "repeated"
+                else f"line {i + 1}: time_s={float(prev_t) - 0.5!r} goes back in time from line {i}")
+    refused(navigate(capsys, sim, tmp_path, imu=bad), str(bad), expected)
+    assert empty_or_absent(tmp_path / "nav")
+
+
+# --- 4. NaN and inf cells -----------------------------------------------------------------
+@pytest.mark.parametrize("cell, shown", [("nan", "'nan'"), ("", "is empty"), ("inf", "has inf"),
+                                         ("-1e999", "has '-1e999'"), ("1,2e-3", None)])
+def test_nan_and_inf_cells(capsys, sim, tmp_path, cell, shown):
+    rows = lines_of(sim / "imu.csv")
+    cells = rows[500].rstrip("\n").split(",")
+    cells[3] = cell  # dtheta_z_rad of line 501
+    rows[500] = ",".join(cells) + "\n"
+    bad = tmp_path / "imu.csv"
+    bad.write_text("".join(rows))
+    r = navigate(capsys, sim, tmp_path, imu=bad)
+    if shown is None:  # a decimal comma makes one column too many: refused, not read shifted
+        refused(r, str(bad), "line 501")
+    else:
+        refused(r, str(bad), "line 501: column 'dtheta_z_rad'", shown, "expected a finite number")
+    assert empty_or_absent(tmp_path / "nav")
+
+
+def test_nan_in_a_gnss_file_and_a_solution(capsys, sim, tmp_path):
+    rows = lines_of(sim / "gnss.csv")
+    rows[10] = rows[10].replace(rows[10].split(",")[2], "NaN", 1)
+    g = tmp_path / "gnss.csv"
+    g.write_text("".join(rows))
+    refused(navigate(capsys, sim, tmp_path, gnss=g), str(g), "line 11: column 'lon_deg'", "expected a finite number")
+    rows = lines_of(sim / "truth.csv")
+    rows[7] = rows[7].replace(rows[7].split(",")[3], "inf", 1)  # height_m
+    t = tmp_path / "truth.csv"
+    t.write_text("".join(rows))
+    refused(run(capsys, "evaluate", sim / "truth.csv", t), str(t), "line 8: column 'height_m' has inf")
+
+
+# --- 5. a gap in the IMU log: a warning, a health verdict, not an error --------------------------
+def test_gap_in_the_imu_log_is_warned_and_judged(capsys, sim, tmp_path):
+    rows = lines_of(sim / "imu.csv")
+    t = np.array([float(r.split(",")[0]) for r in rows[1:]])
+    keep = ~((t > 26.0) & (t <= 29.0))  # 3 s missing in the turn
+    gap = tmp_path / "imu_gap.csv"
+    gap.write_text(rows[0] + "".join(r for r, k in zip(rows[1:], keep) if k))
+    code, out, err = navigate(capsys, sim, tmp_path, gap, None, "--json")
+    assert code == 0, err
+    assert re.search(r"warning: the IMU log has a gap of 3\.0\d* s at t = 26\.0", err), err
+    s = json.loads(out)
+    assert s["health"]["verdict"] == "unhealthy"
+    assert any("IMU gap of 3.0" in x for x in s["health"]["reasons"])
+    assert len(s["imu_gaps"]) == 1 and abs(s["imu_gaps"][0]["length_s"] - 3.01) < 1e-6  # 26.00 -> 29.01
+    assert (tmp_path / "nav" / "summary.json").exists()
+    # --strict makes the verdict the exit code (3), after writing every file
+    code, out, err = navigate(capsys, sim, tmp_path, gap, None, "--force", "--strict")
+    assert code == 3 and "health: unhealthy" in err
+    assert json.loads((tmp_path / "nav" / "summary.json").read_text())["health"]["verdict"] == "unhealthy"
+    # mechanize integrates through it, but says so
+    code, out, err = run(capsys, "mechanize", gap, "--init", "45,7,300,0,0,0,0,0,0", "--json")
+    assert code == 0 and re.search(r"gap of 3\.0\d* s at t = 26\.0", err), err
+
+
+# --- 6. truncated and garbage CSV ---------------------------------------------------------------
+def test_truncated_csv(capsys, sim, tmp_path):
+    text = (sim / "imu.csv").read_text()
+    cut = text[: text.index("\n", len(text) // 2) + 12]  # the last line stops after a few characters
+    bad = tmp_path / "imu.csv"
+    bad.write_text(cut)
+    n_lines = cut.count("\n") + 1
+    refused(navigate(capsys, sim, tmp_path, imu=bad), str(bad), f"line {n_lines}: column", "is empty",
+            "expected a finite number")
+    assert empty_or_absent(tmp_path / "nav")
+    # a header and nothing else
+    bad.write_text(text.splitlines()[0] + "\n")
+    refused(navigate(capsys, sim, tmp_path, imu=bad), str(bad), "has a header but no data rows")
+    bad.write_text("")
+    refused(navigate(capsys, sim, tmp_path, imu=bad), str(bad), "the file is empty")
+
+
+@pytest.mark.parametrize("content, expected", [
+    (bytes(range(256)) * 40, "not a readable CSV file"),
+    (b"\x89PNG\r\n\x1a\n" + np.random.default_rng(0).bytes(3000), "not a readable CSV file"),
+    (b"<html><body>404 not found</body></html>\n", "has a header but no data rows"),
+    ("time_s,dtheta_x_rad\n\u00e9t\u00e9,\u2603\n".encode(), "line 2: column 'time_s' has '\u00e9t\u00e9'"),
+])
+def test_garbage_csv(capsys, sim, tmp_path, content, expected):
+    bad = tmp_path / "imu.csv"
+    bad.write_bytes(content)
+    refused(navigate(capsys, sim, tmp_path, imu=bad), str(bad), expected)
+    assert empty_or_absent(tmp_path / "nav")
+    out = tmp_path / "sol.csv"
+    refused(run(capsys, "mechanize", bad, "--init", "45,7,300,0,0,0,0,0,0", "--out", out), str(bad), expected)
+    assert not out.exists()
+
+
+# --- 7. gzip under a .csv name, truncated gzip -------------------------------------------------------
+def test_gzip_under_a_csv_name_is_read(capsys, sim, tmp_path):
+    z = tmp_path / "imu.csv"
+    z.write_bytes(gzip.compress((sim / "imu.csv").read_bytes()))
+    code, out, err = run(capsys, "mechanize", z, "--init", "45,7,300,0,0,0,0,0,0", "--json")
+    assert code == 0, err
+    assert json.loads(out)["epochs"] == len(lines_of(sim / "imu.csv")) - 1
+    data = z.read_bytes()
+    z.write_bytes(data[: len(data) // 2])  # a download cut short
+    refused(run(capsys, "mechanize", z, "--init", "45,7,300,0,0,0,0,0,0"), str(z), "not a readable CSV file")
+
+
+# --- 8. semicolons -------------------------------------------------------------------------------------
+def test_semicolon_separated_csv_gets_a_hint(capsys, sim, tmp_path):
+    bad = tmp_path / "imu.csv"
+    bad.write_text((sim / "imu.csv").read_text().replace(",", ";"))
+    refused(navigate(capsys, sim, tmp_path, imu=bad), str(bad), "separated by ';'", "comma-separated")
+    assert empty_or_absent(tmp_path / "nav")
+
+
+# --- 9. TOML: NaN, wrong types, unknown keys ---------------------------------------------------------------
+def config(tmp_path, sim, text):
+    p = tmp_path / "c.toml"
+    p.write_text(f'[imu]\nfile = "{sim / "imu.csv"}"\n[gnss]\nfile = "{sim / "gnss.csv"}"\n'
+                 f'[output]\ndir = "{tmp_path / "nav"}"\nplots = false\n' + text)
+    return p
+
+
+@pytest.mark.parametrize("text, needles", [
+    ("[noise]\ngyro_arw_deg_sqrt_h = nan\n", ["field 'noise.gyro_arw_deg_sqrt_h'", "not a finite number"]),
+    ("[noise]\naccel_vrw_m_s_sqrt_h = -inf\n", ["field 'noise.accel_vrw_m_s_sqrt_h'", "not a finite number"]),
+    ("[constraints]\nrate_hz = \"ten\"\n", ["field 'constraints.rate_hz'", "number"]),
+    ("[filter]\nscheme = 3\n", ["field 'filter.scheme'"]),
+    ("[filter]\nschme = \"open\"\n", ["field 'filter.schme'", "xtra"]),
+    ("[nosie]\ngyro_arw_deg_sqrt_h = 0.1\n", ["field 'nosie'"]),
+    ("[noise\n", ["not valid TOML", "line"]),
+])
+def test_bad_toml(capsys, sim, tmp_path, text, needles):
+    cfg = config(tmp_path, sim, text)
+    before = cfg.read_bytes()
+    refused(run(capsys, "navigate", cfg), str(cfg), *needles)
+    assert cfg.read_bytes() == before
+    assert not (tmp_path / "nav").exists()  # refused before the output folder is made
+
+
+# --- 10. impossible configuration ------------------------------------------------------------------------
+@pytest.mark.parametrize("text, needles", [
+    ('[init]\nmode = "given"\nlat_deg = 95\nlon_deg = 7\nheight_m = 300\nrpy_deg = [0, 0, 0]\n',
+     ["field 'init'", "lat_deg 95", "outside [-90, 90]"]),
+    ("[noise]\ngyro_arw_deg_sqrt_h = -0.3\n", ["field 'noise.gyro_arw_deg_sqrt_h'", "greater than 0"]),
+    ("[init]\nsigma_pos_m = 0\n", ["field 'init.sigma_pos_m'", "greater than 0"]),
+])
+def test_impossible_navigate_configuration(capsys, sim, tmp_path, text, needles):
+    cfg = config(tmp_path, sim, text)
+    refused(run(capsys, "navigate", cfg), str(cfg), *needles)
+    assert not (tmp_path / "nav").exists()
+
+
+@pytest.mark.parametrize("old, new, needles", [
+    ("lat_deg = 45", "lat_deg = 95", ["field 'start.lat_deg'", "less than or equal to 90"]),
+    ("white_h_m = 0.5", "white_h_m = -0.5", ["field 'gnss.white_h_m'", "greater than or equal to 0"]),
+    ("rate_hz = 100", "rate_hz = nan", ["field 'imu.rate_hz'", "not a finite number"]),
+])
+def test_impossible_scenario(capsys, tmp_path, old, new, needles):
+    sc = tmp_path / "s.toml"
+    sc.write_text(SCENARIO.replace(old, new, 1))
+    refused(run(capsys, "simulate", sc, "--out", tmp_path / "o", "--no-plot"), str(sc), *needles)
+    assert empty_or_absent(tmp_path / "o")
+
+
+def test_impossible_command_line_values(capsys, sim, tmp_path):
+    out = tmp_path / "sol.csv"
+    refused(run(capsys, "mechanize", sim / "imu.csv", "--init", "95,7,300,0,0,0,0,0,0", "--out", out), "latitude")
+    assert not out.exists()
+    refused(run(capsys, "navigate", "--imu", sim / "imu.csv", "--gnss", sim / "gnss.csv", "--lever-arm", "0,0",
+                "--out", tmp_path / "nav"), "--lever-arm", "three numbers")
+    assert empty_or_absent(tmp_path / "nav")
+
+
+# --- 11. results already there, --out equal to an input, unwritable output --------------------------------
+def test_an_output_folder_with_results_needs_force(capsys, sim, tmp_path):
+    code, _, err = navigate(capsys, sim, tmp_path)
+    assert code == 0, err
+    summary = tmp_path / "nav" / "summary.json"
+    before = {p.name: p.read_bytes() for p in (tmp_path / "nav").iterdir()}
+    refused(navigate(capsys, sim, tmp_path), str(tmp_path / "nav"), "already holds results", "--force")
+    assert {p.name: p.read_bytes() for p in (tmp_path / "nav").iterdir()} == before
+    assert json.loads(summary.read_text())["files"]
+    # simulate refuses to overwrite its own earlier files
+    sc = tmp_path / "s.toml"
+    sc.write_text(SCENARIO)
+    assert run(capsys, "simulate", sc, "--out", tmp_path / "sim", "--no-plot")[0] == 0
+    before = {p.name: p.read_bytes() for p in (tmp_path / "sim").iterdir()}
+    refused(run(capsys, "simulate", sc, "--out", tmp_path / "sim", "--no-plot", "--seed", "1"),
+            "refusing to overwrite")
+    assert {p.name: p.read_bytes() for p in (tmp_path / "sim").iterdir()} == before
+
+
+def test_out_equal_to_an_input(capsys, sim, tmp_path):
+    imu = tmp_path / "imu.csv"
+    shutil.copy(sim / "imu.csv", imu)
+    before = imu.read_bytes()
+    refused(run(capsys, "mechanize", imu, "--init", "45,7,300,0,0,0,0,0,0", "--out", imu, "--force"),
+            str(imu), "is an input of this command")
+    assert imu.read_bytes() == before
+    # navigate into the folder that holds its inputs under the names it writes
+    d = tmp_path / "run"
+    d.mkdir()
+    shutil.copy(sim / "gnss.csv", d / "solution_forward.csv")
+    refused(run(capsys, "navigate", "--imu", imu, "--gnss", d / "solution_forward.csv", "--out", d, "--force",
+                "--no-plots"), str(d / "solution_forward.csv"), "would overwrite an input")
+    assert (d / "solution_forward.csv").read_bytes() == (sim / "gnss.csv").read_bytes()
+    assert sorted(p.name for p in d.iterdir()) == ["solution_forward.csv"]
+
+
+@pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0, reason="root writes into a read-only folder")
+def test_read_only_output_folder(capsys, sim, tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    try:
+        refused(run(capsys, "navigate", "--imu", sim / "imu.csv", "--gnss", sim / "gnss.csv", "--out", ro / "nav",
+                    "--no-plots"), str(ro / "nav"), "not writable")
+        assert not (ro / "nav").exists()
+    finally:
+        ro.chmod(0o755)
+
+
+def test_output_folder_under_a_file(capsys, sim, tmp_path):
+    """Runs as root too: a folder cannot be made under a regular file."""
+    f = tmp_path / "afile"
+    f.write_text("mine\n")
+    refused(run(capsys, "navigate", "--imu", sim / "imu.csv", "--gnss", sim / "gnss.csv", "--out", f / "nav",
+                "--no-plots"), str(f / "nav"), "not writable")
+    assert f.read_text() == "mine\n"
+    refused(run(capsys, "mechanize", sim / "imu.csv", "--init", "45,7,300,0,0,0,0,0,0", "--out", f / "sol.csv"),
+            "not writable")
+
+
+def test_unsupported_plot_extension_is_a_user_error(capsys, sim, tmp_path):
+    plot = tmp_path / "err.xyz"
+    refused(run(capsys, "evaluate", sim / "truth.csv", sim / "truth.csv", "--plot", plot), str(plot),
+            "unsupported plot format '.xyz'", ".png")
+    assert not plot.exists()
+
+
+# --- 12. RINEX: truncated, garbage (inskit spp) -----------------------------------------------------------
+def spp(capsys, obs, nav, out):
+    return run(capsys, "spp", obs, nav, "--out", out)
+
+
+def test_truncated_rinex_obs(capsys, tmp_path):
+    lines = OBS.read_text().splitlines(True)
+    # cut inside the satellite lines of an epoch: the epoch line promises more than the file holds
+    epoch = next(i for i, s in enumerate(lines) if re.match(r"^ 15  1  8  1 30  0\.0000000  0", s))
+    cut = tmp_path / "cut.15o"
+    cut.write_text("".join(lines[: epoch + 3]))
+    err = refused(spp(capsys, cut, NAV, tmp_path / "o"), str(cut), "the file ends inside the epoch",
+                  "satellite records", "truncated file?")
+    assert f"line {epoch + 3}: " in err and f"starting at line {epoch + 1}" in err, err
+    assert empty_or_absent(tmp_path / "o")
+    # a header cut before END OF HEADER
+    cut.write_text("".join(lines[:10]))
+    refused(spp(capsys, cut, NAV, tmp_path / "o"), str(cut), "END OF HEADER")
+    assert empty_or_absent(tmp_path / "o")
+
+
+def test_truncated_rinex_nav(capsys, tmp_path):
+    lines = NAV.read_text().splitlines(True)
+    head = next(i for i, s in enumerate(lines) if "END OF HEADER" in s)
+    cut = tmp_path / "cut.15n"
+    cut.write_text("".join(lines[: head + 1 + 8 * 20 + 3]))  # 20 whole records and 3 lines of the 21st
+    refused(spp(capsys, OBS, cut, tmp_path / "o"), str(cut), f"line {head + 1 + 8 * 20 + 3}: the file ends "
+            f"inside the record starting at line {head + 1 + 8 * 20 + 1} (expected 8 lines)")
+    assert empty_or_absent(tmp_path / "o")
+
+
+@pytest.mark.parametrize("content", [b"this is not a RINEX file\n" * 30, bytes(range(256)) * 8, b""])
+def test_garbage_rinex(capsys, tmp_path, content):
+    bad = tmp_path / "bad.15o"
+    bad.write_bytes(content)
+    for obs, nav in ((bad, NAV), (OBS, bad)):
+        refused(spp(capsys, obs, nav, tmp_path / "o"), str(bad), "line 1: not a RINEX file",
+                "'RINEX VERSION / TYPE'")
+    assert empty_or_absent(tmp_path / "o")
+
+
+def test_click_usage_errors_are_exit_2_too(capsys, sim):
+    """Not an inskit message but click's (usage + error), still exit 2 and no traceback."""
+    from inskit.cli import main
+
+    with pytest.raises(SystemExit) as e:
+        main(["mechanize", str(sim / "imu.csv"), "--frame", "polar"])
+    err = capsys.readouterr().err
+    assert e.value.code == 2 and "Invalid value for '--frame'" in err and "Traceback" not in err
+
+
+# --- 13. a full disk, an interrupt: no partial file under a final name ------------------------------------
+@pytest.mark.parametrize("failure", ["disk full", "ctrl-c"])
+def test_a_write_that_fails_halfway_leaves_no_partial_file(capsys, sim, tmp_path, monkeypatch, failure):
+    """The innovations file (written after the forward solution) fails half
+    written: its name never appears, nor the summary.json that marks a complete run."""
+    import errno
+
+    import pandas as pd
+
+    real = pd.DataFrame.to_csv
+
+    def failing(self, path_or_buf=None, *a, **k):
+        if "innovations" in str(path_or_buf):
+            Path(path_or_buf).write_text("time_s,half a line")
+            if failure == "disk full":
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+            raise KeyboardInterrupt
+        return real(self, path_or_buf, *a, **k)
+
+    monkeypatch.setattr(pd.DataFrame, "to_csv", failing)
+    code, _, err = navigate(capsys, sim, tmp_path)
+    names = sorted(p.name for p in (tmp_path / "nav").iterdir())
+    assert "innovations.csv" not in names and "summary.json" not in names
+    assert not [n for n in names if n.startswith(".part-")]
+    if failure == "disk full":
+        assert code == 2 and err.count("\n") == 1, err
+        assert f"{tmp_path / 'nav' / 'innovations.csv'}: could not be written (No space left on device)" in err
+    else:
+        assert code == 130 and err.strip() == "inskit: aborted", err
+
+
+# --- 14. defects the property tests found (tests/test_property_readers.py), seen from the CLI --------------
+def test_a_repeated_line_in_a_nav_record_is_refused_not_read_shifted(capsys, tmp_path):
+    """A record of 9 lines used to be read as its first 8: sqrt(A) came from
+    the line above (M0 = -1.81) and the orbit was silently wrong."""
+    lines = NAV.read_text().splitlines(True)
+    head = next(i for i, s in enumerate(lines) if "END OF HEADER" in s)
+    bad = tmp_path / "dup.15n"
+    bad.write_text("".join(lines[: head + 3] + lines[head + 2:]))  # line 2 of the first record, twice
+    refused(spp(capsys, OBS, bad, tmp_path / "o"), str(bad), f"line {head + 10}: the record starting at line "
+            f"{head + 2} has 9 lines, expected 8", "repeated")
+    assert empty_or_absent(tmp_path / "o")
+    blank = tmp_path / "blank.15n"
+    rec = lines[head + 3]
+    lines[head + 3] = rec[:60] + " " * 19 + rec[79:]  # sqrt(A) of the first record left blank
+    blank.write_text("".join(lines))
+    refused(spp(capsys, OBS, blank, tmp_path / "o"), str(blank), f"line {head + 2}: ", "sqrt")
+
+
+@pytest.mark.parametrize("where", ["observation", "clock"])
+def test_an_infinite_or_garbled_rinex_field_names_its_line(capsys, tmp_path, where):
+    """'1E999' in an observation was read as inf; junk in the receiver-clock
+    field of an epoch line was a bare ValueError (exit 3)."""
+    lines = (GNSS_DATA / "gnss_1730_first40.obs").read_text().splitlines(True)
+    ep = next(i for i, s in enumerate(lines) if s.startswith(">"))
+    if where == "observation":
+        s = lines[ep + 1]
+        lines[ep + 1] = s[:3] + "         1E999" + s[17:]  # the first observation field (F14.3)
+        needle = f"line {ep + 2}: columns 4-17: expected a finite number"
+    else:
+        s = lines[ep].rstrip("\n").ljust(56)
+        lines[ep] = s[:41] + "  \x00garbage\x00    " + s[56:] + "\n"
+        needle = f"line {ep + 1}: columns 42-56: expected the receiver clock offset (a finite number) or blanks"
+    bad = tmp_path / "bad.obs"
+    bad.write_text("".join(lines))
+    refused(spp(capsys, bad, GNSS_DATA / "gnss_1730.nav", tmp_path / "o"), str(bad), needle)
+    assert empty_or_absent(tmp_path / "o")
+
+
+def test_an_rtklib_pos_latitude_beyond_the_pole_is_refused(capsys, sim, tmp_path):
+    """read_pos accepted latitude 91 deg (and inf, reported without the file name)."""
+    pos = tmp_path / "sol.pos"
+    head = "%  GPST                  latitude(deg) longitude(deg)  height(m)   Q  ns   sdn(m)   sde(m)   sdu(m)\n"
+    row = "2025/08/27 17:30:{s:06.3f}   {lat}  7.0000000  300.000   1   8   0.0100   0.0100   0.0300\n"
+    for lat, shown in (("91.0000000", "'91.0000000'; expected a value in [-90, 90] degrees"),
+                       ("inf", "'inf'; expected a finite number")):
+        pos.write_text(head + "".join(row.format(s=float(i), lat=lat if i == 2 else "45.0000000") for i in range(5)))
+        refused(run(capsys, "navigate", "--imu", sim / "imu.csv", "--gnss", pos, "--gnss-format", "rtklib-pos",
+                    "--out", tmp_path / "nav", "--no-plots"), str(pos), "line 4: column 'latitude(deg)' has " + shown)
+        assert empty_or_absent(tmp_path / "nav")
+
+
+def test_rates_near_the_float_limit_do_not_slip_past_the_unit_check(capsys, sim, rates, tmp_path):
+    """Gyro values of 1e300 under a rad/s header overflowed the norm to inf;
+    the NaN percentiles then passed every rule and the log was accepted."""
+    t, w, f = rates
+    w = w.copy()
+    w[:, 0] = 1e300
+    bad = write_rates(tmp_path / "imu_huge.csv", t, w, f)
+    refused(navigate(capsys, sim, tmp_path, imu=bad), str(bad), "column 'gyro_x_rad_s': angular rates reach 1e+300 "
+            "rad/s")
+    assert empty_or_absent(tmp_path / "nav")

@@ -1,0 +1,244 @@
+"""Parquet and fast-CSV solution files (issue 13): lossless typed Parquet with
+units, CSV at a chosen rate equal to the former ``%.15g`` files, readers that
+take both, column selection, and the navigate outputs."""
+
+import json
+
+import numpy as np
+import pandas as pd
+import pyarrow.parquet as pq
+import pytest
+
+from inskit import io
+from inskit import rotations as rot
+from inskit.errors import ConfigError, InputError
+from inskit.io import parquet as P
+from inskit.types import NavSolution
+from inskit.units import DEG
+
+
+def solution(n=2001, dt=0.01, t0=243261.7262, rng=None):
+    """A smooth drive-like solution with sigma and estimate columns."""
+    rng = rng or np.random.default_rng(13)
+    t = t0 + dt * np.arange(n)
+    s = np.linspace(0.0, 1.0, n)
+    lla = np.column_stack([40.1 * DEG + 1e-5 * s, -105.1 * DEG + 2e-5 * np.sin(3 * s), 1600.0 + 3 * s])
+    v = np.column_stack([10 * np.cos(s), 10 * np.sin(s), 0.1 * s])
+    rpy = np.column_stack([0.01 * np.sin(5 * s), -0.02 * s, -3.0 + 6.0 * s])  # yaw passes through +-180 deg
+    extra = {"sigma_n_m": 0.05 + s, "sigma_att_d_rad": 1e-3 * (1 + s),
+             "bg_x_rad_s": 1e-4 * rng.normal(size=n), "ba_z_m_s2": 1e-3 * rng.normal(size=n), "sg_x": 1e-5 * s}
+    return NavSolution.from_euler(t, lla, v, rpy, extra)
+
+
+def test_parquet_round_trip_is_lossless_and_typed(tmp_path):
+    sol = solution()
+    p = io.write_solution(tmp_path / "s.parquet", sol, metadata={"config": "drive", "solution": "forward"})
+    back = io.read_solution(p)
+    # float64 on disk: only the deg <-> rad conversions round (1 ulp), nothing is lost to text
+    np.testing.assert_array_equal(back.time, sol.time)
+    np.testing.assert_allclose(back.lla[:, :2], sol.lla[:, :2], rtol=4e-16, atol=0)
+    np.testing.assert_array_equal(back.lla[:, 2], sol.lla[:, 2])
+    np.testing.assert_array_equal(back.v_n, sol.v_n)
+    np.testing.assert_allclose(rot.euler_from_quat(back.q_nb), sol.euler, rtol=0, atol=1e-14)
+    for k, a in sol.extra.items():
+        np.testing.assert_array_equal(back.extra[k], a)
+    schema = pq.read_schema(p)
+    assert all(str(f.type) == "double" for f in schema)
+    units = {f.name: f.metadata[b"unit"].decode() for f in schema}
+    assert units["time_s"] == "s" and units["lat_deg"] == "deg" and units["vn_m_s"] == "m/s"
+    assert units["bg_x_rad_s"] == "rad/s" and units["ba_z_m_s2"] == "m/s^2" and units["sg_x"] == "1"
+    assert units["sigma_att_d_rad"] == "rad" and units["height_m"] == "m"
+    meta = P.read_metadata(p)
+    assert meta["config"] == "drive" and meta["solution"] == "forward" and meta["units"] == units
+    from inskit import __version__
+
+    assert meta["version"] == __version__
+
+
+def test_fast_csv_equals_the_former_pandas_format(tmp_path):
+    """The vectorised writer's values are those of ``to_csv(float_format="%.15g")`` within one unit
+    of the 15th significant digit (they differ only at exact halves), and pandas' default parser
+    (the one ``read_solution`` uses) reads them back within 1e-14, small values included."""
+    sol = solution()
+    p = io.write_solution(tmp_path / "s.csv", sol)
+    cols = P.solution_columns(sol)
+    pd.DataFrame(cols).to_csv(tmp_path / "old.csv", index=False, float_format="%.15g")
+    new = pd.read_csv(p, float_precision="round_trip")
+    old = pd.read_csv(tmp_path / "old.csv", float_precision="round_trip")
+    assert list(new.columns) == list(old.columns) == list(cols)
+    assert p.read_text().splitlines()[0] == ",".join(cols)  # a plain header, no quotes
+    a, b = new.to_numpy(), old.to_numpy()
+    assert np.all(np.abs(a - b) <= 1.0001e-14 * np.abs(b))
+    assert abs(p.stat().st_size / (tmp_path / "old.csv").stat().st_size - 1) < 0.1  # the same size
+    truth = np.column_stack(list(cols.values()))
+    fast = pd.read_csv(p).to_numpy()  # pandas' default (fast) float parser
+    assert np.all(np.abs(fast - truth) <= 1e-14 * np.abs(truth))
+    back = io.read_solution(p)
+    np.testing.assert_allclose(back.lla[:, 0], sol.lla[:, 0], rtol=1e-14)
+    np.testing.assert_allclose(back.extra["bg_x_rad_s"], sol.extra["bg_x_rad_s"], rtol=1e-14)
+
+
+def test_round_significant_digits():
+    x = np.array([243261.72620000001, 40.09662684777193, -9.49153321281977e-05, 1.1146479022979544e-06, 1e-300,
+                  5e-324, 0.0, 123456789012345678.0])
+    r = P.round_significant(x)
+    for xi, ri in zip(x, r):
+        assert float(f"{xi:.15g}") == pytest.approx(ri, rel=1.0001e-14, abs=0)
+        digits = repr(float(ri)).split("e")[0].replace("-", "").replace(".", "").strip("0")
+        assert len(digits) <= 15
+
+
+def test_gzip_csv_round_trip(tmp_path):
+    sol = solution(n=300)
+    p = io.write_solution(tmp_path / "s.csv.gz", sol)
+    assert p.read_bytes()[:2] == b"\x1f\x8b"
+    back = io.read_solution(p)
+    np.testing.assert_allclose(back.v_n, sol.v_n, rtol=1e-14, atol=1e-300)
+
+
+def test_decimation_keeps_one_row_per_period_on_the_absolute_grid():
+    t = 243261.7262 + 0.01 * np.arange(6001)  # 100 Hz for 60 s, off the 0.1 s grid by 6.2 ms
+    k = P.decimation_index(t, 10.0)
+    assert k[0] == 0 and k[-1] == len(t) - 1
+    inner = t[k[1:-1]]
+    # each kept row is the first at or after a multiple of 0.1 s: 6.2 ms past it, 0.1 s apart
+    np.testing.assert_allclose((inner * 10) % 1.0 * 0.1, 0.0062, atol=1e-6)
+    np.testing.assert_allclose(np.diff(inner), 0.1, atol=1e-6)
+    assert len(k) == 600 + 2
+    assert len(P.decimation_index(t, 100.0)) == len(t) == len(P.decimation_index(t, 250.0))
+    jitter = np.arange(1001) * 0.01 + np.r_[0.0, np.full(1000, -1e-7)]  # samples 0.1 us before the grid
+    kj = P.decimation_index(jitter, 1.0)
+    np.testing.assert_array_equal(kj, [0, 100, 200, 300, 400, 500, 600, 700, 800, 900, 1000])
+
+
+def test_csv_at_a_rate_and_parquet_at_every_epoch(tmp_path):
+    sol = solution(n=6001)
+    io.write_solution(tmp_path / "s.parquet", sol)
+    io.write_solution(tmp_path / "s.csv", sol, rate_hz=10.0)
+    full, dec = io.read_solution(tmp_path / "s.parquet"), io.read_solution(tmp_path / "s.csv")
+    assert len(full) == 6001 and len(dec) == 602
+    i = np.searchsorted(full.time, dec.time)
+    np.testing.assert_allclose(full.time[i], dec.time, rtol=1e-15)  # rows of the solution, not interpolated
+    np.testing.assert_allclose(full.extra["sigma_n_m"][i], dec.extra["sigma_n_m"], rtol=1e-14)
+
+
+def test_column_selection():
+    names = ["time_s", "lat_deg", "lon_deg", "height_m", "vn_m_s", "ve_m_s", "vd_m_s", "roll_deg", "pitch_deg",
+             "yaw_deg", "sigma_n_m", "bg_x_rad_s", "sg_x"]
+    nav = names[:10]
+    assert P.select_columns(names, "all") == names
+    assert P.select_columns(names, ["navigation"]) == nav
+    assert P.select_columns(names, "navigation+sigma") == nav + ["sigma_n_m"]
+    assert P.select_columns(names, ["estimates"]) == nav + ["bg_x_rad_s", "sg_x"]
+    assert P.select_columns(names, ["sg_x", "navigation"]) == nav + ["sg_x"]
+    with pytest.raises(ConfigError, match=r"'bg_q_rad_s' is neither a group .* its columns are time_s, .*sg_x"):
+        P.select_columns(names, ["bg_q_rad_s"])
+
+
+def test_written_columns_follow_the_selection(tmp_path):
+    sol = solution(n=200)
+    io.write_solution(tmp_path / "n.parquet", sol, columns="navigation")
+    io.write_solution(tmp_path / "s.csv", sol, columns=["navigation+sigma", "sg_x"])
+    assert pq.read_schema(tmp_path / "n.parquet").names == list(P.NAVIGATION_COLUMNS)
+    assert list(pd.read_csv(tmp_path / "s.csv").columns) == list(P.NAVIGATION_COLUMNS) + [
+        "sigma_n_m", "sigma_att_d_rad", "sg_x"]
+
+
+def test_reader_tells_the_format_by_content(tmp_path):
+    sol = solution(n=50)
+    io.write_solution(tmp_path / "s.parquet", sol)
+    (tmp_path / "odd.dat").write_bytes((tmp_path / "s.parquet").read_bytes())
+    assert len(io.read_solution(tmp_path / "odd.dat")) == 50
+    (tmp_path / "fake.parquet").write_text("time_s,lat_deg\n1,2\n")
+    with pytest.raises(InputError, match=r"fake.parquet: named .parquet but not a Parquet file"):
+        io.read_solution(tmp_path / "fake.parquet")
+    (tmp_path / "cut.parquet").write_bytes((tmp_path / "s.parquet").read_bytes()[:300])
+    with pytest.raises(InputError, match=r"cut.parquet: not a readable Parquet file"):
+        io.read_solution(tmp_path / "cut.parquet")
+
+
+def test_parquet_reader_validates_rows(tmp_path):
+    cols = P.solution_columns(solution(n=20))
+    t = cols["time_s"].copy()
+    t[7] = t[6]
+    P.write_parquet(tmp_path / "dup.parquet", {**cols, "time_s": t})
+    with pytest.raises(InputError, match=r"dup.parquet: row 7: time_s=.* does not increase from row 6"):
+        io.read_solution(tmp_path / "dup.parquet")
+    lat = cols["lat_deg"].copy()
+    lat[3] = 91.0
+    P.write_parquet(tmp_path / "lat.parquet", {**cols, "lat_deg": lat})
+    with pytest.raises(InputError, match=r"lat.parquet: row 3: lat_deg=91.0 is outside \[-90, 90\]"):
+        io.read_solution(tmp_path / "lat.parquet")
+    P.write_parquet(tmp_path / "short.parquet", {k: v for k, v in cols.items() if k != "yaw_deg"})
+    with pytest.raises(InputError, match=r"short.parquet: missing column\(s\) yaw_deg"):
+        io.read_solution(tmp_path / "short.parquet")
+
+
+def test_nan_is_refused_with_column_and_row(tmp_path):
+    sol = solution(n=30)
+    sol.extra["sigma_n_m"][12] = np.nan
+    for name in ("s.parquet", "s.csv"):
+        with pytest.raises(InputError, match=rf"{name}: refusing to write nan \(column 'sigma_n_m', row 12\)"):
+            io.write_solution(tmp_path / name, sol)
+        assert not (tmp_path / name).exists()
+    assert not list(tmp_path.iterdir())  # no temporary file left either
+
+
+def test_output_config_keys():
+    from inskit.jobs.config import OutputSection
+
+    assert OutputSection().format == "both" and OutputSection().rate_hz == 10.0
+    assert OutputSection(columns="navigation").columns == ["navigation"]
+    with pytest.raises(Exception, match="rate_hz = 5 sets the rate of the CSV files"):
+        OutputSection(format="parquet", rate_hz=5.0)
+    with pytest.raises(Exception, match="greater than 0"):
+        OutputSection(rate_hz=0.0)
+
+
+def test_navigate_writes_parquet_and_decimated_csv_and_evaluate_reads_both(tmp_path):
+    """The whole command on a simulated 100 Hz drive: Parquet at every IMU epoch, CSV at
+    --output-rate, ``evaluate`` gives the same errors from either (the CSV's rows are the
+    Parquet's), within what 15 digits and the coarser rows allow."""
+    from click.testing import CliRunner
+
+    from inskit.cli import cli
+
+    scen = tmp_path / "s.toml"
+    scen.write_text(
+        'name = "drive"\n[start]\nlat_deg = 45\nlon_deg = 7\nheight_m = 300\n'
+        '[imu]\nrate_hz = 100\ngrade = "industrial-mems"\n'
+        '[gnss]\nrate_hz = 1\nwhite_h_m = 0.5\nwhite_v_m = 1.0\n'
+        '[[segment]]\ntype = "static"\nduration_s = 20\n'
+        '[[segment]]\ntype = "accelerate"\nspeed_m_s = 10\nduration_s = 10\n'
+        '[[segment]]\ntype = "turn"\nangle_deg = 90\nradius_m = 30\n'
+        '[[segment]]\ntype = "cruise"\nduration_s = 20\n')
+    run = CliRunner().invoke
+    r = run(cli, ["simulate", str(scen), "--out", str(tmp_path / "sim"), "--no-plot"])
+    assert r.exit_code == 0, r.output
+    nav = tmp_path / "nav"
+    r = run(cli, ["navigate", "--imu", str(tmp_path / "sim" / "imu.csv"), "--gnss", str(tmp_path / "sim" / "gnss.csv"),
+                  "--out", str(nav), "--no-plots", "--output-rate", "5", "--json"])
+    assert r.exit_code == 0, r.output
+    s = json.loads((nav / "summary.json").read_text())
+    assert s["solution_files"] == {"format": "both", "csv_rate_hz": 5.0, "columns": ["all"]}
+    full = io.read_solution(nav / "solution_forward.parquet")
+    dec = io.read_solution(nav / "solution_forward.csv")
+    assert len(full) == s["epochs"]
+    duration = full.time[-1] - full.time[0]
+    assert abs(len(dec) - 5 * duration) <= 3
+    assert {"sigma_n_m", "bg_x_rad_s"} <= set(full.extra) and set(full.extra) == set(dec.extra)
+    errs = {}
+    for f in ("solution_forward.parquet", "solution_forward.csv"):
+        r = run(cli, ["evaluate", str(nav / f), str(tmp_path / "sim" / "truth.csv"), "--json"])
+        assert r.exit_code == 0, r.output
+        errs[f] = json.loads(r.output[r.output.index("{"):])
+    a, b = errs["solution_forward.parquet"], errs["solution_forward.csv"]
+    assert a["horizontal_m"]["rms"] < 2.0  # 0.5 m white GNSS noise, filtered
+    assert b["horizontal_m"]["rms"] == pytest.approx(a["horizontal_m"]["rms"], rel=0.05)
+    # 15 digits of a latitude in degrees: 1e-13 deg = 1e-8 m
+    assert b["horizontal_m"]["final"] == pytest.approx(a["horizontal_m"]["final"], rel=0, abs=1e-7)
+    # Parquet only: no CSV is written, and a CSV rate would be ignored, so it is refused
+    r = run(cli, ["navigate", "--imu", str(tmp_path / "sim" / "imu.csv"), "--gnss", str(tmp_path / "sim" / "gnss.csv"),
+                  "--out", str(tmp_path / "pq"), "--no-plots", "--output-format", "parquet", "--output-rate", "5"])
+    assert isinstance(r.exception, ConfigError) and "rate_hz = 5 sets the rate of the CSV files" in str(r.exception)
+    assert not (tmp_path / "pq" / "summary.json").exists()
