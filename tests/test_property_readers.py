@@ -487,9 +487,6 @@ def test_read_nav(tmp_path, case):
         assert (nav.params["sqrt_a"] > 0).all() and ((nav.params["e"] >= 0) & (nav.params["e"] < 1)).all()
 
 
-@pytest.mark.xfail(strict=True, reason="pydantic coerces the *string* 'inf' into a float field; the fix is "
-                   "ConfigDict(allow_inf_nan=False) in jobs/config.py _Strict and simulation/scenario.py _S "
-                   "(files this module's author does not own)")
 @pytest.mark.parametrize("kind", ["config", "scenario"])
 def test_a_string_inf_in_a_float_field_is_refused(tmp_path, kind):
     """Found by test_load_config: ``bank_s = "INF"`` loaded as inf (TOML's

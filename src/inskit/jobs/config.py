@@ -54,7 +54,7 @@ def _changed(model, keys):
 
 
 class _Strict(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
 class ImuSection(_Strict):

@@ -77,7 +77,7 @@ STATISTICS = ("count", "mean", "std", "min", "median", "p90", "max")
 
 
 class _M(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
 class OutageSpec(_M):

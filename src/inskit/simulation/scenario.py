@@ -32,7 +32,7 @@ from .sensors import ImuErrors, apply_imu_errors, preset
 
 
 class _S(BaseModel):
-    model_config = ConfigDict(extra="forbid")
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
 class StartSpec(_S):
