@@ -27,7 +27,8 @@ carries one (``ctx.estimate("lever")``).  The filter loop knows nothing about
 GNSS, ZUPT or odometers; new aiding sources plug in here.  Every H is checked
 against central finite differences of its own innovation over the fullest
 layout (``tests/test_integration_measurements.py``), using
-:func:`perturbed_context`.
+:func:`perturbed_context`; :func:`numerical_jacobian` does that check for any
+new plug-in.
 """
 
 from __future__ import annotations
@@ -336,3 +337,36 @@ class NonHolonomic(_GridMeasurement):
         H[:, 3:6] = C_bn[1:3]
         H[:, 6:9] = -(C_bn @ skew(ctx.v_n))[1:3]
         return v_b[1:3], H, np.eye(2) * self.sigma**2
+
+
+def numerical_jacobian(meas, ctx: UpdateContext, row=0, steps=None):
+    """Central finite differences of a measurement's own innovation over
+    every state: the check every plug-in's ``H`` must pass (the protocol's
+    contract; ``innovation(perturbed by +dx) - innovation(-dx) ~ 2 H dx``).
+
+    Parameters
+    ----------
+    meas : a measurement plug-in
+    ctx : UpdateContext
+    row : int
+        The measurement's own row (an epoch) to linearize at.
+    steps : dict, optional
+        Step per block name (in the block's unit); 1e-3 for a block not
+        named.  Choose steps large against the rounding of the innovation
+        (a 2e7 m range rounds to 3.7e-9 m) and small against its curvature.
+
+    Returns
+    -------
+    (k, layout.size) ndarray
+    """
+    lay = ctx.layout
+    steps = steps or {}
+    eps = np.concatenate([np.full(b.size, float(steps.get(b.name, 1e-3))) for b in lay.blocks])
+    n = lay.size
+    J = np.zeros((len(meas.linearize(ctx, row)[0]), n))
+    for j in range(n):
+        d = np.zeros(n)
+        d[j] = eps[j]
+        J[:, j] = (meas.linearize(perturbed_context(ctx, d), row)[0]
+                   - meas.linearize(perturbed_context(ctx, -d), row)[0]) / (2.0 * eps[j])
+    return J
