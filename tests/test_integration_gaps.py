@@ -73,3 +73,23 @@ def test_navigate_bridges_warns_and_recovers(turn_with_gap):
     d = earth.lla_to_ned(sol.lla[k], truth.lla[kt])
     yaw = np.degrees(rot.attitude_error(sol.C_nb[k], truth.C_nb[kt])[2])
     assert np.hypot(d[0], d[1]) < 2.0 and abs(yaw) < 1.0
+
+
+def test_a_change_of_rate_is_reported_and_not_taken_for_gaps():
+    """A logger that switches from 200 Hz to 20 Hz: every 50 ms interval is
+    ten times the log's median, so a global-median rule bridged each as a
+    gap; judged against the local rate, the change is one reported event, and
+    a real 2 s gap inside the 20 Hz part is still found."""
+    from inskit.integration.gaps import find_gaps, find_rate_changes
+    from inskit.types import ImuData
+
+    t = np.concatenate([np.arange(0.0, 60.0, 0.005), np.arange(60.0, 100.0, 0.05)])
+    t = np.concatenate([t[t < 80.0], t[t >= 82.0]])  # 2 s missing at 80 s
+    n = len(t)
+    imu = ImuData(t, np.zeros((n, 3)), np.zeros((n, 3)))
+    gaps = find_gaps(imu)
+    assert len(gaps) == 1 and abs(gaps[0].start_s - 80.0) < 0.06 and abs(gaps[0].length_s - 2.05) < 0.06
+    ch = find_rate_changes(imu)
+    assert len(ch) == 1
+    c = ch[0]
+    assert abs(c.rate_before_hz - 200.0) < 1 and abs(c.rate_after_hz - 20.0) < 0.5 and 59.0 < c.t_s < 64.0

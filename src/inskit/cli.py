@@ -101,8 +101,11 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
     if frame == "ned":
         opts["height"] = height
     href = None if height == "free" else (init.lla[2] if height_ref is None else height_ref)
-    from .integration.gaps import find_gaps
+    from .integration.gaps import find_gaps, find_rate_changes
 
+    for ch in find_rate_changes(imu):
+        _log(f"warning: {imu_file}: the sampling rate changes from {ch.rate_before_hz:.4g} Hz to "
+             f"{ch.rate_after_hz:.4g} Hz near t = {ch.t_s:.3f} s (row {ch.row})")
     gaps = find_gaps(imu)
     for g in gaps:
         _log(f"warning: {imu_file}: a gap of {g.length_s:.3f} s at t = {g.start_s:.3f} s (row {g.row}); the "
@@ -128,6 +131,8 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
         },
         "out": out_file,
         "imu_gaps": [{"row": g.row, "start_s": g.start_s, "length_s": g.length_s} for g in gaps],
+        "imu_rate_changes": [{"row": ch.row, "t_s": ch.t_s, "rate_before_hz": ch.rate_before_hz,
+                              "rate_after_hz": ch.rate_after_hz} for ch in find_rate_changes(imu)],
     }
     f = summary["final"]
     table = (

@@ -30,16 +30,67 @@ class ImuGap:
     length_s: float
 
 
-def find_gaps(imu: ImuData, factor=5.0):
-    """Intervals longer than ``factor`` times the median sampling interval."""
+@dataclass(frozen=True)
+class RateChange:
+    """The log's sampling rate changes near ``row`` (time ``t_s``)."""
+
+    row: int
+    t_s: float
+    rate_before_hz: float
+    rate_after_hz: float
+
+
+#: samples per block of the local sampling interval
+RATE_BLOCK = 64
+
+
+def local_interval(dt, block=RATE_BLOCK):
+    """The local sampling interval at each of ``dt``: the median of its block
+    of ``block`` intervals (a gap inside a block does not move a median), so
+    a log whose rate changes is judged against its own rate at each time."""
+    dt = np.asarray(dt, float)
+    n = len(dt)
+    if n < 2 * block:
+        return np.full(n, float(np.median(dt)) if n else np.nan)
+    nb = n // block
+    med = np.median(dt[: nb * block].reshape(nb, block), axis=1)
+    return med[np.minimum(np.arange(n) // block, nb - 1)]
+
+
+def find_rate_changes(imu: ImuData, tolerance=0.2, block=RATE_BLOCK):
+    """Where the sampling rate changes by more than ``tolerance`` (relative)
+    between consecutive blocks and stays changed over the next block."""
     dt = np.diff(imu.time)
-    med = float(np.median(dt))
-    rows = np.nonzero(dt > factor * med)[0] + 1
+    n = len(dt)
+    if n < 3 * block:
+        return []
+    nb = n // block
+    med = np.median(dt[: nb * block].reshape(nb, block), axis=1)
+    out = []
+    level = med[0]  # the interval of the current steady run of blocks
+    for b in range(1, nb):
+        c = med[b]
+        if abs(c - level) <= tolerance * level:
+            continue
+        if b + 1 < nb and abs(med[b + 1] - c) > tolerance * c:
+            continue  # a block straddling the change (or a burst): wait for the new steady rate
+        k = b * block + 1
+        out.append(RateChange(int(k), float(imu.time[k]), float(1.0 / level), float(1.0 / c)))
+        level = c
+    return out
+
+
+def find_gaps(imu: ImuData, factor=5.0):
+    """Intervals longer than ``factor`` times the local sampling interval
+    (:func:`local_interval`: a change of rate is not a gap)."""
+    dt = np.diff(imu.time)
+    loc = local_interval(dt)
+    rows = np.nonzero(dt > factor * loc)[0] + 1
     return [ImuGap(int(k), float(imu.time[k - 1]), float(dt[k - 1])) for k in rows]
 
 
 def bridge_gaps(imu: ImuData, gaps):
-    """Fill each gap with rows at the median interval that carry the previous
+    """Fill each gap with rows at the local interval that carry the previous
     sample's rate and specific force (the last row keeps its own sample).
 
     Returns
@@ -52,11 +103,12 @@ def bridge_gaps(imu: ImuData, gaps):
     if not gaps:
         return imu, []
     dt = np.diff(imu.time)
-    med = float(np.median(dt))
+    loc = local_interval(dt)
     t_parts, th_parts, v_parts, out = [], [], [], []
     prev, n_new = 0, 0
     for g in gaps:
         k = g.row
+        med = float(loc[k - 1])  # the log's own interval around the gap
         t_parts.append(imu.time[prev:k])
         th_parts.append(imu.dtheta_b[prev:k])
         v_parts.append(imu.dv_b[prev:k])

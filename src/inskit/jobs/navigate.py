@@ -41,6 +41,7 @@ class NavigateResult:
     gaps: list = None
     raw: RawGnss | None = None
     clock_start: dict | None = None
+    rate_changes: list = None
 
 
 WEEK_S = 604800.0  #: seconds in a GPS week
@@ -342,7 +343,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     the time offset applied): calibration loops pass it to read the files
     once.
     """
-    from ..integration.gaps import bridge_gaps, find_gaps, gap_process_noise
+    from ..integration.gaps import bridge_gaps, find_gaps, find_rate_changes, gap_process_noise
 
     t_start = time.perf_counter()
     tight = cfg.gnss.coupling == "tight"
@@ -362,6 +363,11 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         raise InputError("gnss.use_velocity and gnss.sigma_floor_m describe fixes fused by loose coupling; with "
                          "tight coupling the fixes are only the reference (use use_doppler and the sigma scales)")
     gaps = find_gaps(imu, cfg.imu.gap_factor)
+    rate_changes = find_rate_changes(imu)
+    for c in rate_changes:
+        if log:
+            log(f"warning: the IMU rate changes from {c.rate_before_hz:.4g} Hz to {c.rate_after_hz:.4g} Hz near "
+                f"t = {c.t_s:.3f} s (row {c.row}): gaps are judged against the local rate")
     for g in gaps:
         if log:
             log(f"warning: the IMU log has a gap of {g.length_s:.3f} s at t = {g.start_s:.3f} s (row {g.row}): "
@@ -461,7 +467,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     score_f = score_outages(out.solution, gnss, windows, lever)
     score_s = score_outages(sm.solution, gnss, windows, lever) if sm is not None else None
     return NavigateResult(cfg, imu, gnss, windows, used, startup, settings, out, sm, score_f, score_s,
-                          time.perf_counter() - t_start, measured, gaps, raw, clock_start)
+                          time.perf_counter() - t_start, measured, gaps, raw, clock_start, rate_changes)
 
 
 def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, log=None):
@@ -563,7 +569,9 @@ def summary(res: NavigateResult) -> dict:
             "clock_start": res.clock_start,
             "reference": "gnss.file" if res.config.gnss.file is not None else "single-point solution",
         }
-    out["health"] = health(fw, res.gaps or ())
+    out["health"] = health(fw, res.gaps or (), res.rate_changes or ())
+    out["imu_rate_changes"] = [{"row": c.row, "t_s": c.t_s, "rate_before_hz": c.rate_before_hz,
+                                "rate_after_hz": c.rate_after_hz} for c in (res.rate_changes or ())]
     out["imu_gaps"] = [{"row": g.row, "start_s": g.start_s, "length_s": g.length_s} for g in (res.gaps or ())]
     out["final_estimates"] = {b.name: {"values": [float(v) for v in fw.estimate(b.name)[-1]],
                                        "sigma": [float(v) for v in fw.sigma_of(b.name)[-1]], "unit": b.unit}
@@ -576,15 +584,18 @@ HEALTH_MAX_REJECTED_FRACTION = 0.05
 HEALTH_MAX_MEAN_NIS_PER_DOF = 3.0
 HEALTH_MAX_PRIOR_SIGMAS = 5.0
 HEALTH_BIAS_BLOCKS = ("bg", "ba")
+HEALTH_MAX_REJECTION_RUN = 4
 
 
-def health(out, gaps=()) -> dict:
+def health(out, gaps=(), rate_changes=()) -> dict:
     """The verdict on a filter run: is the result to be trusted?
 
     *Unhealthy* when any of these holds (each reason is listed):
 
     * more than 5 % of a measurement's updates rejected (of its rows, for a
       measurement gated row by row, such as one row per satellite);
+    * 4 or more consecutive updates of a measurement rejected (a burst of
+      bad input: the filter survived it, the data are still suspect);
     * a measurement's mean NIS above 3 times its degrees of freedom (the
       filter is overconfident by more than sqrt(3) in sigma; a consistent
       filter averages 1 per degree of freedom);
@@ -593,6 +604,9 @@ def health(out, gaps=()) -> dict:
     * a recovery from a lost state happened;
     * the IMU log had a gap (bridged on the last rates: the solution over it
       is an extrapolation).
+
+    A change of the IMU's sampling rate is a warning (gaps are then judged
+    against the local rate).
 
     *Warnings*, listed without changing the verdict: other blocks' estimates
     beyond 5 initial sigmas (a scale factor soaking up a mounting error, say),
@@ -622,6 +636,17 @@ def health(out, gaps=()) -> dict:
                 reasons.append(f"{name}: {c['rows_rejected']} of {c['rows']} rows rejected ({frac:.0%})")
         elif frac > HEALTH_MAX_REJECTED_FRACTION:
             reasons.append(f"{name}: {c['rejected']} of {n_upd} updates rejected ({frac:.0%})")
+        acc = np.asarray(inn.get("accepted", []), bool)
+        if len(acc):  # the longest run of consecutive rejections: a burst of bad input, even when survived
+            edges = np.diff(np.r_[0, (~acc).astype(np.int8), 0])
+            starts, ends = np.nonzero(edges == 1)[0], np.nonzero(edges == -1)[0]
+            if len(starts):
+                j = int(np.argmax(ends - starts))
+                run = int(ends[j] - starts[j])
+                per[name]["longest_rejection_run"] = run
+                if run >= HEALTH_MAX_REJECTION_RUN:
+                    reasons.append(f"{name}: {run} consecutive updates rejected from t = "
+                                   f"{float(np.asarray(inn['t'])[starts[j]]):.2f} s (a burst of bad input)")
         if mean_nis is not None and dof:
             if mean_nis > HEALTH_MAX_MEAN_NIS_PER_DOF * dof:
                 reasons.append(f"{name}: mean NIS {mean_nis:.2f} for {dof:.3g} degrees of freedom (filter "
@@ -646,6 +671,9 @@ def health(out, gaps=()) -> dict:
                        f"{r['after_rejections']} consecutive rejections over {r['rejected_for_s']:.1f} s")
     for g in gaps:
         reasons.append(f"IMU gap of {g.length_s:.3f} s at t = {g.start_s:.3f} s, bridged on the last rates")
+    for c in rate_changes:
+        warnings.append(f"IMU rate changes from {c.rate_before_hz:.4g} Hz to {c.rate_after_hz:.4g} Hz near "
+                        f"t = {c.t_s:.3f} s")
     return {"verdict": "unhealthy" if reasons else "healthy", "reasons": reasons, "warnings": warnings,
             "measurements": per}
 
