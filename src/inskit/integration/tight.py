@@ -45,36 +45,20 @@ import numpy as np
 
 from .. import earth
 from ..errors import InputError
+from ..gnss.constants import OMEGA_E_GPS as OMEGA_E_GNSS
+from ..gnss.ephemeris import sagnac_rotate
 from ..rotations import skew
 from .measurements import UpdateContext, _sensor_rate_columns
-
-#: Earth rotation rate of the GPS and Galileo ICDs [rad/s] (WGS84 value)
-OMEGA_E_GNSS = 7.2921151467e-5
-
-
-def _ecef_of(lla):
-    lat, lon, h = float(lla[0]), float(lla[1]), float(lla[2])
-    s, c = math.sin(lat), math.cos(lat)
-    re = earth.A / math.sqrt(1.0 - earth.E2 * s * s)
-    return np.array([(re + h) * c * math.cos(lon), (re + h) * c * math.sin(lon), (re * (1.0 - earth.E2) + h) * s])
-
-
-def _dcm_en(lat, lon):
-    sl, cl, so, co = math.sin(lat), math.cos(lat), math.sin(lon), math.cos(lon)
-    return np.array([[-sl * co, -so, -cl * co], [-sl * so, co, -cl * so], [cl, 0.0, -sl]])
 
 
 def _frame_rotation(lla, C_en, w_n):
     """``d (C_en w_n) / d p_n`` (3, 3): how a vector held in NED turns in
     ECEF when the position moves by ``p_n`` metres (the NED frame rotates
     with latitude and longitude)."""
-    lat, h = float(lla[0]), float(lla[2])
-    s = math.sin(lat)
-    w = math.sqrt(1.0 - earth.E2 * s * s)
-    rn = earth.A * (1.0 - earth.E2) / (w * w * w) + h
-    re = earth.A / w + h
+    lat = float(lla[0])
+    rn, re = earth.principal_radii(lat, float(lla[2]))
+    s, cl = math.sin(lat), math.cos(lat)
     so, co = math.sin(float(lla[1])), math.cos(float(lla[1]))
-    cl = math.cos(lat)
     north, down = C_en[:, 0], C_en[:, 2]
     d_lat = np.stack([down, np.zeros(3), -north], axis=1)
     d_lon = np.array([[s * so, -co, cl * so], [-s * co, -so, -cl * co], [0.0, 0.0, 0.0]])
@@ -104,15 +88,9 @@ class _RangeRows:
         self.lever_arm_b = np.asarray(lever_arm_b, float)
         sel = np.nonzero(ok)[0]
         self._z, self._s = z[sel], s[sel]
-        tau = np.asarray(table.travel_s, float)[sel]
-        ang = OMEGA_E_GNSS * tau
-        ca, sa = np.cos(ang), np.sin(ang)
-
-        def rot(v):  # R3(angle): the frame of reception sees the satellite rotated back
-            return np.stack([ca * v[:, 0] + sa * v[:, 1], -sa * v[:, 0] + ca * v[:, 1], v[:, 2]], axis=1)
-
-        self._rs = rot(np.asarray(table.sat_pos_e, float)[sel])
-        self._vs = rot(np.asarray(table.sat_vel_e, float)[sel])
+        tau = np.asarray(table.travel_s, float)[sel]  # into the frame of reception (Sagnac)
+        self._rs = sagnac_rotate(np.asarray(table.sat_pos_e, float)[sel], tau, OMEGA_E_GNSS)
+        self._vs = sagnac_rotate(np.asarray(table.sat_vel_e, float)[sel], tau, OMEGA_E_GNSS)
         sats = np.asarray(table.sat).astype(str)[sel]
         self._system = np.array([x[:1] for x in sats])
         self._sats = sats
@@ -139,7 +117,7 @@ class _RangeRows:
 
     def _antenna(self, ctx: UpdateContext, tau):
         """Antenna ECEF position, ECEF velocity, C_en and the lever-arm pieces."""
-        C_en = _dcm_en(float(ctx.lla[0]), float(ctx.lla[1]))
+        C_en = earth.dcm_en(float(ctx.lla[0]), float(ctx.lla[1]))
         lev = ctx.estimate("lever", self.lever_arm_b)
         C = ctx.C_nb
         w = ctx.omega_ib_b
@@ -147,7 +125,7 @@ class _RangeRows:
         v_a = ctx.v_n + C @ wl
         cl = C @ lev
         arm = cl + v_a * tau
-        r_a = _ecef_of(ctx.lla) + C_en @ arm
+        r_a = earth.lla_to_ecef(ctx.lla) + C_en @ arm
         # d r_a / d p_n: the NED axes, plus the turn of the lever arm's NED vector with position
         self._dr_dp = C_en + _frame_rotation(ctx.lla, C_en, arm)
         self._dv_dp = _frame_rotation(ctx.lla, C_en, v_a)
@@ -265,24 +243,23 @@ class PseudorangeRate(_RangeRows):
         return nu, H, np.diag(self._s[a:b] ** 2)
 
 
-def clock_from_ranges(table, row_epoch, r_e, v_e=None):
+def clock_from_ranges(table, row_epoch, r_e, v_e=None, system=None):
     """Receiver clock bias [m] and drift [m/s] at one epoch from its ranges
     and a known antenna position (and velocity): the median over satellites
-    of ``P - |r_s' - r|`` and of ``rr - u . (v - v_s')``.  Works with a single
-    satellite (a tightly coupled start needs no four-satellite fix when the
-    INS position is known).  Returns ``(bias, drift, n_used)``; drift is NaN
-    without Doppler or velocity.
+    (of ``system`` only, when given) of ``P - |r_s' - r|`` and of
+    ``rr - u . (v - v_s')``.  Works with a single satellite (a tightly coupled
+    start needs no four-satellite fix when the INS position is known).
+    Returns ``(bias, drift, n_used)``; drift is NaN without Doppler or
+    velocity.
     """
     m = np.asarray(table.epoch) == row_epoch
+    if system is not None:
+        m &= np.char.startswith(np.asarray(table.sat).astype(str), system)
     if not m.any():
         return math.nan, math.nan, 0
     tau = np.asarray(table.travel_s, float)[m]
-    ang = OMEGA_E_GNSS * tau
-    ca, sa = np.cos(ang), np.sin(ang)
-    ps = np.asarray(table.sat_pos_e, float)[m]
-    vs = np.asarray(table.sat_vel_e, float)[m]
-    rs = np.stack([ca * ps[:, 0] + sa * ps[:, 1], -sa * ps[:, 0] + ca * ps[:, 1], ps[:, 2]], axis=1)
-    vr = np.stack([ca * vs[:, 0] + sa * vs[:, 1], -sa * vs[:, 0] + ca * vs[:, 1], vs[:, 2]], axis=1)
+    rs = sagnac_rotate(np.asarray(table.sat_pos_e, float)[m], tau, OMEGA_E_GNSS)
+    vr = sagnac_rotate(np.asarray(table.sat_vel_e, float)[m], tau, OMEGA_E_GNSS)
     d = np.asarray(r_e, float)[None, :] - rs
     rng = np.linalg.norm(d, axis=1)
     pr = np.asarray(table.pseudorange_m, float)[m]

@@ -87,19 +87,18 @@ def load_raw_gnss(cfg: NavigateConfig, log=None) -> RawGnss:
 
 
 def spp_fixes(raw: RawGnss) -> GnssData:
-    """Our single-point solution as GNSS fixes on the seconds of week."""
-    s = raw.spp
-    ok = np.isfinite(s.r_e).all(axis=1)
-    from .. import earth
+    """Our single-point solution as GNSS fixes (:meth:`SppSolution.to_gnss_data`:
+    solved epochs, flagged ones left out) on the seconds of week of the RINEX
+    file's first epoch, the IMU's time base."""
+    from ..gnss.spp import EXCLUDED, SOLVED
 
-    lla = earth.ecef_to_lla(s.r_e[ok])
-    C = earth.dcm_en(lla[:, 0], lla[:, 1])
-    sig_enu = np.maximum(np.asarray(s.sigma_enu, float)[ok], 0.1)
-    sig_ned = np.where(np.isfinite(sig_enu), sig_enu, 10.0)[:, [1, 0, 2]]
-    v_n = None
-    if getattr(s, "v_e", None) is not None and np.isfinite(s.v_e[ok]).all():
-        v_n = np.einsum("nji,nj->ni", C, s.v_e[ok])
-    return GnssData(s.time[ok] - raw.offset_s, lla, sig_ned, v_n, None if v_n is None else np.full_like(v_n, 0.2))
+    s = raw.spp
+    try:
+        g = s.to_gnss_data()
+    except InputError:  # Doppler on some epochs only: positions alone
+        g = s.to_gnss_data(with_velocity=False)
+    t = s.time[np.isin(s.status, (SOLVED, EXCLUDED))] - raw.offset_s
+    return GnssData(t, g.lla, g.sigma_ned, g.v_n, g.sigma_v_ned)
 
 
 def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = None):
@@ -236,8 +235,7 @@ def clock_blocks(cfg: NavigateConfig, raw: RawGnss, initial: NavState, lever, us
     if not systems:
         raise InputError(f"{cfg.gnss.obs}: no usable range of the systems {cfg.gnss.systems}")
     ref = systems[0]
-    sub = _rows(tb, (ep == e0) & (sys == ref))
-    bias, drift, n = clock_from_ranges(sub, e0, r_a, v_a)
+    bias, drift, n = clock_from_ranges(tb, e0, r_a, v_a, system=ref)
     source = "ranges at the initial position"
     s = raw.spp
     if ref in tuple(s.systems) and np.isfinite(s.r_e[e0]).all():  # single-point's clock, when it solved that epoch
@@ -258,19 +256,10 @@ def clock_blocks(cfg: NavigateConfig, raw: RawGnss, initial: NavState, lever, us
         e_s = ep[use & (sys == s)]
         b_s = np.nan
         if len(e_s):
-            sub = _rows(tb, (ep == e_s[0]) & (sys == s))
-            b_s, _, _ = clock_from_ranges(sub, int(e_s[0]), r_a, v_a)
+            b_s, _, _ = clock_from_ranges(tb, int(e_s[0]), r_a, v_a, system=s)
         blocks.append(SystemTimeOffset(s, sigma0=100.0, estimate0=0.0 if not np.isfinite(b_s) else b_s - bias))
     return blocks, {"bias_m": bias, "drift_m_s": drift, "from": source, "satellites": n, "epoch_index": e0,
                     "systems": systems}
-
-
-def _rows(tb, m):
-    """The rows ``m`` of a range table as a plain namespace (for clock_from_ranges)."""
-    from types import SimpleNamespace
-
-    return SimpleNamespace(**{k: np.asarray(getattr(tb, k))[m] for k in
-                              ("epoch", "travel_s", "sat_pos_e", "sat_vel_e", "pseudorange_m", "range_rate_m_s")})
 
 
 def outage_windows(cfg: NavigateConfig, gnss: GnssData):
