@@ -11,6 +11,10 @@ $(BIN)/python:
 
 $(STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --disable-pip-version-check -q -e '.[test]'
+	@echo "building the compile cache and matplotlib's font cache (one run of the main job, output discarded)"
+	$(BIN)/inskit navigate examples/drive_0708.toml --out $(VENV)/warm-up --force > /dev/null 2>&1 || \
+	  $(BIN)/inskit navigate examples/drive_0708.toml --out $(VENV)/warm-up --force
+	rm -rf $(VENV)/warm-up
 	touch $(STAMP)
 
 install: $(STAMP)

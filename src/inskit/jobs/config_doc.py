@@ -60,7 +60,7 @@ SUFFIX_UNITS = {
 SCENARIO_MEANINGS = {
     "Scenario.name": "name of the scenario (progress and summaries)",
     "Scenario.description": "free text for the reader (not used by the programs)",
-    "Scenario.duration_limit_s": "accepted but not used by the simulator (the segments set the duration)",
+    "Scenario.duration_limit_s": "end the run here when the segments last longer (the segments are cut, not scaled)",
     "Scenario.start": "the start of the trajectory",
     "Scenario.imu": "the simulated IMU",
     "Scenario.gnss": "the simulated GNSS fixes",

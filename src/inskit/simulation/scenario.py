@@ -159,7 +159,7 @@ class RawGnssSection(_S):
 class Scenario(_S):
     name: str
     description: str = ""
-    duration_limit_s: float | None = None
+    duration_limit_s: float | None = Field(None, gt=0)
     start: StartSpec
     imu: ImuSpec = ImuSpec()
     gnss: GnssSpec = GnssSpec()
@@ -236,6 +236,8 @@ def build_trajectory(sc: Scenario, rng=None) -> SegmentTrajectory:
                 raise ConfigError("random vibration needs a seed")
             band = v.band_hz or (0.5 * v.frequency_hz, 1.5 * v.frequency_hz)
             tr.random_vibration(v.target, amp, band, rng)
+    if sc.duration_limit_s is not None:
+        tr.duration_limit = float(sc.duration_limit_s)
     return tr
 
 

@@ -18,11 +18,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 from scipy.interpolate import CubicHermiteSpline
 
 from .. import earth
 from ..errors import ConfigError
 from .trajectory import Kinematics, kinematics_from_curvilinear
+
+_A, _E2 = earth.A, earth.E2
 
 G_COORD = 9.80665  # gravity used only to set the bank angle of coordinated turns
 
@@ -151,6 +154,42 @@ class Oscillation:
         return g * x, dg * x + g * dx, ddg * x + 2 * dg * dx + g * ddx
 
 
+@njit(cache=True)
+def _rk4_lla(y, v_grid, v_half, h):
+    """RK4 of d(lat, lon, h)/dt = (v_N/(R_N+h), v_E/((R_E+h) cos lat), -v_D)
+    on a uniform grid, in place (``y[0]`` given), with the velocity known at
+    the grid points and half-steps (it does not depend on position).
+    Compiled: a Python loop here was half of ``simulate()`` (issue 13).
+    Radii as :func:`inskit.earth.principal_radii` (WGS84)."""
+    n = y.shape[0]
+    k = np.empty((4, 3))
+    yy = np.empty(3)
+    for i in range(n - 1):
+        for st in range(4):
+            if st == 0:
+                for c in range(3):
+                    yy[c] = y[i, c]
+                v = v_grid[i]
+            elif st == 3:
+                for c in range(3):
+                    yy[c] = y[i, c] + h * k[2, c]
+                v = v_grid[i + 1]
+            else:
+                for c in range(3):
+                    yy[c] = y[i, c] + 0.5 * h * k[st - 1, c]
+                v = v_half[i]
+            sl = np.sin(yy[0])
+            w = np.sqrt(1.0 - _E2 * sl * sl)
+            rn = _A * (1.0 - _E2) / (w * w * w) + yy[2]
+            re = _A / w + yy[2]
+            k[st, 0] = v[0] / rn
+            k[st, 1] = v[1] / (re * np.cos(yy[0]))
+            k[st, 2] = -v[2]
+        for c in range(3):
+            y[i + 1, c] = y[i, c] + h / 6.0 * (k[0, c] + 2.0 * k[1, c] + 2.0 * k[2, c] + k[3, c])
+
+
+
 class SegmentTrajectory:
     """A trajectory assembled segment by segment (see module docstring).
 
@@ -268,7 +307,10 @@ class SegmentTrajectory:
 
     @property
     def duration(self):
-        return self.t
+        """Length of the simulated run [s]: the segments' total, or the
+        scenario's ``duration_limit_s`` when that is shorter."""
+        limit = getattr(self, "duration_limit", None)
+        return self.t if limit is None else min(self.t, limit)
 
     # --- evaluation --------------------------------------------------------------
     def _heading(self, t):
@@ -308,16 +350,7 @@ class SegmentTrajectory:
         v_all, _, _ = self._velocity(t_all)
         v_grid, v_half = v_all[:n], v_all[n:]
 
-        def f(yy, v):
-            rn, re = earth.principal_radii(yy[0], yy[2])
-            return np.array([v[0] / rn, v[1] / (re * np.cos(yy[0])), -v[2]])
-
-        for k in range(n - 1):
-            k1 = f(y[k], v_grid[k])
-            k2 = f(y[k] + h / 2 * k1, v_half[k])
-            k3 = f(y[k] + h / 2 * k2, v_half[k])
-            k4 = f(y[k] + h * k3, v_grid[k + 1])
-            y[k + 1] = y[k] + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        _rk4_lla(y, v_grid, v_half, h)
         dy = rhs(tg, y)
         self._pos = CubicHermiteSpline(tg, y, dy, axis=0)
 
