@@ -119,3 +119,14 @@ def test_preset_overrides_are_checked():
     assert p.gyro.white_noise == pytest.approx(0.2 * DEG / 60)
     with pytest.raises(ConfigError, match=r"imu.gyro: unknown error term\(s\) nois"):
         preset("tactical", gyro={"nois": 0.2})
+
+
+def test_compiled_gauss_markov_recursion_equals_scipy_lfilter():
+    """The compiled AR(1) recursion is the filter scipy.signal.lfilter applies, to the bit."""
+    from scipy.signal import lfilter
+
+    from inskit.simulation.sensors import _ar1
+
+    w = np.random.default_rng(1).standard_normal((20000, 3))
+    phi = np.exp(-0.01 / 300.0)
+    assert np.array_equal(_ar1(w, phi), lfilter([1.0], [1.0, -phi], w, axis=0))

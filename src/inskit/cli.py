@@ -342,8 +342,11 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
 @click.option("--no-plot", is_flag=True, help="Skip the scenario plot.")
 @click.option("--verify", is_flag=True, help="Also mechanize the ideal IMU (at the rate and at twice it) against the truth.")
 @click.option("--truth-rate", type=float, help="Rate of the truth file [Hz] (default: the IMU rate).")
+@click.option("--format", "file_format", type=click.Choice(["csv", "parquet"]), default="csv", show_default=True,
+              help="imu, gnss and truth files as CSV or Parquet (typed, exact, about 20x faster to write); "
+              "every inskit reader takes both.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, as_json):
+def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, file_format, as_json):
     """Simulate a scenario: IMU, GNSS and truth files plus a plot."""
     from .jobs.simulate import verify_ideal, write_simulation
     from .simulation.scenario import load_scenario, simulate as run_sim
@@ -357,7 +360,7 @@ def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, a
               leave=False) as bar:
         sim = run_sim(sc, seed, truth_rate_hz=truth_rate, progress=lambda _: bar.update(1))
         bar.update(1)
-        files = write_simulation(sim, Path(out_dir), overwrite=force, plot=not no_plot)
+        files = write_simulation(sim, Path(out_dir), overwrite=force, plot=not no_plot, file_format=file_format)
         bar.update(1)
     res = {
         "scenario": sc.name, "seed": seed, "duration_s": float(sim.truth.time[-1]), "imu_epochs": len(sim.imu),

@@ -41,11 +41,24 @@ _GYRO_RAD_MEDIAN = 1.0    # median |w| in rad/s above this looks like deg/s
 
 
 def read_table(path) -> tuple[Path, pd.DataFrame]:
-    """Read a comma-separated table with one header line; gzip data is
-    recognised by its content whatever the file is called."""
+    """Read a comma-separated table with one header line, or a Parquet file;
+    gzip and Parquet data are recognised by their content whatever the file
+    is called.  (In messages about a Parquet table, "line" n is row n - 2.)"""
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: no such file")
+    from .parquet import is_parquet
+
+    if is_parquet(path):
+        import pyarrow.parquet as pq
+
+        try:
+            df = pq.read_table(path).to_pandas()
+        except Exception as exc:  # pyarrow raises several kinds for a damaged file
+            raise InputError(f"{path}: not a readable Parquet file ({str(exc).splitlines()[0]})") from None
+        if len(df) == 0:
+            raise InputError(f"{path}: has columns but no data rows")
+        return path, df
     with open(path, "rb") as fh:
         gz = fh.read(2) == b"\x1f\x8b"
     try:
@@ -237,14 +250,20 @@ def check_imu_units(path, w, f, gcol, acol, gunit, aunit):
 
 
 def write_imu(path, imu: ImuData, *, overwrite=False):
-    """Write increments in the IMU format (``dtheta_*_rad``, ``dv_*_m_s``)."""
+    """Write increments in the IMU format (``dtheta_*_rad``, ``dv_*_m_s``):
+    Parquet when ``path`` ends in ``.parquet`` (float64, exact), else CSV with
+    17 significant digits."""
     path = check_writable(path, overwrite)
     data = {"time_s": imu.time}
     for i, a in enumerate(AXES):
         data[f"dtheta_{a}_rad"] = imu.dtheta_b[:, i]
     for i, a in enumerate(AXES):
         data[f"dv_{a}_m_s"] = imu.dv_b[:, i]
-    write_csv(path, data, "%.17g")
+    if path.suffix == ".parquet":
+        from .parquet import write_parquet
+
+        return write_parquet(path, data)
+    return write_csv(path, data, "%.17g")
 
 
 def check_writable(path, overwrite):
@@ -313,7 +332,11 @@ def write_gnss(path, gnss: GnssData, *, overwrite=False):
             cols[c] = gnss.v_n[:, i]
         for i, c in enumerate(GNSS_VEL_COLUMNS[3:]):
             cols[c] = gnss.sigma_v_ned[:, i]
-    write_csv(path, cols, "%.15g")
+    if path.suffix == ".parquet":
+        from .parquet import write_parquet
+
+        return write_parquet(path, cols)
+    return write_csv(path, cols, "%.15g")
 
 
 def read_solution(path) -> NavSolution:

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError, InputError
+from ..files import CSV_DIGITS, CSV_EXPONENT_BELOW, format_column, round_significant, write_csv_fast  # noqa: F401 (re-exported)
 from ..files import atomic_write
 from ..types import NavSolution
 from ..units import DEG
@@ -46,8 +47,6 @@ COLUMN_GROUPS = ("all", "navigation", "navigation+sigma", "sigma", "estimates")
 SUFFIX_UNITS = {"_m_s2": "m/s^2", "_rad_s": "rad/s", "_deg_s": "deg/s", "_m_s": "m/s", "_deg": "deg",
                 "_rad": "rad", "_hz": "Hz", "_m": "m", "_s": "s"}
 
-#: significant digits of the CSV values (those of the earlier ``%.15g`` files)
-CSV_DIGITS = 15
 
 
 def column_unit(name: str) -> str:
@@ -242,80 +241,6 @@ def write_parquet(path, cols: dict, metadata: dict | None = None, compression="z
         # float columns: no dictionary (values rarely repeat), byte-stream split (groups the exponent bytes,
         # which zstd then packs: 10 % smaller than plain encoding on drive_0708, as fast)
         pq.write_table(table, str(tmp), compression=compression, use_dictionary=False, use_byte_stream_split=True)
-    return path
-
-
-def round_significant(x, digits=CSV_DIGITS) -> np.ndarray:
-    """``x`` rounded to ``digits`` significant decimal digits, vectorised.
-
-    The result is the double nearest to a ``digits``-digit decimal, so its
-    shortest round-trip decimal form (what pyarrow writes) has at most
-    ``digits`` digits, as ``%.15g`` gave; it may differ from C's correctly
-    rounded ``%.15g`` by one unit in the last digit at exact halves.
-    """
-    x = np.asarray(x, np.float64)
-    ax = np.abs(x)
-    ok = (ax > 0) & np.isfinite(ax)
-    e = np.zeros_like(x)
-    np.floor(np.log10(ax, where=ok, out=np.zeros_like(x)), where=ok, out=e)
-    p = digits - 1 - e
-    with np.errstate(over="ignore", invalid="ignore"):  # subnormals: 10^p overflows, x is kept as it is
-        s = np.power(10.0, np.abs(p))
-        r = np.where(p >= 0, np.round(x * s) / s, np.round(x / s) * s)
-    return np.where(ok & np.isfinite(r), r, x)
-
-
-#: below this magnitude CSV values are written as ``m.mmme-N``: a fixed-point ``0.00123...`` has leading
-#: zeros that pandas' default float parser counts among its 17 digits (it would lose the last ones)
-CSV_EXPONENT_BELOW = 1e-2
-
-
-def format_column(x, digits=CSV_DIGITS):
-    """A float column as an Arrow column for the CSV writer: rounded to
-    ``digits`` significant digits (:func:`round_significant`), numbers below
-    :data:`CSV_EXPONENT_BELOW` in magnitude as mantissa and exponent strings,
-    built by Arrow's vectorised kernels (no Python per value)."""
-    import pyarrow as pa
-    import pyarrow.compute as pc
-
-    r = round_significant(x, digits)
-    ar = np.abs(r)
-    small = (ar >= 1e-290) & (ar < CSV_EXPONENT_BELOW)  # pyarrow writes smaller ones with an exponent itself
-    if not small.any():
-        return pa.array(r)
-    rs = r[small]
-    e = np.floor(np.log10(np.abs(rs)))
-    m = round_significant(rs * np.power(10.0, -e), digits)  # in [1, 10), or 10 after rounding 9.99..: still exact
-    text = pc.binary_join_element_wise(pc.cast(pa.array(m), pa.string()),
-                                       pc.cast(pa.array(e.astype(np.int64)), pa.string()), "e")
-    # one float-to-text conversion per value: Arrow's (shortest round trip) for the rest
-    return pc.replace_with_mask(pc.cast(pa.array(r), pa.string()), pa.array(small), text)
-
-
-def write_csv_fast(path, cols: dict, digits=CSV_DIGITS) -> Path:
-    """Write float columns as CSV (one plain header line), atomically, by
-    pyarrow's vectorised CSV writer; gzip when ``path`` ends in ``.gz``.
-
-    Values have ``digits`` significant digits (:func:`format_column`), so
-    files stay the size of the former ``%.15g`` ones and read back within one
-    unit of the last digit, by pandas' default parser too.
-    """
-    import pyarrow as pa
-    import pyarrow.csv as pcsv
-
-    path = Path(path)
-    header = (",".join(cols) + "\n").encode()
-    table = pa.Table.from_arrays([format_column(v, digits) for v in cols.values()], names=list(cols))
-    opts = pcsv.WriteOptions(include_header=False, batch_size=8192, quoting_style="none")
-    with atomic_write(path) as tmp:
-        if path.name.endswith(".gz"):
-            with pa.CompressedOutputStream(str(tmp), "gzip") as out:
-                out.write(header)
-                pcsv.write_csv(table, out, opts)
-        else:
-            with open(tmp, "wb") as fh:
-                fh.write(header)
-                pcsv.write_csv(table, fh, opts)
     return path
 
 

@@ -15,8 +15,9 @@ from ..simulation.imu import ideal_imu, truth_solution
 from ..simulation.scenario import Scenario, Simulation, build_trajectory
 
 
-def write_simulation(sim: Simulation, out_dir, *, overwrite=False, plot=True):
-    """Write ``imu.csv`` (increments), ``gnss.csv``, ``truth.csv`` and a plot.
+def write_simulation(sim: Simulation, out_dir, *, overwrite=False, plot=True, file_format="csv"):
+    """Write ``imu.csv`` (increments), ``gnss.csv``, ``truth.csv`` and a plot
+    (``.parquet`` instead with ``file_format="parquet"``).
 
     With raw GNSS observations (``sim.raw``) also ``obs.rnx`` and ``nav.rnx``
     (RINEX 3.04) and ``raw_truth.csv``, and then every time column of the
@@ -25,7 +26,9 @@ def write_simulation(sim: Simulation, out_dir, *, overwrite=False, plot=True):
     receiver and IMU log.  Without raw GNSS the times are scenario seconds.
     """
     out = Path(out_dir)
-    files = [out / "imu.csv", out / "gnss.csv", out / "truth.csv"]
+    if file_format not in ("csv", "parquet"):
+        raise InputError(f"file_format must be 'csv' or 'parquet', got {file_format!r}")
+    files = [out / f"{n}.{file_format}" for n in ("imu", "gnss", "truth")]
     if sim.raw is not None:
         files += [out / "obs.rnx", out / "nav.rnx", out / "raw_truth.csv"]
     if not overwrite:
