@@ -198,13 +198,16 @@ def evaluate(solution_file, truth_file, plot_file, force, as_json):
 
 # --- bench ----------------------------------------------------------------------------
 @cli.command()
-@click.option("--quick", is_flag=True, help="Shorter runs (10 min of data instead of 1 h).")
+@click.option("--quick", is_flag=True, help="Shorter runs (10 min of data instead of 1 h; 2 min for the commands).")
+@click.option("--no-cli", is_flag=True, help="Leave out the end-to-end command figures (navigate_cli_epochs_per_s, ...).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def bench(quick, as_json):
-    """Throughput of the compiled kernels (epochs per second, one core)."""
+def bench(quick, no_cli, as_json):
+    """Throughput of the compiled kernels (epochs per second, one core) and of
+    the user commands end to end (navigate, simulate, mechanize on a simulated
+    hour of car: wall time, peak memory)."""
     from .jobs.bench import run_benchmarks
 
-    res = run_benchmarks(quick=quick, progress=lambda name: _log(f"bench: {name} done"))
+    res = run_benchmarks(quick=quick, progress=lambda name: _log(f"bench: {name} done"), cli=not no_cli)
     table = "\n".join(f"{k:<28}{v}" for k, v in res.items())
     _emit(res, as_json, table)
 

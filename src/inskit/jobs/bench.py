@@ -43,7 +43,7 @@ def _static_imu(duration_s, rate_hz, rng):
     return ImuData(t, dth, dv), truth_solution(traj, t[:1]).state(0)
 
 
-def run_benchmarks(quick=False, progress=None):
+def run_benchmarks(quick=False, progress=None, cli=True):
     """Run the benchmarks; return a flat dict of figures.
 
     Keys: ``ned_epochs_per_s`` (NED mechanization over a 1 h, 100 Hz run,
@@ -56,7 +56,10 @@ def run_benchmarks(quick=False, progress=None):
     Doppler updates from 8 satellites at 1 Hz), ``spp_epochs_per_s``
     (single-point positioning of the bundled ABPO day),
     ``gyrofree_epochs_per_s`` (ten-accelerometer closed-form solve plus the
-    source's inertial navigation, compiled).
+    source's inertial navigation, compiled); with ``cli`` the end-to-end
+    command figures of :mod:`.bench_cli` (``navigate_cli_epochs_per_s``,
+    ``navigate_peak_rss_mb``, ``simulate_cli_epochs_per_s``,
+    ``mechanize_cli_epochs_per_s``, ...).
     """
     rng = np.random.default_rng(0)
     duration = 600.0 if quick else 3600.0
@@ -98,6 +101,10 @@ def run_benchmarks(quick=False, progress=None):
     out["gyrofree_epochs_per_s"] = gyrofree_rate(quick)
     if progress:
         progress("gyrofree")
+    if cli:
+        from .bench_cli import cli_benchmarks
+
+        out.update(cli_benchmarks(quick, repeats=2 if quick else 3, progress=progress))
     return out
 
 

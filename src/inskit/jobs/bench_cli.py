@@ -1,0 +1,184 @@
+"""End-to-end figures of ``inskit bench``: the user's commands, timed whole.
+
+What a user times is the command: start-up and imports, reading, the
+filter, writing.  Each figure here runs the command line itself in a child
+process (``python -m inskit.cli ...``) on a simulated drive written to a
+cache folder once, and reports the median of the repeats with the spread
+(slowest, fastest) and the child's own peak resident memory
+(read from the child's ``/proc/self/status`` at its exit).
+
+* ``navigate_cli_epochs_per_s``: ``inskit navigate`` on 1 h of a car at
+  200 Hz (IMU CSV read, 21-state closed-loop filter with Gauss-Markov
+  biases, ZUPT and NHC at 10 Hz, 1 Hz GNSS, the full-rate Parquet solution
+  written, no plots), IMU epochs per second of wall time;
+  ``navigate_peak_rss_mb``.
+* ``simulate_cli_epochs_per_s``: ``inskit simulate`` of the same hour of
+  car (``car.toml``, segments repeated, ``duration_limit_s``) at 100 Hz writing Parquet (``--format parquet --no-plot``).
+* ``mechanize_cli_epochs_per_s``: ``inskit mechanize`` of that 100 Hz IMU
+  file from the truth's first state, writing the solution CSV.
+
+Quick mode (the tests) uses 120 s instead of an hour.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from .. import __version__
+
+_EXAMPLES = Path(__file__).resolve().parents[3] / "examples"
+
+NAV_CONFIG = """# written by inskit bench: the end-to-end navigate figure
+name = "bench_drive"
+[imu]
+file = "imu.csv"
+format = "inskit"
+[gnss]
+file = "gnss.csv"
+format = "inskit"
+lever_arm_b_m = [0.0, 0.0, -1.2]
+[constraints]
+zupt = true
+nhc = true
+rate_hz = 10.0
+[filter]
+scheme = "closed"
+scale_factors = true
+[outages]
+protocol = "none"
+[output]
+format = "parquet"
+plots = false
+"""
+
+
+def cache_dir() -> Path:
+    """Folder of the generated bench drives (``$INSKIT_BENCH_CACHE``, else
+    ``$XDG_CACHE_HOME/inskit/bench``, else ``~/.cache/inskit/bench``)."""
+    d = os.environ.get("INSKIT_BENCH_CACHE")
+    if d:
+        return Path(d)
+    base = os.environ.get("XDG_CACHE_HOME") or str(Path.home() / ".cache")
+    return Path(base) / "inskit" / "bench"
+
+
+def bench_drive(duration_s: float, rate_hz: float, root: Path | None = None) -> Path:
+    """The car scenario (``examples/car.toml``, its segments repeated) cut at
+    ``duration_s`` and sampled at ``rate_hz``, written once as CSV (imu,
+    gnss, truth) with the navigate config beside it; returns the folder."""
+    from ..simulation.scenario import load_scenario, simulate
+    from .simulate import write_simulation
+
+    root = cache_dir() if root is None else Path(root)
+    d = root / f"car_{duration_s:g}s_{rate_hz:g}hz_v{__version__}"
+    if (d / "done").is_file():
+        return d
+    sc = load_scenario(_EXAMPLES / "car.toml")
+    reps = int(np.ceil(duration_s / 1800.0)) + 1
+    sc = sc.model_copy(update={"duration_limit_s": float(duration_s), "segment": list(sc.segment) * reps,
+                               "imu": sc.imu.model_copy(update={"rate_hz": float(rate_hz)})})
+    sim = simulate(sc, seed=1)
+    write_simulation(sim, d, overwrite=True, plot=False)
+    (d / "navigate.toml").write_text(NAV_CONFIG)
+    (d / "done").write_text("ok\n")
+    return d
+
+
+#: the child's own high-water mark at exit: VmHWM of /proc/self/status belongs to the
+#: process image after exec (getrusage's maxrss may still hold the parent's, copied by fork)
+_WRAP = """
+import atexit, resource, sys
+def _hwm():
+    try:
+        kb = [l for l in open("/proc/self/status") if l.startswith("VmHWM:")][0].split()[1]
+    except (OSError, IndexError):
+        kb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    sys.stderr.write("\\n__inskit_peak_rss_kib__ %s\\n" % kb)
+atexit.register(_hwm)
+from inskit.cli import main
+sys.argv = ["inskit"] + sys.argv[1:]
+main()
+"""
+
+
+def _run_timed(args, cwd=None):
+    """Run ``inskit ARGS`` in a child process; return (wall s, the child's
+    own peak RSS in MiB, stdout)."""
+    t0 = time.perf_counter()
+    p = subprocess.run([sys.executable, "-c", _WRAP, *map(str, args)], cwd=cwd, capture_output=True)
+    wall = time.perf_counter() - t0
+    err = p.stderr.decode(errors="replace")
+    if p.returncode != 0:
+        raise RuntimeError(f"inskit {' '.join(map(str, args))} failed ({p.returncode}): {err[-500:]}")
+    kib = [ln.split()[1] for ln in err.splitlines() if ln.startswith("__inskit_peak_rss_kib__")]
+    return wall, float(kib[-1]) / 1024.0 if kib else float("nan"), p.stdout.decode()
+
+
+def _scenario_text(duration_s):
+    """``examples/car.toml`` with its segments repeated and cut at ``duration_s``."""
+    text = (_EXAMPLES / "car.toml").read_text()
+    seg = text[text.index("[[segment]]"):]
+    reps = int(np.ceil(duration_s / 1800.0))
+    return text.replace('name = "car"', f'name = "car"\nduration_limit_s = {duration_s}', 1) + ("\n" + seg) * reps
+
+
+def _median(key, n, runs, out):
+    walls = [r[0] for r in runs]
+    rates = [n / w for w in walls]
+    out[key] = round(float(np.median(rates)))
+    out[f"{key}_spread"] = [round(min(rates)), round(max(rates))]
+    out[f"{key.replace('_epochs_per_s', '')}_wall_s"] = round(float(np.median(walls)), 3)
+
+
+def cli_benchmarks(quick=False, repeats=3, progress=None, root=None) -> dict:
+    """The end-to-end figures (see the module docstring) as a flat dict."""
+    if not (_EXAMPLES / "car.toml").is_file():
+        return {"cli_note": "examples/car.toml not found (run from a source checkout)"}
+    duration = 120.0 if quick else 3600.0
+    out = {"cli_duration_s": duration}
+    d200 = bench_drive(duration, 200.0, root)
+    d100 = bench_drive(duration, 100.0, root)
+    if progress:
+        progress("bench drives")
+    n200 = int(round(duration * 200.0))
+    n100 = int(round(duration * 100.0))
+    with tempfile.TemporaryDirectory(prefix="inskit-bench-") as tmp:
+        nav = ["navigate", d200 / "navigate.toml", "--out", Path(tmp) / "nav", "--force", "--no-plots", "--json"]
+        _run_timed(nav)  # warm-up (compile cache, page cache)
+        runs = [_run_timed(nav) for _ in range(repeats)]
+        _median("navigate_cli_epochs_per_s", n200, runs, out)
+        out["navigate_peak_rss_mb"] = round(max(r[1] for r in runs), 1)
+        s = json.loads(runs[-1][2])
+        out["navigate_cli_imu_rate_hz"] = 200.0
+        out["navigate_cli_fixes_used"] = s["measurements"]["gnss_pos"]["used"]
+        if progress:
+            progress("navigate")
+        sim = ["simulate", _EXAMPLES / "car.toml", "--out", Path(tmp) / "sim", "--force", "--no-plot",
+               "--format", "parquet", "--seed", "1"]
+        cut = Path(tmp) / "car_1h.toml"
+        cut.write_text(_scenario_text(duration))
+        sim[1] = cut
+        n_sim = n100
+        _run_timed(sim)
+        runs = [_run_timed(sim) for _ in range(repeats)]
+        _median("simulate_cli_epochs_per_s", n_sim, runs, out)
+        out["simulate_peak_rss_mb"] = round(max(r[1] for r in runs), 1)
+        if progress:
+            progress("simulate")
+        mech = ["mechanize", d100 / "imu.csv", "--init-from", d100 / "truth.csv", "--out", Path(tmp) / "mech.csv",
+                "--force", "--json"]
+        _run_timed(mech)
+        runs = [_run_timed(mech) for _ in range(repeats)]
+        _median("mechanize_cli_epochs_per_s", n100, runs, out)
+        out["mechanize_peak_rss_mb"] = round(max(r[1] for r in runs), 1)
+        if progress:
+            progress("mechanize")
+    return out

@@ -1,0 +1,38 @@
+"""The end-to-end bench: its drives are what it says, its command figures are measured."""
+
+import numpy as np
+import pytest
+
+from inskit.io import read_gnss, read_imu
+from inskit.jobs import bench_cli as B
+from inskit.simulation.scenario import build_trajectory, load_scenario
+
+
+def test_scenario_text_is_the_car_cut_at_the_duration(tmp_path):
+    p = tmp_path / "car_1h.toml"
+    p.write_text(B._scenario_text(3600.0))
+    sc = load_scenario(p)
+    car = load_scenario(B._EXAMPLES / "car.toml")
+    assert len(sc.segment) == 3 * len(car.segment)
+    tr = build_trajectory(sc)
+    assert tr.duration == pytest.approx(3600.0)
+    assert tr.t > 3600.0  # the segments were longer: cut, not stretched
+
+
+def test_bench_drive_has_the_rate_and_length_asked(tmp_path):
+    d = B.bench_drive(20.0, 200.0, root=tmp_path)
+    imu = read_imu(d / "imu.csv")
+    assert np.median(np.diff(imu.time)) == pytest.approx(1 / 200.0)
+    assert imu.time[-1] - imu.time[0] == pytest.approx(20.0, abs=1 / 200.0)
+    assert len(read_gnss(d / "gnss.csv")) == 21  # 1 Hz fixes, both ends
+    assert (d / "navigate.toml").is_file() and (d / "done").is_file()
+    assert B.bench_drive(20.0, 200.0, root=tmp_path) == d  # cached
+
+
+@pytest.mark.slow
+def test_cli_figures_are_measured(tmp_path):
+    r = B.cli_benchmarks(quick=True, repeats=1, root=tmp_path)
+    for k in ("navigate_cli_epochs_per_s", "simulate_cli_epochs_per_s", "mechanize_cli_epochs_per_s"):
+        assert r[k] > 0 and r[f"{k}_spread"][0] <= r[k] <= r[f"{k}_spread"][1]
+    assert 50 < r["navigate_peak_rss_mb"] < 24000
+    assert r["navigate_cli_fixes_used"] >= 100
