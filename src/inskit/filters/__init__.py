@@ -11,8 +11,24 @@
 """
 
 from .kalman import FilterDivergence, UpdateResult, chi2_threshold, gate_rows, joseph_update, nees
-from .linear import kf_predict, kf_update, run_linear_kalman, simulate_linear, van_loan
-from .simple import FirstOrderFilter, SecondOrderFilter
+
+# .linear and .simple need scipy.linalg (0.3-0.5 s to import): loaded when first asked for, so the
+# commands that filter with .kalman alone do not pay for it
+_LAZY = {"kf_predict": "linear", "kf_update": "linear", "run_linear_kalman": "linear",
+         "simulate_linear": "linear", "van_loan": "linear",
+         "FirstOrderFilter": "simple", "SecondOrderFilter": "simple"}
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        import importlib
+
+        return getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__():
+    return sorted(set(globals()) | set(_LAZY))
 
 __all__ = ["FilterDivergence", "FirstOrderFilter", "SecondOrderFilter", "UpdateResult", "chi2_threshold",
            "gate_rows", "joseph_update", "kf_predict", "kf_update", "nees", "run_linear_kalman", "simulate_linear",

@@ -7,7 +7,6 @@ from functools import lru_cache
 
 import numpy as np
 from numba import njit
-from scipy import stats
 
 from ..errors import InskitError
 
@@ -18,8 +17,15 @@ class FilterDivergence(InskitError):
 
 @lru_cache(maxsize=64)
 def chi2_threshold(dof: int, probability: float) -> float:
-    """Chi-square quantile: NIS above it is rejected at ``1 - probability``."""
-    return float(stats.chi2.ppf(probability, dof))
+    """Chi-square quantile: NIS above it is rejected at ``1 - probability``.
+
+    ``scipy.special.chdtri`` (the inverse of the upper tail) rather than
+    ``scipy.stats.chi2.ppf``: the same value to 1e-12 (tested), without the
+    0.7 s import of ``scipy.stats`` in every command that filters.
+    """
+    from scipy.special import chdtri
+
+    return float(chdtri(dof, 1.0 - probability))
 
 
 @dataclass(frozen=True)
