@@ -1,5 +1,6 @@
 """Studies on Dask (inskit.jobs.study): results independent of the worker
-count, resumable without repeating a finished run, bit for bit."""
+count, resumable without repeating a finished run, bit for bit; sensor grades
+fitted to static logs (Allan) beside the presets."""
 
 from __future__ import annotations
 
@@ -12,12 +13,23 @@ import pandas as pd
 import pytest
 from click.testing import CliRunner
 
+from inskit import earth, io
 from inskit.cli_study import register
-from inskit.errors import ConfigError
-from inskit.jobs.study import load_spec, run_seed, run_study
+from inskit.errors import ConfigError, InputError
+from inskit.jobs.study import (
+    AllanGrade,
+    allan_grade,
+    build_cases,
+    load_spec,
+    run_seed,
+    run_study,
+)
+from inskit.simulation.sensors import ImuErrors, apply_imu_errors, triad_from_datasheet
+from inskit.types import ImuData
 
 CAR = Path(__file__).resolve().parents[1] / "examples" / "car.toml"
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "study_outage_grades.toml"
+EXAMPLE_ALLAN = Path(__file__).resolve().parents[1] / "examples" / "study_allan_grades.toml"
 
 #: 2 grades x 4 runs, first 100 s of the car drive (it starts moving at 60 s), 30 s outage from 70 s
 TINY = f"""
@@ -148,3 +160,160 @@ def test_bad_specs_are_config_errors(tmp_path, text, match):
 def test_example_spec_is_valid():
     spec, scenario = load_spec(EXAMPLE)
     assert scenario == CAR.resolve() and spec.outage.length_s == 60.0 and spec.kind == "sweep"
+
+
+# --- sensor grades fitted to static logs -----------------------------------------------------------------
+
+#: the sensor of the static test log, datasheet units: far noisier than the tactical preset (ARW 0.125
+#: deg/rt(h), 0.35 deg/h; VRW 50 ug/rt(Hz), 50 ug), with a short correlation time so that a 20 min log
+#: resolves the bias-instability bump (its Allan peak at 1.89 tau = 9.5 s, well inside tau_max = T / 18)
+NOISY = {"gyro": {"noise": 0.5, "bias_instability": 100.0, "bias_instability_tau_s": 5.0},
+         "accel": {"noise": 200.0, "bias_instability": 3000.0, "bias_instability_tau_s": 5.0}}
+
+
+def _static_log(path, duration_s=1200.0, rate_hz=20.0, seed=11, move_at_s=None):
+    """A static IMU log at 45 deg latitude (gravity, Earth rate) through inskit's sensor-error model,
+    with turn-on biases and scale factors too (constants an Allan fit must not see), written as CSV."""
+    n = round(duration_s * rate_hz) + 1
+    t = np.arange(n) / rate_hz
+    lat = np.radians(45.0)
+    w = np.array([earth.OMEGA_IE * np.cos(lat), 0.0, -earth.OMEGA_IE * np.sin(lat)])
+    f = np.array([0.0, 0.0, -earth.gravity_down(lat, 100.0)])
+    dth, dv = np.tile(w / rate_hz, (n, 1)), np.tile(f / rate_hz, (n, 1))
+    if move_at_s is not None:
+        dv[t > move_at_s, 0] += 1.0 / rate_hz  # 1 m/s^2 forward: it drives off
+    dth[0] = dv[0] = 0.0
+    errors = ImuErrors(triad_from_datasheet("gyro", turn_on_bias=100.0, scale_factor_ppm=500, **NOISY["gyro"]),
+                       triad_from_datasheet("accel", turn_on_bias=2000.0, scale_factor_ppm=500, **NOISY["accel"]))
+    imu, _ = apply_imu_errors(ImuData(t, dth, dv), errors, np.random.default_rng(seed))
+    io.write_imu(path, imu, overwrite=True)
+    return path
+
+
+@pytest.fixture(scope="module")
+def static_log(tmp_path_factory):
+    return _static_log(tmp_path_factory.mktemp("allan") / "noisy_imu.csv")
+
+
+def test_allan_grade_recovers_the_simulated_sensor(static_log):
+    """The fitted grade is the simulated one within the statistical uncertainty of an Allan
+    deviation on finite data, 1 / sqrt(2 (N/m - 1)) per axis at cluster time m dt (IEEE 952 annex C),
+    over three axes / sqrt(3):
+    * white noise is read at tau <= 5 s, N/m >= 240: <= 2.7 %; 8 % is 3 sigma;
+    * bias instability at the bump's peak, tau = 9.5 s, N/m = 126: 6.3 % per axis, 3.7 % for the
+      triad; 12 % is 3.3 sigma (60 seeds of this log: std 3.0 % gyro, 3.5 % accel, worst 8.4 %);
+    * the correlation time has no closed form: it is where the broad maximum sits; over 60 seeds its
+      spread is 8 % (worst -24 %), hence 30 %."""
+    errors, rec = allan_grade(AllanGrade(allan=str(static_log), base="tactical"))
+    fit = rec["from_fit"]
+    assert rec["name"] == "noisy_imu" and rec["source"] == "allan" and rec["bias_resolved"]
+    assert fit["gyro_arw_deg_sqrt_h"] == pytest.approx(NOISY["gyro"]["noise"], rel=0.08)
+    assert fit["accel_vrw_ug_sqrt_hz"] == pytest.approx(NOISY["accel"]["noise"], rel=0.08)
+    assert fit["gyro_bias_instability_deg_h"] == pytest.approx(NOISY["gyro"]["bias_instability"], rel=0.12)
+    assert fit["accel_bias_instability_ug"] == pytest.approx(NOISY["accel"]["bias_instability"], rel=0.12)
+    assert fit["gyro_bias_tau_s"] == pytest.approx(5.0, rel=0.3)
+    assert fit["accel_bias_tau_s"] == pytest.approx(5.0, rel=0.3)
+    # the simulated sensor is the fit, in SI, and the base preset for what a static log cannot show
+    from inskit.simulation.sensors import preset
+    from inskit.units import DEG, MICRO_G
+
+    tac = preset("tactical")
+    assert errors.gyro.white_noise == pytest.approx(fit["gyro_arw_deg_sqrt_h"] * DEG / 60.0, rel=1e-12)
+    assert errors.accel.bias_instability == pytest.approx(fit["accel_bias_instability_ug"] * MICRO_G, rel=1e-12)
+    assert errors.gyro.turn_on_bias_sigma == tac.gyro.turn_on_bias_sigma
+    assert errors.accel.scale_factor == tac.accel.scale_factor
+    assert rec["parameters"]["accel_turn_on_bias_ug"] == pytest.approx(1000.0)
+    assert set(rec["from_fit"]) < set(rec["parameters"]) and len(rec["per_axis"]["gyro"]) == 3
+
+
+def test_study_ranks_an_allan_grade_beside_a_preset(static_log, tmp_path):
+    """A tiny sweep: the tactical preset and the grade fitted to the noisy log, on the same base (turn-on
+    bias and scale factor of the tactical preset), so that only the fitted noise differs.  Over the 30 s
+    outage the Gauss-Markov gyro bias (sigma 107 deg/h = 5.2e-4 rad/s, tau 5 s; a tilt random walk of
+    diffusion D = 2 sigma^2 tau) alone gives g sqrt(D T^5 / 20) = 18 m per horizontal axis, the accelerometer
+    one (sigma 3.2 mg) sigma sqrt(2 tau) T^1.5 / sqrt(3) = 9.5 m: tens of metres against the tactical
+    grade's few (test_cli_one_worker_ranks_grades); every run of it must be worse."""
+    text = TINY.replace('grades = ["tactical", "industrial-mems"]',
+                        f'grades = ["tactical", {{allan = "{static_log.name}", name = "my-imu", base = "tactical"}}]')
+    text = text.replace("runs = 4", "runs = 3")
+    spec = _spec(static_log.parent, text, "allan_study.toml")
+    res = run_study(spec, tmp_path / "out", workers=1)
+    rank = res["ranking"]
+    assert [e["grade"] for e in rank] == ["tactical", "my-imu"]
+    assert rank[1]["min"] > rank[0]["max"]  # every noisy run worse than every tactical one
+    runs = pd.read_parquet(tmp_path / "out" / "runs.parquet")
+    assert sorted(set(runs["grade"])) == ["my-imu", "tactical"]
+    saved = json.loads((tmp_path / "out" / "summary.json").read_text())
+    by_name = {g["name"]: g for g in saved["grades"]}
+    assert by_name["tactical"]["source"] == "preset"
+    mine = by_name["my-imu"]
+    _, rec = allan_grade(AllanGrade(allan=str(static_log), base="tactical"))
+    assert mine["source"] == "allan" and mine["base"] == "tactical" and Path(mine["file"]) == static_log
+    assert mine["from_fit"] == pytest.approx(rec["from_fit"], rel=1e-12)
+    assert by_name["tactical"]["parameters"]["gyro_arw_deg_sqrt_h"] == pytest.approx(0.125)
+
+
+def test_a_changed_log_is_a_different_study(tmp_path):
+    from inskit.jobs.study import fingerprint
+
+    log = _static_log(tmp_path / "log.csv", duration_s=120.0, seed=1)
+    spec = _spec(tmp_path, TINY.replace('grades = ["tactical", "industrial-mems"]', 'grades = [{allan = "log.csv"}]'))
+    fp = fingerprint(*load_spec(spec))
+    assert fingerprint(*load_spec(spec)) == fp
+    _static_log(log, duration_s=120.0, seed=2)  # the same file name, another recording
+    assert fingerprint(*load_spec(spec)) != fp
+
+
+def _allan_spec(folder, entry):
+    return _spec(folder, TINY.replace('grades = ["tactical", "industrial-mems"]', f'grades = ["tactical", {entry}]'))
+
+
+@pytest.mark.parametrize("make, entry, exc, match", [
+    (None, '{allan = "nowhere.csv"}', ConfigError, r"grades\.1\.allan.*no such file.*nowhere\.csv"),
+    ({"duration_s": 60.0}, '{allan = "log.csv"}', InputError, r"grades\.1\.allan.*log\.csv.*at least 100 s"),
+    ({"duration_s": 200.0, "move_at_s": 150.0}, '{allan = "log.csv"}', InputError,
+     r"grades\.1\.allan.*log\.csv.*not static"),
+    ({"duration_s": 200.0, "move_at_s": 150.0}, '{allan = "log.csv", window_s = [0.0, 140.0]}', None, None),
+    ({"duration_s": 200.0}, '{allan = "log.csv", window_s = [0.0, 500.0]}', ConfigError, "after the end of the log"),
+    ({"duration_s": 200.0}, '{allan = "log.csv", window_s = [50.0, 20.0]}', ConfigError,
+     r"grades\.1\.window_s.*start < end"),
+    ({"duration_s": 200.0}, '{allan = "log.csv", name = "tactical"}', ConfigError, "each grade once"),
+    ({"duration_s": 200.0}, '{allan = "log.csv", base = "military"}', ConfigError, r"grades\.1\.base"),
+    ({"duration_s": 200.0}, '{alan = "log.csv"}', ConfigError, r"grades\.1\.alan.*not permitted"),
+    ({"duration_s": 200.0}, '7', ConfigError, r"grades\.1.*preset name, or a table with 'allan'"),
+])
+def test_bad_allan_grades_name_the_key_and_the_file(tmp_path, make, entry, exc, match):
+    if make is not None:
+        _static_log(tmp_path / "log.csv", **make)
+    spec = _allan_spec(tmp_path, entry)
+    if exc is None:  # the static part of a log that drives off, cut out with window_s, is accepted
+        s, sc = load_spec(spec)
+        assert build_cases(s, sc)[1].grade_info["log_duration_s"] == pytest.approx(140.0)
+        return
+    with pytest.raises(exc, match=match):
+        s, sc = load_spec(spec)
+        build_cases(s, sc)
+
+
+def test_grades_as_tables_of_presets_and_logs(static_log):
+    spec = _spec(static_log.parent, TINY.replace('grades = ["tactical", "industrial-mems"]\n', "") + f"""
+[[grades]]
+preset = "tactical"
+[[grades]]
+allan = "{static_log.name}"
+""", "tables.toml")
+    s, sc = load_spec(spec)
+    assert [c.grade for c in build_cases(s, sc)] == ["tactical", "noisy_imu"]
+
+
+def test_allan_example_spec_is_valid(static_log, tmp_path):
+    # the example reads the log `inskit simulate examples/static.toml --out out/static` writes
+    (tmp_path / "examples").mkdir()
+    for p in (EXAMPLE_ALLAN, CAR):
+        (tmp_path / "examples" / p.name).write_text(p.read_text())
+    (tmp_path / "out" / "static").mkdir(parents=True)
+    (tmp_path / "out" / "static" / "imu.csv").write_bytes(static_log.read_bytes())
+    spec, scenario = load_spec(tmp_path / "examples" / EXAMPLE_ALLAN.name)
+    assert scenario.name == "car.toml" and spec.outage.length_s == 60.0
+    assert any(isinstance(g, AllanGrade) and g._log == (tmp_path / "out" / "static" / "imu.csv").resolve()
+               for g in spec.grades)

@@ -30,6 +30,14 @@ there and computes the rest.  At the end the rows are sorted by
 ``DIR/summary.parquet`` (one row per case, figure and statistic),
 ``DIR/summary.json`` (the ranking) and ``DIR/study.png``.
 
+Sensor grades: a preset name (:data:`GRADES`), or a grade fitted to a
+static log of the user's own IMU (:class:`AllanGrade`, ``{allan = "log.csv"}``):
+:func:`allan_grade` runs the Allan analysis of :mod:`.allan` on the log and
+puts the fitted white noise (ARW, VRW), bias instability and its correlation
+time in place of a preset's; what a static log cannot show (turn-on bias, scale
+factor, saturation) comes from a ``base`` preset (default none).  The study
+output lists every grade's parameters and which of them came from the fit.
+
 Seeds: run ``r`` of case ``c`` uses the 64-bit integer drawn from
 ``numpy.random.SeedSequence(seed, spawn_key=(c, r))`` (the same sequence as
 ``SeedSequence(seed).spawn(...)[c].spawn(...)[r]``), so every number depends
@@ -51,16 +59,19 @@ import os
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Literal
+from typing import Annotated, Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import (BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, Tag, ValidationError,
+                      field_validator)
 
 from .. import earth
 from .. import rotations as rot
 from ..config_files import read_toml, validation_message
 from ..errors import ConfigError, InputError
 from ..files import atomic_write, check_folder_writable, save_figure, write_text
+from ..types import ImuData
+from ..units import DEG, DEG_PER_HOUR, G0, MICRO_G, PPM
 from .montecarlo import (ConsistencySpec, anees_band, consistency_errors, grade_initial_uncertainty,
                          matched_settings, perturbed_start, run_once)
 from .outages import withheld_mask
@@ -98,13 +109,93 @@ class FilterCase(_M):
     gating: bool = Field(False, description="chi-square innovation gate (probability 0.9999) on the fixes")
 
 
+#: extensions stripped from a log's file name to name its Allan grade
+_LOG_SUFFIXES = (".gz", ".csv", ".txt")
+
+
+class AllanGrade(_M):
+    """A sensor grade fitted to a static log of the user's IMU (:func:`allan_grade`).
+
+    In ``grades`` as an inline table, beside preset names:
+    ``grades = ["tactical", {allan = "logs/static.csv", base = "tactical"}]``,
+    or as ``[[grades]]`` tables (then presets as ``preset = "tactical"``).
+    """
+
+    allan: str = Field(..., min_length=1, description=(
+        "static IMU log, relative to the study file, in an IMU format inskit reads (see `format`); at least "
+        "100 s at rest, hours to resolve a bias instability of long correlation time"))
+    name: str | None = Field(None, min_length=1, description=(
+        "label in tables and plots (default: the file name without .csv / .gz / .txt)"))
+    format: Literal["inskit", "rtklibexplorer"] = Field("inskit", description=(
+        "'inskit' (docs/formats.md) or 'rtklibexplorer' (the rtklibexplorer GNSS-IMU logs)"))
+    window_s: tuple[float, float] | None = Field(None, description=(
+        "[start, end] of the static part to fit [s after the log's first sample] (default: the whole log)"))
+    base: Literal[GRADES] = Field("ideal", description=(
+        "grade that gives what a static log cannot show: turn-on bias (run to run), scale factor, saturation, "
+        "and the filter's initial attitude uncertainty; 'ideal': no turn-on bias or scale-factor error"))
+    #: the log's resolved path and the spec key it came from (set by :func:`load_spec`)
+    _log: Path | None = PrivateAttr(None)
+    _key: str = PrivateAttr("grades")
+
+    @field_validator("window_s")
+    @classmethod
+    def _window(cls, w):
+        if w is not None and not 0.0 <= w[0] < w[1]:
+            raise ValueError(f"must be [start, end] with 0 <= start < end, got {list(w)}")
+        return w
+
+    @property
+    def label(self) -> str:
+        n = Path(self.allan).name
+        while any(n.lower().endswith(x) for x in _LOG_SUFFIXES) and "." in n[1:]:
+            n = n[:n.rfind(".")]
+        return self.name or n
+
+
+class PresetGrade(_M):
+    """A preset grade as a table (``[[grades]]`` form): ``preset = "tactical"``."""
+
+    preset: Literal[GRADES] = Field(..., description="grade preset")
+
+    @property
+    def label(self) -> str:
+        return self.preset
+
+
+def _grade_kind(v):
+    if isinstance(v, (str, PresetGrade)):
+        return "preset-name" if isinstance(v, str) else "preset"
+    if isinstance(v, AllanGrade):
+        return "allan"
+    if isinstance(v, dict):
+        return "preset" if "preset" in v and "allan" not in v else "allan"
+    return None
+
+
+#: a grade of a study: a preset name, ``{preset = ...}`` or ``{allan = ...}``
+Grade = Annotated[Annotated[Literal[GRADES], Tag("preset-name")] | Annotated[PresetGrade, Tag("preset")]
+                  | Annotated[AllanGrade, Tag("allan")],
+                  Discriminator(_grade_kind, custom_error_type="grade",
+                                custom_error_message="a grade is a preset name, or a table with 'allan' (a static "
+                                                     "log to fit) or 'preset'")]
+_GRADE_TAGS = ("preset-name", "preset", "allan")
+
+
+def grade_label(g) -> str:
+    """The name of a grade in tables, plots and ``runs.parquet``."""
+    return g if isinstance(g, str) else g.label
+
+
 class StudySpec(_M):
     """A study file (TOML).  Every key:
 
     ``scenario``: scenario file, relative to the study file; ``kind``:
     ``"monte-carlo"`` (one case: one grade, one filter setting) or ``"sweep"``
     (every grade x every filter setting); ``grades``: IMU grades (default
-    the scenario's); ``runs``: runs per case; ``seed``: base seed;
+    the scenario's): preset names, and tables ``{allan = "static.csv"}``
+    (:class:`AllanGrade`: keys ``allan``, ``name``, ``format``,
+    ``window_s``, ``base``) for grades fitted to static logs;
+    ``runs``: runs per case; ``seed``: base seed;
     ``duration_s``: use only the first seconds of the scenario; ``[outage]``:
     score by the errors at the end of this GNSS outage (without it: the
     consistency figures of the ``consistency`` job); ``[[filter]]``: filter
@@ -113,8 +204,9 @@ class StudySpec(_M):
 
     scenario: str = Field(..., description="scenario TOML, relative to the study file")
     kind: Literal["monte-carlo", "sweep"] = Field(..., description="one case, or grades x filter settings")
-    grades: list[Literal[GRADES]] | None = Field(None, min_length=1, description="IMU grades (default: the "
-                                                 "scenario's)")
+    grades: list[Grade] | None = Field(None, min_length=1, description=(
+        "IMU grades (default: the scenario's): preset names and {allan = \"static.csv\", ...} tables of grades "
+        "fitted to static logs"))
     runs: int = Field(..., ge=1, le=1_000_000, description="runs per case")
     seed: int = Field(0, ge=0, description="base seed of every run's SeedSequence")
     duration_s: float | None = Field(None, gt=0, description="use only the first seconds of the scenario")
@@ -137,19 +229,174 @@ def load_spec(path) -> tuple[StudySpec, Path]:
     try:
         spec = StudySpec.model_validate(data)
     except ValidationError as exc:
-        raise ConfigError(validation_message(path, exc)) from None
+        raise ConfigError(_validation_message(path, exc)) from None
     if spec.kind == "monte-carlo" and (len(spec.grades or [None]) > 1 or len(spec.filter) > 1):
         raise ConfigError(f"{path}: a 'monte-carlo' study has one grade and one [[filter]]; "
                           "use kind = \"sweep\" for several")
     names = [f.name for f in spec.filter]
     if len(set(names)) != len(names):
         raise ConfigError(f"{path}: [[filter]] names must be unique, got {names}")
-    if spec.grades is not None and len(set(spec.grades)) != len(spec.grades):
-        raise ConfigError(f"{path}: field 'grades': each grade once, got {spec.grades}")
+    labels = [grade_label(g) for g in spec.grades or []]
+    if len(set(labels)) != len(labels):
+        raise ConfigError(f"{path}: field 'grades': each grade once (an Allan grade is named after its file or its "
+                          f"'name'), got {labels}")
+    for i, g in enumerate(spec.grades or []):
+        if isinstance(g, AllanGrade):
+            key = f"grades.{i}.allan"
+            if g.label in GRADES:
+                raise ConfigError(f"{path}: field '{key}': the grade of {g.allan!r} would be named {g.label!r} like "
+                                  "a preset; give it another 'name'")
+            log = (path.parent / g.allan).resolve()
+            if not log.is_file():
+                raise ConfigError(f"{path}: field '{key}': no such file {log}")
+            g._log, g._key = log, f"{path}: field '{key}' ({log.name})"
     scenario = (path.parent / spec.scenario).resolve()
     if not scenario.is_file():
         raise ConfigError(f"{path}: field 'scenario': no such file {scenario}")
     return spec, scenario
+
+
+def _validation_message(path, exc):
+    """:func:`validation_message`, but for an error in a grade every error of
+    that grade (a misspelt key is both unknown and a missing key), without the
+    grade-kind tags of the union in the field path."""
+    errors = exc.errors()
+    e = errors[0]
+    if e["loc"][:1] != ("grades",) or len(e["loc"]) < 2:
+        return validation_message(path, exc)
+
+    def where(loc):
+        return ".".join(str(x) for i, x in enumerate(loc) if not (i == 2 and x in _GRADE_TAGS))
+
+    mine = [x for x in errors if x["loc"][:2] == e["loc"][:2]]
+    more = f" (and {len(errors) - len(mine)} more)" if len(errors) > len(mine) else ""
+    return f"{path}: " + "; ".join(f"field '{where(x['loc'])}': {x['msg']}" for x in mine) + more
+
+
+def _datasheet(errors) -> dict:
+    """The grade parameters of a sensor model in datasheet units (the keys of
+    the study output's ``grades[].parameters``)."""
+    g, a = errors.gyro, errors.accel
+    return {
+        "gyro_arw_deg_sqrt_h": g.white_noise / (DEG / 60.0),
+        "gyro_bias_instability_deg_h": g.bias_instability / DEG_PER_HOUR,
+        "gyro_bias_tau_s": g.bias_instability_tau_s,
+        "gyro_turn_on_bias_deg_h": g.turn_on_bias_sigma / DEG_PER_HOUR,
+        "gyro_scale_factor_ppm": float(np.mean(g.scale_factor)) / PPM,
+        "gyro_saturation_deg_s": g.saturation / DEG if np.isfinite(g.saturation) else None,
+        "accel_vrw_ug_sqrt_hz": a.white_noise / MICRO_G,
+        "accel_bias_instability_ug": a.bias_instability / MICRO_G,
+        "accel_bias_tau_s": a.bias_instability_tau_s,
+        "accel_turn_on_bias_ug": a.turn_on_bias_sigma / MICRO_G,
+        "accel_scale_factor_ppm": float(np.mean(a.scale_factor)) / PPM,
+        "accel_saturation_g": a.saturation / G0 if np.isfinite(a.saturation) else None,
+    }
+
+
+#: the parameters an Allan grade takes from the fit (the rest come from its base)
+FROM_FIT = ("gyro_arw_deg_sqrt_h", "gyro_bias_instability_deg_h", "gyro_bias_tau_s", "accel_vrw_ug_sqrt_hz",
+            "accel_bias_instability_ug", "accel_bias_tau_s")
+
+
+def _read_log(g: AllanGrade):
+    from .. import io
+    from ..io.rtklib import read_rtklibexplorer_imu
+
+    path = g._log if g._log is not None else Path(g.allan)
+    if not path.is_file():
+        raise ConfigError(f"{g._key}: no such file {path}")
+    imu = io.read_imu(path) if g.format == "inskit" else read_rtklibexplorer_imu(path)[0]
+    if g.window_s is not None:
+        t = imu.time - imu.time[0]
+        a, b = g.window_s
+        if b > t[-1]:
+            raise ConfigError(f"{g._key}: window_s ends at {b:g} s, after the end of the log ({t[-1]:.1f} s "
+                              "after its first sample)")
+        k = (t >= a) & (t <= b)
+        if k.sum() < 2:
+            raise ConfigError(f"{g._key}: window_s {list(g.window_s)} holds fewer than two samples")
+        imu = ImuData(imu.time[k], imu.dtheta_b[k], imu.dv_b[k])
+    return path, imu
+
+
+def allan_grade(g: AllanGrade):
+    """The sensor model of an Allan grade and the record of where its terms came from.
+
+    The log is read (``format``, cut to ``window_s``) and fitted per axis by
+    :func:`inskit.jobs.allan.allan_report` (white noise, Gauss-Markov bias
+    instability of the IEEE 952 coefficient ``B`` and correlation time
+    ``tau``).  One triad of the sensor model takes the root mean square of
+    its three axes' white-noise densities and ``B`` (the presets are
+    isotropic; for white noise that keeps the summed noise power) and the
+    geometric mean of their ``tau``.  Everything else is the ``base``
+    preset's: turn-on bias, scale factor, saturation.  A fitted rate random
+    walk is recorded but not simulated: the presets have none, the 15-state
+    filter does not model it, and on a log shorter than hours it is often a
+    chance upturn of the last few clusters.
+
+    Returns
+    -------
+    errors : ImuErrors
+        The full sensor model the study simulates.
+    record : dict
+        ``name``, ``source = "allan"``, ``file``, ``format``, ``window_s``,
+        ``log_duration_s``, ``base``, ``parameters`` (every grade parameter,
+        datasheet units), ``from_fit`` (the subset that came from the fit),
+        ``rate_random_walk_not_used``, ``per_axis`` (the fit of each axis as
+        ``inskit allan`` reports it), ``bias_resolved`` and ``notes``.
+
+    Raises
+    ------
+    InputError
+        A log that cannot be read, is too short, irregular or not static,
+        named with the spec key and the file.
+    """
+    from .allan import allan_report
+
+    try:
+        path, imu = _read_log(g)
+        fits, rep = allan_report(imu)
+    except InputError as exc:
+        raise InputError(f"{g._key}: {exc}") from None
+
+    def triad(base, axes):
+        def rms(k):
+            return float(np.sqrt(np.mean([getattr(f, k) ** 2 for f in axes])))
+
+        tau = float(np.exp(np.mean(np.log([f.gm_tau for f in axes]))))
+        return replace(base, white_noise=rms("white"), bias_instability=rms("bias_instability"),
+                       bias_instability_tau_s=tau, rate_random_walk=0.0)
+
+    base = _grade_errors(g.base)
+    errors = replace(base, gyro=triad(base.gyro, fits["gyro_fit"]), accel=triad(base.accel, fits["accel_fit"]),
+                     source=f"Allan fit of {path.name}; base {g.base}")
+    params = _datasheet(errors)
+    rrw = {"gyro_rrw_deg_h_sqrt_h": [x["rrw_deg_h_sqrt_h"] for x in rep["gyro"]],
+           "accel_rrw_ug_sqrt_h": [x["rrw_ug_sqrt_h"] for x in rep["accel"]]}
+    notes = list(rep["notes"])
+    if any(v is not None for x in rrw.values() for v in x):
+        notes.append("a rate random walk was fitted on some axes (rate_random_walk_not_used) but is not simulated: "
+                     "the presets have none and the 15-state filter does not model it")
+    record = {"name": g.label, "source": "allan", "file": str(path), "format": g.format,
+              "window_s": None if g.window_s is None else list(g.window_s),
+              "log_duration_s": float(imu.time[-1] - imu.time[0]), "base": g.base, "parameters": params,
+              "from_fit": {k: params[k] for k in FROM_FIT}, "rate_random_walk_not_used": rrw,
+              "per_axis": {"gyro": rep["gyro"], "accel": rep["accel"]},
+              "bias_resolved": all(x["bias_instability_resolved"] for x in rep["gyro"] + rep["accel"]),
+              "notes": notes}
+    return errors, record
+
+
+def resolve_grade(g):
+    """``(label, full sensor model, grade of the initial uncertainty, record)``
+    of a grade of the spec (a preset name, :class:`PresetGrade` or :class:`AllanGrade`)."""
+    if isinstance(g, AllanGrade):
+        errors, record = allan_grade(g)
+        return g.label, errors, g.base, record
+    name = grade_label(g)
+    errors = _grade_errors(name)
+    return name, errors, name, {"name": name, "source": "preset", "parameters": _datasheet(errors),
+                                "datasheet": errors.source}
 
 
 def run_seed(base, case, run) -> int:
@@ -172,6 +419,8 @@ class StudyCase:
     lever_arm_b: tuple[float, float, float]
     #: cases with the same key share one prepared truth and ideal IMU per process
     prep_key: str = ""
+    #: the grade's parameters and their origin (:func:`resolve_grade`)
+    grade_info: dict | None = None
 
     @property
     def figures(self):
@@ -236,8 +485,8 @@ def build_cases(spec: StudySpec, scenario_path, key="") -> list[StudyCase]:
     lever = tuple(float(x) for x in sc.gnss.lever_arm_b_m)
     cases = []
     for grade in spec.grades or [sc.imu.grade]:
+        label, full, initial, record = resolve_grade(grade)
         for f in spec.filter:
-            full = _grade_errors(grade)
             model = consistency_errors(full)
             kw = dict(scheme=f.scheme, gate_probability=0.9999 if f.gating else None)
             if outage is not None:  # the full sensor, the scenario's GNSS, forward filter
@@ -247,9 +496,9 @@ def build_cases(spec: StudySpec, scenario_path, key="") -> list[StudyCase]:
                 sim, lever = model, (0.0, 0.0, 0.0)
                 g = GnssErrors(rate_hz=1.0, white_h_m=1.0, white_v_m=2.0, velocity_sigma_m_s=0.0)
                 kw["smoother_node_s"] = 0.0
-            settings = matched_settings(_scaled(model, f.noise_scale), _initial(grade), **kw)
+            settings = matched_settings(_scaled(model, f.noise_scale), _initial(initial), **kw)
             cs = ConsistencySpec(tr, sc.imu.rate_hz, sim, g, settings, spec.duration_s)
-            cases.append(StudyCase(len(cases), grade, f.name, cs, outage, lever, key))
+            cases.append(StudyCase(len(cases), label, f.name, cs, outage, lever, key, record))
     return cases
 
 
@@ -291,10 +540,13 @@ def run_case(case: StudyCase, run: int, base_seed: int) -> dict:
 
 
 def fingerprint(spec: StudySpec, scenario_path) -> str:
-    """SHA-256 of the validated spec and the scenario file's bytes: a resumed
-    study must be the same study."""
+    """SHA-256 of the validated spec, the scenario file's bytes and those of
+    every Allan grade's log: a resumed study must be the same study."""
     h = hashlib.sha256(json.dumps(spec.model_dump(mode="json"), sort_keys=True).encode())
     h.update(Path(scenario_path).read_bytes())
+    for g in spec.grades or []:
+        if isinstance(g, AllanGrade):
+            h.update(Path(g._log if g._log is not None else g.allan).read_bytes())
     return h.hexdigest()
 
 
@@ -464,6 +716,12 @@ def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None
     out = check_folder_writable(out_dir)
     fp = fingerprint(spec, scenario_path)
     cases = build_cases(spec, scenario_path, fp)  # every config error before anything is written
+    grades = list({c.grade: c.grade_info for c in cases}.values())
+    for r in grades:
+        if r["source"] == "allan":
+            log(f"study: grade {r['name']!r}: {_fit_line(r)}")
+            for n in r["notes"]:
+                log(f"study: grade {r['name']!r}: note: {n}")
     meta_path = out / "study.json"
     if meta_path.is_file():
         try:
@@ -530,7 +788,7 @@ def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None
     files["plot"] = _plot(df, cases, out / "study.png")
     res = {"study": str(Path(spec_path)), "kind": spec.kind, "scenario": str(scenario_path),
            "duration_s": spec.duration_s, "seed": spec.seed, "runs_per_case": spec.runs,
-           "outage_s": list(cases[0].outage) if cases[0].outage else None, "ranking": rank,
+           "outage_s": list(cases[0].outage) if cases[0].outage else None, "ranking": rank, "grades": grades,
            "runs_total": total, "runs_computed": len(todo), "runs_reused": total - len(todo),
            "execution": {**cluster_info, "cluster_start_s": t_cluster, "runs_s": t_runs,
                          "seconds": time.perf_counter() - t_start},
@@ -557,6 +815,16 @@ def _plain(x):
     return x
 
 
+def _fit_line(r) -> str:
+    """One line of an Allan grade's fitted parameters."""
+    p = r["from_fit"]
+    return (f"Allan fit of {Path(r['file']).name} ({r['log_duration_s']:.0f} s): ARW {p['gyro_arw_deg_sqrt_h']:.4g} "
+            f"deg/rt(h), gyro BI {p['gyro_bias_instability_deg_h']:.4g} deg/h (tau {p['gyro_bias_tau_s']:.3g} s), "
+            f"VRW {p['accel_vrw_ug_sqrt_hz']:.4g} ug/rt(Hz), accel BI {p['accel_bias_instability_ug']:.4g} ug "
+            f"(tau {p['accel_bias_tau_s']:.3g} s); turn-on bias, scale factor from {r['base']!r}"
+            + ("" if r["bias_resolved"] else "; bias instability unresolved on some axes (upper bound)"))
+
+
 def ranking_table(res) -> str:
     """The ranking as a text table."""
     rank = res["ranking"]
@@ -575,6 +843,7 @@ def ranking_table(res) -> str:
             lines.append(f"{e['rank']:>4}  {e['grade']:<16}{e['filter']:<12}{e['runs']:>6}{a['pos']:>8.2f}"
                          f"{a['vel']:>8.2f}{a['att']:>8.2f}  [{e['band_95_per_epoch'][0]:.2f}, "
                          f"{e['band_95_per_epoch'][1]:.2f}]")
+    lines += [f"grade {r['name']!r}: {_fit_line(r)}" for r in res.get("grades", []) if r["source"] == "allan"]
     lines.append(f"runs: {res['runs_total']} ({res['runs_computed']} computed, {res['runs_reused']} reused); "
                  f"{res['execution']['seconds']:.1f} s; files: {', '.join(res['files'].values())}")
     return "\n".join(lines)
