@@ -46,3 +46,78 @@ def test_plot_writes_png(tmp_path):
     p = analysis.plot_errors(err, tmp_path / "e.png")
     assert (tmp_path / "e.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert p == tmp_path / "e.png"
+
+
+def test_attitude_in_degrees_beside_arcmin_and_yaw_wrapped():
+    t = np.arange(3.0)
+    ref = np.array([0.5, 0.5, 0.0])
+    s = analysis.summarize(analysis.nav_error(make(t, ref, np.radians(179.9)), make(t, ref, np.radians(-179.9))))
+    assert s["yaw_deg"]["final"] == pytest.approx(-0.2, abs=1e-9)  # across +-180: 0.2 deg, not 359.8
+    assert s["yaw_arcmin"]["final"] == pytest.approx(-12.0, abs=1e-6)
+    cols = analysis.per_epoch_columns(analysis.nav_error(make(t, ref, np.radians(179.9)),
+                                                         make(t, ref, np.radians(-179.9))))
+    assert cols["err_yaw_deg"] == pytest.approx([-0.2] * 3, abs=1e-9)
+
+
+def _moving(t, ref):
+    """2 km north at 10 m/s: NED frames along it differ by 0.3 mrad."""
+    n = len(t)
+    lla = earth.ned_to_lla(np.column_stack([10.0 * t, np.zeros(n), np.zeros(n)]), ref)
+    return NavSolution.from_euler(t, lla, np.tile([10.0, 0, 0], (n, 1)), np.zeros((n, 3)))
+
+
+def test_window_limits_are_respected_and_bad_windows_refused():
+    ref = np.array([np.radians(40), np.radians(-105), 1600.0])
+    t = np.arange(0.0, 200.0, 0.1)
+    err = analysis.nav_error(_moving(t, ref), _moving(t, ref))
+    w = analysis.restrict(err, 50.0, 60.0)
+    assert w.time[0] == pytest.approx(50.0) and w.time[-1] == pytest.approx(60.0) and len(w.time) == 101
+    assert analysis.restrict(err, None, 10.0).time[0] == 0.0  # one side open
+    with pytest.raises(InputError, match=r"--from/--to: the window must end after it starts"):
+        analysis.restrict(err, 60.0, 60.0)
+    with pytest.raises(InputError, match=r"end 500 s lies outside the data .*0\.000\.\.199\.900 s"):
+        analysis.restrict(err, 10.0, 500.0)
+    with pytest.raises(InputError, match=r"--remove-offset: the window's start -50 s lies outside"):
+        analysis.constant_offset(err, -50.0, 10.0)
+    with pytest.raises(InputError, match="no epoch inside"):
+        analysis.restrict(err, 50.01, 50.05)
+
+
+def test_constant_offset_recovered_within_its_noise():
+    """Solution = truth + a constant NED offset + white noise of 0.3 m per
+    axis over 2000 epochs: the mean recovers the offset within 4 standard
+    errors (0.3 / sqrt(2000) = 6.7 mm), the spread is the noise, and after
+    the removal the horizontal RMS is the noise's sqrt(2) * 0.3 m."""
+    ref = np.array([np.radians(40), np.radians(-105), 1600.0])
+    t = np.arange(0.0, 200.0, 0.1)
+    truth = _moving(t, ref)
+    offset = np.array([1.5, -2.0, 0.7])
+    rng = np.random.default_rng(11)
+    noise = rng.normal(0.0, 0.3, (len(t), 3))
+    sol = NavSolution(t, earth.ned_to_lla(offset + noise, truth.lla), truth.v_n, truth.q_nb)
+    err = analysis.nav_error(sol, truth)
+    o = analysis.constant_offset(err)
+    se = 0.3 / np.sqrt(len(t))
+    assert np.all(np.abs(o.ned_m - offset) < 4 * se), o.ned_m - offset
+    assert o.spread_ned_m == pytest.approx([0.3] * 3, rel=0.05)
+    assert o.epochs == 2000 and (o.from_s, o.to_s) == (0.0, pytest.approx(199.9))
+    s = analysis.summarize(analysis.remove_offset(err, o.ned_m))
+    assert s["horizontal_m"]["rms"] == pytest.approx(np.sqrt(2) * 0.3, rel=0.05)
+    assert s["north_m"]["rms"] == pytest.approx(0.3, rel=0.05)  # the 1.5 m are gone
+    # over a sub-interval: 300 epochs, a wider bound
+    o2 = analysis.constant_offset(err, 20.0, 49.95)
+    assert o2.epochs == 300 and np.all(np.abs(o2.ned_m - offset) < 4 * 0.3 / np.sqrt(300))
+
+
+def test_per_epoch_columns():
+    ref = np.array([np.radians(40), np.radians(-105), 1600.0])
+    t = np.arange(0.0, 5.0, 0.5)
+    truth = _moving(t, ref)
+    sol = NavSolution(t, earth.ned_to_lla(np.array([3.0, 4.0, -1.0]), truth.lla), truth.v_n, truth.q_nb)
+    cols = analysis.per_epoch_columns(analysis.nav_error(sol, truth))
+    assert tuple(cols) == analysis.PER_EPOCH_COLUMNS
+    assert cols["time_s"] == pytest.approx(t)
+    assert cols["err_horizontal_m"] == pytest.approx([5.0] * len(t), abs=1e-6)
+    assert cols["err_vertical_m"] == pytest.approx([1.0] * len(t), abs=1e-6)  # |down|
+    assert cols["err_down_m"] == pytest.approx([-1.0] * len(t), abs=1e-6)
+    assert cols["err_3d_m"] == pytest.approx([np.sqrt(26.0)] * len(t), abs=1e-6)

@@ -132,11 +132,52 @@ def test_simulate_navigate_evaluate_pipeline(tmp_path):
                "--lever-arm", "0,0,-1", "--out", tmp_path / "nav", "--no-plots", "--json", "--smooth",
                "--truth", tmp_path / "sim" / "truth.csv")
     assert r.returncode == 0, r.stderr
-    t = json.loads(r.stdout)["truth_errors"]
+    nav = json.loads(r.stdout)
+    t = nav["truth_errors"]
     # the smoother uses the future too: no worse than the forward filter against the truth
     assert t["smoothed"]["horizontal_m"]["rms"] <= t["forward"]["horizontal_m"]["rms"] * 1.05
+    # --truth is [truth] file: every figure names its reference (no outages here: the fit and GNSS-on ones)
+    assert nav["fit_to_used_fixes_h_rms_m"] == nav["gnss_on_horizontal_rms_m"]
+    assert isinstance(nav["gnss_on_h_vs_truth_rms_m"], float) and nav["outages_vs_truth"] == 0
+    assert json.loads((tmp_path / "nav" / "config_used.json").read_text())["truth"]["file"].endswith("truth.csv")
     r = inskit("evaluate", tmp_path / "nav" / "solution_forward.csv", tmp_path / "sim" / "truth.csv", "--json")
     assert r.returncode == 0, r.stderr
     s = json.loads(r.stdout)
     assert s["horizontal_m"]["rms"] < 1.0  # 0.5 m white GNSS noise, filtered
     assert abs(s["roll_arcmin"]["final"]) < 30 and abs(s["pitch_arcmin"]["final"]) < 30
+
+
+def test_evaluate_window_offset_and_per_epoch(files, tmp_path):
+    """The stationary truth moved by a constant NED offset: --remove-offset
+    finds it exactly, --from/--to bound the epochs, --per-epoch writes them."""
+    from inskit import earth
+
+    truth = io.read_solution(files / "truth.csv")
+    moved = type(truth)(truth.time, earth.ned_to_lla(np.array([0.3, -0.4, 0.1]), truth.lla), truth.v_n, truth.q_nb)
+    io.write_solution(tmp_path / "moved.csv", moved)
+    pe = tmp_path / "per_epoch.csv"
+    r = inskit("evaluate", tmp_path / "moved.csv", files / "truth.csv", "--from", 10, "--to", 20, "--per-epoch", pe,
+               "--remove-offset", "--json")
+    assert r.returncode == 0, r.stderr
+    s = json.loads(r.stdout)  # one JSON object
+    o = s["offset_removed"]
+    assert (o["north_m"], o["east_m"], o["down_m"]) == pytest.approx((0.3, -0.4, 0.1), abs=1e-6)
+    assert s["horizontal_m"]["max"] < 1e-6 and s["epochs"] == 1001
+    assert s["window"] == {"from_s": 10.0, "to_s": 20.0}
+    import pandas as pd
+
+    tab = pd.read_csv(pe)
+    assert tab["time_s"].min() == pytest.approx(10.0) and tab["time_s"].max() == pytest.approx(20.0)
+    # an explicit interval; the per-epoch file exists now: refused without --force
+    r = inskit("evaluate", tmp_path / "moved.csv", files / "truth.csv", "--per-epoch", pe, "--remove-offset", "0:30")
+    assert r.returncode == 2 and "refusing to overwrite" in r.stderr and len(r.stderr.strip().splitlines()) == 1
+    r = inskit("evaluate", tmp_path / "moved.csv", files / "truth.csv", "--per-epoch", pe, "--remove-offset", "0:30",
+               "--force")
+    assert r.returncode == 0, r.stderr
+    assert "constant offset removed (mean over 0.000..30.000 s" in r.stdout and "yaw_deg" in r.stdout
+    assert len(pd.read_csv(pe)) == 6000
+    for args, msg in ((("--from", 30, "--to", 10), "must end after it starts"),
+                      (("--to", 99), "lies outside the data"),
+                      (("--remove-offset", "a:b"), "is not an interval FROM:TO")):
+        r = inskit("evaluate", tmp_path / "moved.csv", files / "truth.csv", *args)
+        assert r.returncode == 2 and msg in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr

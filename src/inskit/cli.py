@@ -159,41 +159,36 @@ def _check_plot_file(plot_file, force):
 
 
 # --- evaluate ----------------------------------------------------------------------
-def _summary_table(s):
-    rows = [("north_m", "m"), ("east_m", "m"), ("down_m", "m"), ("horizontal_m", "m"), ("3d_m", "m"),
-            ("vn_m_s", "m/s"), ("ve_m_s", "m/s"), ("vd_m_s", "m/s"),
-            ("roll_arcmin", "arcmin"), ("pitch_arcmin", "arcmin"), ("yaw_arcmin", "arcmin")]
-    lines = [f"{'error':<14}{'rms':>12}{'max':>12}{'final':>12}  unit"]
-    for k, u in rows:
-        v = s[k]
-        lines.append(f"{k:<14}{v['rms']:>12.4g}{v['max']:>12.4g}{v['final']:>12.4g}  {u}")
-    lines.append(f"{s['epochs']} epochs over {s['duration_s']:.1f} s")
-    return "\n".join(lines)
-
-
 @cli.command()
 @click.argument("solution_file", type=click.Path(dir_okay=False))
 @click.argument("truth_file", type=click.Path(dir_okay=False))
+@click.option("--from", "t_from", type=float, metavar="S", help="Score from this time [s, the files' time column].")
+@click.option("--to", "t_to", type=float, metavar="S", help="Score up to this time [s, the files' time column].")
+@click.option("--remove-offset", "remove_offset", is_flag=False, flag_value="window", default=None,
+              metavar="[FROM:TO]", help="Estimate the constant NED position offset (mean solution minus truth) over "
+              "FROM:TO [s] (alone: over the window scored), subtract it and report it.")
+@click.option("--per-epoch", "per_epoch_file", type=click.Path(dir_okay=False),
+              help="Write the error at every epoch (.csv, .csv.gz or .parquet): time, N/E/D, horizontal, "
+              "vertical, 3-D [m], velocity [m/s], roll/pitch/yaw [deg].")
 @click.option("--plot", "plot_file", type=click.Path(dir_okay=False), help="Write an error plot (PNG).")
-@click.option("--force", is_flag=True, help="Overwrite --plot if it exists.")
+@click.option("--force", is_flag=True, help="Overwrite --plot and --per-epoch if they exist.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def evaluate(solution_file, truth_file, plot_file, force, as_json):
+def evaluate(solution_file, truth_file, t_from, t_to, remove_offset, per_epoch_file, plot_file, force, as_json):
     """Errors of a navigation solution against a truth file.
 
     Either file may be CSV (.csv, .csv.gz) or Parquet (.parquet, as navigate
-    writes at full rate); the format is told by content."""
-    from . import analysis, io
+    writes at full rate); the format is told by content.  Attitude errors are
+    in degrees, yaw wrapped to +-180."""
+    from .jobs import evaluate as E
 
     _check_plot_file(plot_file, force)
-    sol = io.read_solution(solution_file)
-    truth = io.read_solution(truth_file)
-    err = analysis.nav_error(sol, truth)
-    s = analysis.summarize(err)
-    if plot_file:
-        analysis.plot_errors(err, plot_file, title=f"{Path(solution_file).name} vs {Path(truth_file).name}")
-        _log(f"wrote {plot_file}")
-        s["plot"] = plot_file
-    _emit(s, as_json, _summary_table(s))
+    interval = E.parse_interval(remove_offset) if remove_offset is not None else None
+    s = E.evaluate(solution_file, truth_file, t_from=t_from, t_to=t_to, remove_offset=interval,
+                   per_epoch_file=per_epoch_file, force=force, plot_file=plot_file)
+    for key in ("per_epoch", "plot"):
+        if key in s:
+            _log(f"wrote {s[key]}")
+    _emit(s, as_json, E.summary_text(s))
 
 
 # --- bench ----------------------------------------------------------------------------
@@ -238,7 +233,8 @@ def bench(quick, no_cli, as_json):
               help="Rows per second of the CSV solution files (default: [output] rate_hz, else 10 Hz); a rate at "
               "or above the IMU rate writes every epoch.")
 @click.option("--truth", "truth_file", type=click.Path(dir_okay=False),
-              help="A truth file (e.g. from inskit simulate): add the errors against it to the summary.")
+              help="A truth file (e.g. from inskit simulate; sets [truth] file): the outages are also scored "
+              "against it (keys ..._vs_truth_...) and its errors added to the summary.")
 @click.option("--strict", is_flag=True, help="Exit with status 3 when the run's health verdict is unhealthy.")
 @click.option("--report", "with_report", is_flag=True, help="Also write report.html, one self-contained page of "
               "the run (as `inskit report`).")
@@ -279,6 +275,8 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
         over.setdefault("output", {})["format"] = output_format
     if output_rate is not None:
         over.setdefault("output", {})["rate_hz"] = output_rate
+    if truth_file:
+        over["truth"] = {"file": str(Path(truth_file).resolve())}
     if config_file:
         cfg = C.load_config(config_file, over)
     else:
@@ -303,19 +301,11 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
         _log(f"calibrate: best IMU time offset {best:+.4f} s")
         cfg = cfg.model_copy(update={"imu": cfg.imu.model_copy(update={"time_offset_s": best})})
         extra["time_offset_calibration"] = {"best_s": best, "evaluations": [list(e) for e in evals]}
-    truth = None
-    if truth_file:
-        from . import io
-
-        truth = io.read_solution(truth_file)
     with _progress(None, "navigate") as bar:
         res = N.navigate(cfg, smooth=smooth, progress=bar.update, log=_log)
     s = N.summary(res)
     s.update(extra)
-    text_extra = ""
-    if truth is not None:
-        s["truth_errors"] = N.truth_errors(res, truth)
-        text_extra = N.truth_errors_text(s["truth_errors"])
+    text_extra = N.truth_errors_text(s["truth_errors"]) if "truth_errors" in s else ""
     if force:
         N.clear_previous_run(target)
     files = N.write_outputs(res, target, s)

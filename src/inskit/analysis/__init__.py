@@ -1,6 +1,8 @@
 """Error analysis: navigation errors against truth (:mod:`.errors`) and Allan
 variance of static logs (:mod:`.allan`)."""
 
-from .errors import NavError, nav_error, plot_errors, summarize
+from .errors import (PER_EPOCH_COLUMNS, ConstantOffset, NavError, constant_offset, nav_error, per_epoch_columns,
+                     plot_errors, remove_offset, restrict, summarize)
 
-__all__ = ["NavError", "nav_error", "plot_errors", "summarize"]
+__all__ = ["PER_EPOCH_COLUMNS", "ConstantOffset", "NavError", "constant_offset", "nav_error", "per_epoch_columns",
+           "plot_errors", "remove_offset", "restrict", "summarize"]

@@ -448,6 +448,16 @@ class OdometerSection(_Strict):
                                  "[m/s]")
 
 
+class TruthSection(_Strict):
+    """A truth trajectory to score the run against (a simulation's): the
+    outages are then scored against it as well as against the withheld fixes
+    (`--truth` on the command line sets `file`)."""
+
+    file: Path = Field(..., description="truth trajectory: a solution file (CSV or Parquet, told by content, as "
+                       "`inskit simulate` writes truth.csv) on the solution's time base, relative to this config "
+                       "file")
+
+
 class NavigateConfig(_Strict):
     """The whole ``inskit navigate`` configuration."""
 
@@ -461,6 +471,7 @@ class NavigateConfig(_Strict):
     outages: OutagesSection = Field(OutagesSection(), description="GNSS outage protocol")
     output: OutputSection = Field(OutputSection(), description="results")
     odometer: OdometerSection | None = Field(None, description="wheel-speed aiding (optional)")
+    truth: TruthSection | None = Field(None, description="truth trajectory to score against (optional)")
     base_dir: Path = Field(Path("."), description="(set by the loader, not a key of the file) the folder "
                            "relative paths are taken from: the config file's")
 

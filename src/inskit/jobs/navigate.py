@@ -42,6 +42,7 @@ class NavigateResult:
     raw: RawGnss | None = None
     clock_start: dict | None = None
     rate_changes: list = None
+    truth: NavSolution | None = None  #: the truth scored against ([truth] file / --truth)
 
 
 WEEK_S = 604800.0  #: seconds in a GPS week
@@ -362,6 +363,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
             log(f"warning: the IMU log has a gap of {g.length_s:.3f} s at t = {g.start_s:.3f} s (row {g.row}): "
                 "bridged on the last rates, covariance inflated")
     imu, gaps = bridge_gaps(imu, gaps)
+    truth = io.read_solution(cfg.resolve(cfg.truth.file)) if cfg.truth is not None else None
     windows = outage_windows(cfg, gnss)
     used = ~withheld_mask(gnss.time, windows)
     if used.sum() < 2:
@@ -453,10 +455,10 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
                     f"{bank['score']:.2f}, next best {bank['runner_up_score']})")
         out = run_filter(imu, initial, meas, settings, smoother=smooth, progress=progress, extra_noise=extra)
         sm = rts_smooth(out) if smooth else None
-    score_f = score_outages(out.solution, gnss, windows, lever)
-    score_s = score_outages(sm.solution, gnss, windows, lever) if sm is not None else None
+    score_f = score_outages(out.solution, gnss, windows, lever, truth=truth)
+    score_s = score_outages(sm.solution, gnss, windows, lever, truth=truth) if sm is not None else None
     return NavigateResult(cfg, imu, gnss, windows, used, startup, settings, out, sm, score_f, score_s,
-                          time.perf_counter() - t_start, measured, gaps, raw, clock_start, rate_changes)
+                          time.perf_counter() - t_start, measured, gaps, raw, clock_start, rate_changes, truth)
 
 
 def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, log=None):
@@ -467,6 +469,7 @@ def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, lo
     from scipy.optimize import minimize_scalar
 
     # read with the largest offset: it keeps every sample any offset in the bounds needs
+    cfg = cfg.model_copy(update={"truth": None})  # the search never looks at a truth
     tight = cfg.gnss.coupling == "tight"
     raw = load_raw_gnss(cfg, log) if (tight or cfg.gnss.file is None) else None
     imu0, gnss = load_inputs(cfg, bounds[1], raw)
@@ -503,7 +506,7 @@ def truth_errors(res: NavigateResult, truth: NavSolution) -> dict:
 
 def truth_errors_text(errs: dict) -> str:
     return "".join(f"\nagainst the truth ({label}): horizontal RMS {e['horizontal_m']['rms']:.3f} m, "
-                   f"down RMS {e['down_m']['rms']:.3f} m, yaw RMS {e['yaw_arcmin']['rms']:.2f} arcmin"
+                   f"down RMS {e['down_m']['rms']:.3f} m, yaw RMS {e['yaw_deg']['rms']:.3f} deg"
                    for label, e in errs.items())
 
 
@@ -558,6 +561,9 @@ def summary(res: NavigateResult) -> dict:
             "clock_start": res.clock_start,
             "reference": "gnss.file" if res.config.gnss.file is not None else "single-point solution",
         }
+    if res.truth is not None:
+        out["truth_file"] = str(res.config.resolve(res.config.truth.file))
+        out["truth_errors"] = truth_errors(res, res.truth)
     out["health"] = health(fw, res.gaps or (), res.rate_changes or ())
     out["imu_rate_changes"] = [{"row": c.row, "t_s": c.t_s, "rate_before_hz": c.rate_before_hz,
                                 "rate_after_hz": c.rate_after_hz} for c in (res.rate_changes or ())]
@@ -667,24 +673,53 @@ def health(out, gaps=(), rate_changes=()) -> dict:
             "measurements": per}
 
 
+def _fmt(x, fmt=".3f"):
+    return "n/a" if x is None else format(x, fmt)
+
+
 def outage_table_text(s: dict) -> str:
+    """The outage table and its figures, each named by its reference: the
+    withheld fixes (their noise included), the truth when one was given, and
+    the fit to the used fixes (not an accuracy)."""
     rows = s["outage_table"]
-    lines = [f"{'outage':>6} {'window [s after first fix]':>27} {'end horiz [m]':>14} {'end vert [m]':>13} "
-             f"{'worst horiz [m]':>16}"]
+    truth = "outages_vs_truth" in s
+    head = (f"{'outage':>6} {'window [s after first fix]':>27} {'end horiz [m]':>14} {'end vert [m]':>13} "
+            f"{'worst horiz [m]':>16}")
+    lines = [f"{'':>6} {'':>27} {'--- against the withheld fixes (noise included) ---':>45}"
+             + (f"  {'--- against the truth ---':>31}" if truth else ""),
+             head + (f" {'end horiz [m]':>14} {'worst horiz [m]':>16}" if truth else "")]
     for r in rows:
-        lines.append(f"{r['k']:>6} {r['start_s']:>12.2f} .. {r['end_s']:>9.2f}   {r['horizontal_m']:>13.3f} "
-                     f"{r['vertical_m']:>13.3f} {r['worst_horizontal_m']:>16.3f}")
+        line = (f"{r['k']:>6} {r['start_s']:>12.2f} .. {r['end_s']:>9.2f}   {r['horizontal_m']:>13.3f} "
+                f"{r['vertical_m']:>13.3f} {r['worst_horizontal_m']:>16.3f}")
+        if truth:
+            line += f" {_fmt(r.get('outage_end_h_vs_truth_m')):>14} {_fmt(r.get('outage_worst_h_vs_truth_m')):>16}"
+        lines.append(line)
     if rows:
-        lines.append(f"outage-end horizontal: RMS {s['outage_end_horizontal_rms_m']:.3f} m, median "
-                     f"{s['outage_end_horizontal_median_m']:.3f} m, max {s['outage_end_horizontal_max_m']:.3f} m "
-                     f"({s['solution']} solution)")
-    lines.append(f"GNSS on: horizontal RMS {s['gnss_on_horizontal_rms_m'] * 100:.2f} cm, vertical RMS "
-                 f"{s['gnss_on_vertical_rms_m'] * 100:.2f} cm over {s['gnss_on_fixes']} fixes")
+        lines.append(f"against the withheld fixes (their noise included), {s['solution']} solution: outage-end "
+                     f"horizontal RMS {s['outage_end_horizontal_rms_m']:.3f} m, median "
+                     f"{s['outage_end_horizontal_median_m']:.3f} m, max {s['outage_end_horizontal_max_m']:.3f} m; "
+                     f"worst in the outage RMS {s['outage_worst_horizontal_rms_m']:.3f} m")
+    if truth and s.get("outages_vs_truth"):
+        lines.append(f"against the truth, {s['solution']} solution: outage-end horizontal RMS "
+                     f"{_fmt(s['outage_end_h_vs_truth_rms_m'])} m, max {_fmt(s['outage_end_h_vs_truth_max_m'])} m (the "
+                     f"last epoch before the next used fix); worst in the outage RMS "
+                     f"{_fmt(s['outage_worst_h_vs_truth_rms_m'])} m, max {_fmt(s['outage_worst_h_vs_truth_max_m'])} m")
+    if truth:
+        lines.append(f"against the truth with GNSS on: horizontal RMS {_fmt(s['gnss_on_h_vs_truth_rms_m'])} m, "
+                     f"vertical RMS {_fmt(s['gnss_on_v_vs_truth_rms_m'])} m over {s['gnss_on_epochs_vs_truth']} "
+                     "epochs")
+    lines.append(f"fit to the used fixes (not an accuracy: the filter was fed them): horizontal RMS "
+                 f"{s['fit_to_used_fixes_h_rms_m'] * 100:.2f} cm, vertical RMS "
+                 f"{s['fit_to_used_fixes_v_rms_m'] * 100:.2f} cm over {s['fit_to_used_fixes_count']} fixes")
     if s["solution"] == "smoothed" and rows:
         f = s["forward"]
-        lines.append(f"forward filter for comparison: outage-end RMS {f['outage_end_horizontal_rms_m']:.3f} m, "
-                     f"worst-in-outage RMS {f['outage_worst_horizontal_rms_m']:.3f} m; smoothed worst-in-outage "
-                     f"RMS {s['outage_worst_horizontal_rms_m']:.3f} m")
+        lines.append(f"forward filter for comparison, against the withheld fixes: outage-end RMS "
+                     f"{f['outage_end_horizontal_rms_m']:.3f} m, worst in the outage RMS "
+                     f"{f['outage_worst_horizontal_rms_m']:.3f} m"
+                     + (f"; against the truth: outage-end RMS {_fmt(f.get('outage_end_h_vs_truth_rms_m'))} m, worst "
+                        f"in the outage RMS {_fmt(f.get('outage_worst_h_vs_truth_rms_m'))} m" if truth else ""))
+        lines.append("(the smoother's outage-end error sits next to the used fix that follows; its worst point "
+                     "inside the outage is the figure that means something)")
     counts = ", ".join(f"{k} {v['used']} used/{v['rejected']} rejected" for k, v in s["measurements"].items())
     lines.append(f"updates: {counts}")
     return "\n".join(lines)

@@ -562,19 +562,28 @@ def _num(x, fmt=".3f", scale=1.0):
 
 
 def _key_table(s):
-    rows = [("outage-end horizontal RMS", _num(s.get("outage_end_horizontal_rms_m")), "m"),
-            ("outage-end horizontal median", _num(s.get("outage_end_horizontal_median_m")), "m"),
-            ("outage-end horizontal max", _num(s.get("outage_end_horizontal_max_m")), "m"),
-            ("outage-end vertical RMS", _num(s.get("outage_end_vertical_rms_m")), "m"),
-            ("worst-in-outage horizontal RMS", _num(s.get("outage_worst_horizontal_rms_m")), "m"),
-            ("GNSS-on horizontal RMS", _num(s.get("gnss_on_horizontal_rms_m"), ".2f", 100), "cm"),
-            ("GNSS-on vertical RMS", _num(s.get("gnss_on_vertical_rms_m"), ".2f", 100), "cm"),
-            ("GNSS fixes scored", _e(s.get("gnss_on_fixes", "n/a")), ""),
+    rows = [("outage-end horizontal RMS, against the withheld fixes", _num(s.get("outage_end_horizontal_rms_m")), "m"),
+            ("outage-end horizontal median, against the withheld fixes",
+             _num(s.get("outage_end_horizontal_median_m")), "m"),
+            ("outage-end horizontal max, against the withheld fixes", _num(s.get("outage_end_horizontal_max_m")), "m"),
+            ("outage-end vertical RMS, against the withheld fixes", _num(s.get("outage_end_vertical_rms_m")), "m"),
+            ("worst-in-outage horizontal RMS, against the withheld fixes",
+             _num(s.get("outage_worst_horizontal_rms_m")), "m"),
+            ("fit to the used fixes, horizontal RMS (not an accuracy)",
+             _num(s.get("gnss_on_horizontal_rms_m"), ".2f", 100), "cm"),
+            ("fit to the used fixes, vertical RMS (not an accuracy)",
+             _num(s.get("gnss_on_vertical_rms_m"), ".2f", 100), "cm"),
+            ("used fixes in the fit", _e(s.get("gnss_on_fixes", "n/a")), ""),
             ("outages", _e(s.get("outages", "n/a")), ""),
             ("IMU epochs", _e(s.get("epochs", "n/a")), ""),
             ("duration", _num(s.get("duration_s"), ".1f"), "s"),
             ("filter states", _e(s.get("states", "n/a")), ""),
             ("run time", _num(s.get("elapsed_s"), ".2f"), "s")]
+    if "outages_vs_truth" in s:  # scored against a truth as well
+        rows[5:5] = [("outage-end horizontal RMS, against the truth", _num(s.get("outage_end_h_vs_truth_rms_m")), "m"),
+                     ("worst-in-outage horizontal RMS, against the truth",
+                      _num(s.get("outage_worst_h_vs_truth_rms_m")), "m"),
+                     ("GNSS-on horizontal RMS, against the truth", _num(s.get("gnss_on_h_vs_truth_rms_m")), "m")]
     fw = s.get("forward")
     if s.get("solution") == "smoothed" and isinstance(fw, dict):
         rows.insert(5, ("forward filter: outage-end horizontal RMS", _num(fw.get("outage_end_horizontal_rms_m")),
@@ -603,14 +612,20 @@ def _outage_table(s, solution):
     rows = s.get("outage_table") or []
     if not rows:
         return "<p>No GNSS outages in this run.</p>"
+    truth = "outages_vs_truth" in s
     body = "".join(
         f"<tr><td>{r['k']}</td><td>{r['start_s']:.2f}</td><td>{r['end_s']:.2f}</td>"
         f"<td>{_num(r.get('horizontal_m'))}</td><td>{_num(r.get('vertical_m'))}</td>"
-        f"<td>{_num(r.get('worst_horizontal_m'))}</td><td>{_num(r.get('worst_time_s'), '.2f')}</td></tr>"
+        f"<td>{_num(r.get('worst_horizontal_m'))}</td><td>{_num(r.get('worst_time_s'), '.2f')}</td>"
+        + (f"<td>{_num(r.get('outage_end_h_vs_truth_m'))}</td><td>{_num(r.get('outage_worst_h_vs_truth_m'))}</td>"
+           if truth else "") + "</tr>"
         for r in rows)
-    return (f"<p class=note>Errors of the {_e(solution)} solution against the withheld fixes; windows in seconds "
-            "after the first GNSS fix.</p><table><tr><th>outage</th><th>start [s]</th><th>end [s]</th>"
-            "<th>end horiz [m]</th><th>end vert [m]</th><th>worst horiz [m]</th><th>worst at [s]</th></tr>"
+    note = (f"<p class=note>Errors of the {_e(solution)} solution against the withheld fixes (their noise "
+            "included)" + ("; the last two columns against the truth, from the last used fix before the window "
+                           "to the next" if truth else "") + "; windows in seconds after the first GNSS fix.</p>")
+    return (note + "<table><tr><th>outage</th><th>start [s]</th><th>end [s]</th>"
+            "<th>end horiz [m]</th><th>end vert [m]</th><th>worst horiz [m]</th><th>worst at [s]</th>"
+            + ("<th>end horiz vs truth [m]</th><th>worst horiz vs truth [m]</th>" if truth else "") + "</tr>"
             + body + "</table>")
 
 

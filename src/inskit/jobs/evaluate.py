@@ -1,0 +1,169 @@
+"""The evaluate job: a solution file against a truth file, over a time
+window, optionally after removing a constant NED offset, with a per-epoch
+error table.
+
+The figures are :func:`inskit.analysis.summarize`'s (attitude in degrees,
+yaw wrapped to +-180 deg); times are those of the files' time column.
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from .. import analysis, io
+from ..errors import InputError
+from ..files import same_file
+
+#: file names the per-epoch table may have (the format follows the name)
+PER_EPOCH_SUFFIXES = (".csv", ".csv.gz", ".parquet")
+
+#: the value ``--remove-offset`` takes when given without an interval
+WHOLE_WINDOW = "window"
+
+_NUM = r"[-+]?(?:\d+(?:\.\d*)?|\.\d+)(?:[eE][-+]?\d+)?"
+_INTERVAL = re.compile(rf"^\s*({_NUM})?\s*:\s*({_NUM})?\s*$")
+
+
+def parse_interval(text, option="--remove-offset"):
+    """``(from_s, to_s)`` of ``FROM:TO`` (either side may be empty: open);
+    ``(None, None)`` for :data:`WHOLE_WINDOW`.
+
+    Raises
+    ------
+    InputError
+        Anything else, with an example.
+    """
+    if text == WHOLE_WINDOW:
+        return None, None
+    m = _INTERVAL.match(str(text))
+    if not m:
+        raise InputError(f"{option}: {text!r} is not an interval FROM:TO in seconds (e.g. 100:160, 100: or :160; "
+                         f"give {option} after the two files, or alone for the whole window)")
+    a, b = (None if g is None else float(g) for g in m.groups())
+    return a, b
+
+
+def per_epoch_format(path) -> str:
+    """``"parquet"`` or ``"csv"`` from the name; anything else is refused."""
+    name = Path(path).name.lower()
+    if name.endswith(".parquet"):
+        return "parquet"
+    if name.endswith(".csv") or name.endswith(".csv.gz"):
+        return "csv"
+    raise InputError(f"{path}: unsupported per-epoch table format; use a name ending in "
+                     f"{', '.join(PER_EPOCH_SUFFIXES)}")
+
+
+def check_per_epoch_file(path, force, inputs=()):
+    """Refuse, before the work, a per-epoch path of unknown format, one that
+    exists (without ``force``) or one that names an input."""
+    if path is None:
+        return
+    per_epoch_format(path)
+    for inp in inputs:
+        if same_file(path, inp):
+            raise InputError(f"{path}: is an input of this run; choose another --per-epoch file")
+    if Path(path).exists() and not force:
+        raise InputError(f"{path}: already exists; refusing to overwrite it (use --force)")
+
+
+def write_per_epoch(path, err: analysis.NavError, metadata=None) -> Path:
+    """The per-epoch errors (:data:`inskit.analysis.PER_EPOCH_COLUMNS`) as CSV
+    or Parquet by the name, written whole or not at all."""
+    from ..io.parquet import write_csv_fast, write_parquet
+
+    cols = analysis.per_epoch_columns(err)
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    if per_epoch_format(path) == "parquet":
+        return write_parquet(path, cols, metadata)
+    return write_csv_fast(path, cols)
+
+
+def evaluate(solution_file, truth_file, *, t_from=None, t_to=None, remove_offset=None, per_epoch_file=None,
+             force=False, plot_file=None) -> dict:
+    """Errors of a solution file against a truth file.
+
+    Parameters
+    ----------
+    solution_file, truth_file : str or Path
+        Solution files (CSV or Parquet, told by content), one time base.
+    t_from, t_to : float, optional
+        The window scored [s] (the files' time column); default the whole
+        span they share.
+    remove_offset : tuple of (float or None, float or None), optional
+        Estimate the constant NED position offset (mean solution minus truth)
+        over this interval (``(None, None)``: the window) and subtract it
+        before scoring; the interval may lie outside the window (a static
+        start, say) but inside the shared span.
+    per_epoch_file : str or Path, optional
+        Write the per-epoch errors of the window (after the offset removal)
+        here.
+    force : bool
+        Overwrite ``per_epoch_file`` (and ``plot_file``) if it exists.
+    plot_file : str or Path, optional
+        An error plot (the caller checks its format first).
+
+    Returns
+    -------
+    dict
+        :func:`inskit.analysis.summarize`'s keys, ``solution_file``,
+        ``truth_file``, ``window`` (``from_s``, ``to_s`` as asked, ``None``
+        for open), ``offset_removed`` (:meth:`~inskit.analysis.ConstantOffset.summary`,
+        or ``None``) and, when written, ``per_epoch`` and ``plot``.
+
+    Raises
+    ------
+    InputError
+        A bad window or interval (empty, reversed, outside the shared span),
+        no overlap, an unwritable or existing output.
+    """
+    check_per_epoch_file(per_epoch_file, force, (solution_file, truth_file))
+    if plot_file is not None and per_epoch_file is not None and same_file(plot_file, per_epoch_file):
+        raise InputError(f"{per_epoch_file}: given as both --plot and --per-epoch")
+    sol = io.read_solution(solution_file)
+    truth = io.read_solution(truth_file)
+    full = analysis.nav_error(sol, truth)
+    err = analysis.restrict(full, t_from, t_to, name="--from/--to")
+    offset = None
+    if remove_offset is not None:
+        a, b = remove_offset
+        offset = (analysis.constant_offset(err) if a is None and b is None
+                  else analysis.constant_offset(full, a, b, name="--remove-offset"))
+        err = analysis.remove_offset(err, offset.ned_m)
+    s = analysis.summarize(err)
+    s["solution_file"] = str(solution_file)
+    s["truth_file"] = str(truth_file)
+    s["window"] = {"from_s": t_from, "to_s": t_to}
+    s["offset_removed"] = offset.summary() if offset is not None else None
+    if per_epoch_file is not None:
+        meta = {"solution": str(solution_file), "truth": str(truth_file), "window": s["window"],
+                "offset_removed": s["offset_removed"]}
+        s["per_epoch"] = str(write_per_epoch(per_epoch_file, err, meta))
+    if plot_file is not None:
+        title = f"{Path(solution_file).name} vs {Path(truth_file).name}"
+        if offset is not None:
+            title += " (constant offset removed)"
+        analysis.plot_errors(err, plot_file, title=title)
+        s["plot"] = str(plot_file)
+    return s
+
+
+SUMMARY_ROWS = (("north_m", "m"), ("east_m", "m"), ("down_m", "m"), ("horizontal_m", "m"), ("3d_m", "m"),
+                ("vn_m_s", "m/s"), ("ve_m_s", "m/s"), ("vd_m_s", "m/s"),
+                ("roll_deg", "deg"), ("pitch_deg", "deg"), ("yaw_deg", "deg"))
+
+
+def summary_text(s: dict) -> str:
+    """The table form of :func:`evaluate`'s summary."""
+    lines = [f"{'error':<14}{'rms':>12}{'max':>12}{'final':>12}  unit"]
+    for k, u in SUMMARY_ROWS:
+        v = s[k]
+        lines.append(f"{k:<14}{v['rms']:>12.4g}{v['max']:>12.4g}{v['final']:>12.4g}  {u}")
+    lines.append(f"{s['epochs']} epochs over {s['duration_s']:.1f} s "
+                 f"({s['first_epoch_s']:.3f}..{s['last_epoch_s']:.3f} s)")
+    o = s.get("offset_removed")
+    if o:
+        lines.append(f"constant offset removed (mean over {o['from_s']:.3f}..{o['to_s']:.3f} s, {o['epochs']} epochs): "
+                     f"north {o['north_m']:.4f} m, east {o['east_m']:.4f} m, down {o['down_m']:.4f} m")
+    return "\n".join(lines)

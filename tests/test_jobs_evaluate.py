@@ -1,0 +1,106 @@
+"""The evaluate job (jobs/evaluate.py): time window, constant-offset removal,
+per-epoch table, bad windows."""
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from inskit import earth, io
+from inskit.errors import InputError
+from inskit.jobs.evaluate import evaluate, parse_interval, summary_text
+from inskit.types import NavSolution
+
+OFFSET = np.array([0.8, -1.2, 0.5])  # NED [m]
+SIGMA = 0.2  # white noise per axis [m]
+
+
+@pytest.fixture(scope="module")
+def files(tmp_path_factory):
+    """A 300 s drive north at 10 m/s (truth, 10 Hz) and a solution = truth +
+    OFFSET + white noise, yaw 2 deg off."""
+    d = tmp_path_factory.mktemp("eval")
+    ref = np.array([np.radians(40), np.radians(-105), 1600.0])
+    t = np.arange(3000) / 10.0
+    n = len(t)
+    lla = earth.ned_to_lla(np.column_stack([10.0 * t, np.zeros(n), np.zeros(n)]), ref)
+    truth = NavSolution.from_euler(t, lla, np.tile([10.0, 0, 0], (n, 1)), np.tile([0, 0, np.radians(179.0)], (n, 1)))
+    noise = np.random.default_rng(7).normal(0.0, SIGMA, (n, 3))
+    sol = NavSolution.from_euler(t, earth.ned_to_lla(OFFSET + noise, lla), truth.v_n,
+                                 np.tile([0, 0, np.radians(-179.0)], (n, 1)))
+    io.write_solution(d / "truth.csv", truth)
+    io.write_solution(d / "sol.csv", sol)
+    return d
+
+
+def test_interval_parsing():
+    assert parse_interval("10:20") == (10.0, 20.0)
+    assert parse_interval(" 10.5 : ") == (10.5, None)
+    assert parse_interval(":1e2") == (None, 100.0)
+    assert parse_interval("window") == (None, None)
+    with pytest.raises(InputError, match=r"--remove-offset: 'sol\.csv' is not an interval FROM:TO"):
+        parse_interval("sol.csv")
+
+
+def test_window_offset_and_per_epoch_table(files, tmp_path):
+    out = tmp_path / "e.csv"
+    s = evaluate(files / "sol.csv", files / "truth.csv", t_from=100.0, t_to=200.0, remove_offset=(None, None),
+                 per_epoch_file=out)
+    assert s["epochs"] == 1001
+    assert s["first_epoch_s"] == pytest.approx(100.0) and s["last_epoch_s"] == pytest.approx(200.0)
+    o = s["offset_removed"]
+    se = SIGMA / np.sqrt(1001)
+    for k, v in zip(("north_m", "east_m", "down_m"), OFFSET):
+        assert abs(o[k] - v) < 4 * se, (k, o[k])
+    assert o["epochs"] == 1001 and o["from_s"] == pytest.approx(100.0)
+    assert s["horizontal_m"]["rms"] == pytest.approx(np.sqrt(2) * SIGMA, rel=0.08)
+    assert s["yaw_deg"]["rms"] == pytest.approx(2.0, abs=1e-6)  # -179 vs 179: 2 deg across the wrap
+    tab = pd.read_csv(out)
+    assert tab["time_s"].min() == pytest.approx(100.0) and tab["time_s"].max() == pytest.approx(200.0)
+    assert len(tab) == 1001 and abs(tab["err_north_m"].mean()) < 1e-9  # the offset removed is the window's mean
+    assert tab["err_yaw_deg"].to_numpy() == pytest.approx(2.0, abs=1e-6)
+    assert s["per_epoch"] == str(out)
+    assert "constant offset removed" in summary_text(s) and "yaw_deg" in summary_text(s)
+
+
+def test_offset_from_an_interval_outside_the_window(files, tmp_path):
+    """The offset estimated over 0..50 s is removed from the 200..300 s window."""
+    s = evaluate(files / "sol.csv", files / "truth.csv", t_from=200.0, remove_offset=(0.0, 50.0),
+                 per_epoch_file=tmp_path / "e.parquet")
+    o = s["offset_removed"]
+    assert o["epochs"] == 501 and o["to_s"] == pytest.approx(50.0)
+    assert abs(o["east_m"] - OFFSET[1]) < 4 * SIGMA / np.sqrt(501)
+    from inskit.io.parquet import read_parquet_columns
+
+    cols, meta = read_parquet_columns(tmp_path / "e.parquet")
+    assert cols["time_s"][0] == pytest.approx(200.0) and len(cols["time_s"]) == 1000  # 200.0 .. 299.9 s
+    assert meta["offset_removed"]["epochs"] == 501
+    # without removal the offset stays in the figures
+    raw = evaluate(files / "sol.csv", files / "truth.csv", t_from=200.0)
+    assert raw["offset_removed"] is None and raw["north_m"]["rms"] > 0.7
+
+
+@pytest.mark.parametrize("kw, match", [
+    ({"t_from": 50.0, "t_to": 50.0}, r"--from/--to: the window must end after it starts"),
+    ({"t_from": 250.0, "t_to": 100.0}, r"must end after it starts"),
+    ({"t_to": 1000.0}, r"--from/--to: the window's end 1000 s lies outside the data"),
+    ({"t_from": -20.0}, r"start -20 s lies outside the data"),
+    ({"remove_offset": (290.0, 400.0)}, r"--remove-offset: the window's end 400 s lies outside"),
+    ({"remove_offset": (10.01, 10.05)}, r"--remove-offset: no epoch inside"),
+])
+def test_bad_windows_are_refused(files, kw, match):
+    with pytest.raises(InputError, match=match):
+        evaluate(files / "sol.csv", files / "truth.csv", **kw)
+
+
+def test_per_epoch_file_refusals(files, tmp_path):
+    keep = tmp_path / "keep.csv"
+    keep.write_text("precious\n")
+    with pytest.raises(InputError, match=r"keep\.csv: already exists; refusing to overwrite it \(use --force\)"):
+        evaluate(files / "sol.csv", files / "truth.csv", per_epoch_file=keep)
+    assert keep.read_text() == "precious\n"
+    evaluate(files / "sol.csv", files / "truth.csv", per_epoch_file=keep, force=True)
+    assert len(pd.read_csv(keep)) == 3000
+    with pytest.raises(InputError, match=r"unsupported per-epoch table format"):
+        evaluate(files / "sol.csv", files / "truth.csv", per_epoch_file=tmp_path / "e.txt")
+    with pytest.raises(InputError, match=r"is an input of this run"):
+        evaluate(files / "sol.csv", files / "truth.csv", per_epoch_file=files / "sol.csv", force=True)
