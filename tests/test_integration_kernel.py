@@ -41,13 +41,13 @@ def _raw(dt):
     return (W_B * dt * (1 + AUX[s("sg")]) + AUX[s("bg")] * dt, F_B * dt * (1 + AUX[s("sa")]) + AUX[s("ba")] * dt)
 
 
-def _step(lla, v, q, aux, dt):
+def _step(lla, v, q, aux, dt, gravity=0):
     """One filter propagation step of the navigation state (the filter's own code)."""
     dth_raw, dv_raw = _raw(dt)
     dth, dv, w, f = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     K.correct_increments(K.sensor_corrections(LAY.kernel_index(), aux), dth_raw, dv_raw, dt, dth, dv, w, f)
     lla, v, q = lla.copy(), v.copy(), q.copy()
-    ned_step(dth, dv, dt, lla, v, q, np.zeros(11), True, 0, 0.0, np.zeros(2))
+    ned_step(dth, dv, dt, lla, v, q, np.zeros(11), True, 0, 0.0, np.zeros(2), gravity)
     return lla, v, q
 
 
@@ -62,12 +62,12 @@ def _nav_error(lla, v, q, lla_t, v_t, q_t):
     return e
 
 
-def _phi_fd(lla0, dt, eps):
+def _phi_fd(lla0, dt, eps, gravity=0):
     """Rows pos, vel, att of the one-step transition, by central differences:
     the estimate is the truth plus an error (the filter's correction with its
     sign reversed, and the estimates of the other blocks plus their error)."""
     n = LAY.size
-    truth = _step(lla0, V_N, Q_NB, AUX, dt)
+    truth = _step(lla0, V_N, Q_NB, AUX, dt, gravity)
     Phi = np.zeros((9, n))
     for j in range(n):
         col = []
@@ -76,30 +76,30 @@ def _phi_fd(lla0, dt, eps):
             dx[j] = s * eps[j]
             lla, v, q = np.empty(3), np.empty(3), np.empty(4)
             K.apply_correction(lla0, V_N, Q_NB, dx, -1.0, lla, v, q)
-            col.append(_nav_error(*_step(lla, v, q, AUX + dx[LAY.aux_state_index], dt), *truth))
+            col.append(_nav_error(*_step(lla, v, q, AUX + dx[LAY.aux_state_index], dt, gravity), *truth))
         Phi[:, j] = (col[0] - col[1]) / (2 * eps[j])
     return Phi
 
 
-def _f_fd(lla0, h=1e-2):
+def _f_fd(lla0, h=1e-2, gravity=0):
     """Continuous-time F from the one-step transitions over h, 2h, 3h: the
     one-sided four-point derivative ``(18 Phi(h) - 9 Phi(2h) + 2 Phi(3h) - 11 I) / 6h``
     cancels the h^2 and h^3 terms of the expansion (including those from F's
     change along the step), so what is left is O(h^3)."""
     eps = np.concatenate([np.full(b.size, EPS[b.name]) for b in LAY.blocks])
-    P1, P2, P3 = (_phi_fd(lla0, m * h, eps) for m in (1, 2, 3))
+    P1, P2, P3 = (_phi_fd(lla0, m * h, eps, gravity) for m in (1, 2, 3))
     I9 = np.eye(LAY.size)[:9]
     return (18 * P1 - 9 * P2 + 2 * P3 - 11 * I9) / (6 * h), eps, h
 
 
-def _f_model(lla0):
+def _f_model(lla0, gravity=0):
     F = np.zeros((LAY.size, LAY.size))
     K.fill_transition(F, LAY.kernel_index(), lla0, V_N, rot.dcm_from_quat(Q_NB), F_B, W_B,
-                      K.sensor_corrections(LAY.kernel_index(), AUX))
+                      K.sensor_corrections(LAY.kernel_index(), AUX), gravity)
     return F[:9]
 
 
-def _f_dropped(lla0):
+def _f_dropped(lla0, gravity=0):
     """The terms ``_kernel`` drops on purpose, written out (its docstring):
     transport of the position error, the velocity error's own transport-rate
     term ``v x d w_en(vel)``, gravity's north height gradient.  The test holds
@@ -114,14 +114,17 @@ def _f_dropped(lla0):
     D[1, 0], D[1, 1], D[1, 2] = ve * tl / rn, -(vd / re + vn * tl / rn), ve / re
     M = np.array([[0.0, 1.0 / re, 0.0], [-1.0 / rn, 0.0, 0.0], [0.0, -tl / re, 0.0]])  # d w_en / d v
     D[3:6, 3:6] = rot.skew(V_N) @ M
-    D[3, 2] = -earth.gravity_north_dh(lat, h)
+    gn = [earth.gravity_n(lat, h + s, gravity)[0] for s in (1.0, -1.0)]  # the model's own north gradient
+    D[3, 2] = -(gn[0] - gn[1]) / 2.0
     return D
 
 
+@pytest.mark.parametrize("gravity", list(earth.GRAVITY_MODELS))
 @pytest.mark.parametrize("point", ["mid-latitude", "equator"])
-def test_transition_matches_finite_differences_of_the_ned_step(point):
+def test_transition_matches_finite_differences_of_the_ned_step(point, gravity):
     """Every entry of the position, velocity and attitude rows of F against
-    the compiled NED step's own Jacobian.
+    the compiled NED step's own Jacobian, with each gravity model (F's height
+    gradient is the model's own).
 
     Tolerance: 1e-6 relative, plus an absolute floor made of (a) rounding:
     the finite difference resolves a row only to its quantity's spacing
@@ -134,8 +137,9 @@ def test_transition_matches_finite_differences_of_the_ned_step(point):
     would be 7e-10 m per difference.
     """
     lla0 = np.array([0.7, 0.1, 300.0]) if point == "mid-latitude" else np.array([2e-3, 1e-3, 0.5])
-    Ffd, eps, h = _f_fd(lla0)
-    F = _f_model(lla0) + _f_dropped(lla0)
+    code = earth.gravity_model_code(gravity)
+    Ffd, eps, h = _f_fd(lla0, gravity=code)
+    F = _f_model(lla0, code) + _f_dropped(lla0, code)
     R = 6.4e6
     spacing = np.r_[np.full(3, np.spacing(lla0[0]) * R + np.spacing(lla0[2])), np.full(3, 1e-15), np.full(3, 1e-16)]
     rounding = 10.0 * 3.0 / h * spacing[:, None] / eps[None, :]

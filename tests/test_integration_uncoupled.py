@@ -64,3 +64,14 @@ def test_velocity_reset_needs_velocity():
     g = GnssData(gnss.time, gnss.lla, gnss.sigma_ned)
     with pytest.raises(InputError, match="no velocity"):
         run_uncoupled(imu, truth.state(0), g, use_velocity=True)
+
+
+def test_uncoupled_mechanizes_with_the_chosen_gravity_model():
+    from inskit.strapdown import mechanize
+
+    imu, truth, gnss = setup()
+    none = np.zeros(len(gnss), bool)
+    for model in ("normal-simple", "j2"):
+        free = run_uncoupled(imu, truth.state(0), gnss, use=none, gravity=model)
+        assert np.array_equal(free.lla, mechanize(imu, truth.state(0), gravity=model).lla)
+    assert not np.array_equal(free.lla, run_uncoupled(imu, truth.state(0), gnss, use=none).lla)

@@ -257,3 +257,25 @@ def test_output_dir_is_relative_to_the_config_file(tmp_path, captured, monkeypat
     assert isinstance(r.exception, _Stop), r.output
     assert (cfg_file.parent / "results" / "run1").is_dir()  # the output folder was checked writable there
     assert not (cwd / "results").exists()
+
+
+# --- [earth] gravity -----------------------------------------------------------------
+def test_earth_gravity_key_default_choices_and_errors():
+    assert _cfg(LOOSE).earth.gravity == "normal"
+    assert _cfg(LOOSE, earth={"gravity": "normal-simple"}).earth.gravity == "normal-simple"
+    with pytest.raises(ConfigError, match=r"c.toml: .*earth.gravity.*'normal', 'normal-simple' or 'j2'"):
+        _cfg(LOOSE, earth={"gravity": "egm96"})
+    with pytest.raises(ConfigError, match="earth"):
+        _cfg(LOOSE, earth={"model": "j2"})
+    assert _section_keys(config_doc.render(), "### `[earth]`") == ["gravity"]
+
+
+@pytest.mark.parametrize("flag, expected", [(None, "j2"), ("normal-simple", "normal-simple")])
+def test_cli_gravity_overrides_the_config(tmp_path, captured, flag, expected):
+    from inskit.cli import cli
+
+    cfg_file = _config(tmp_path, '[earth]\ngravity = "j2"\n')
+    args = ["navigate", str(cfg_file), "--out", str(tmp_path / "o")] + (["--gravity", flag] if flag else [])
+    r = CliRunner().invoke(cli, args)
+    assert isinstance(r.exception, _Stop), r.output
+    assert captured[0].earth.gravity == expected

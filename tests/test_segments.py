@@ -125,14 +125,15 @@ def test_imu_lever_arm_moves_the_sensed_point():
     assert np.hypot(err2[:, 0], err2[:, 1]).max() > 0.1
 
 
-def test_compiled_rates_equal_the_numpy_formulas():
+@pytest.mark.parametrize("gravity", ["normal", "normal-simple", "j2"])
+def test_compiled_rates_equal_the_numpy_formulas(gravity):
     sc = load_scenario(EXAMPLES / "aircraft.toml")
     tr = build_trajectory(sc, np.random.default_rng(0))
     tq = np.linspace(0.0, tr.duration, 20001)
     from inskit.simulation import ideal_rates
 
-    w1, f1 = tr.rates(tq)
-    w2, f2 = ideal_rates(tr.kinematics(tq))
+    w1, f1 = tr.rates(tq, gravity=gravity)
+    w2, f2 = ideal_rates(tr.kinematics(tq), gravity)
     assert np.abs(w1 - w2).max() < 1e-15 and np.abs(f1 - f2).max() < 1e-12
 
 

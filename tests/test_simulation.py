@@ -1,4 +1,5 @@
 import numpy as np
+import pytest
 
 from inskit import earth
 from inskit.simulation import HarmonicTrajectory, ideal_imu, ideal_rates
@@ -45,6 +46,20 @@ def test_ideal_imu_at_rest_reads_gravity_and_earth_rate():
     w, f = ideal_rates(kin)
     assert np.allclose(f[0], [0, 0, -earth.gravity_down(lat, 0.0)])
     assert np.allclose(w[0], earth.rate_ie_n(lat))
+
+
+@pytest.mark.parametrize("model", ["normal", "normal-simple", "j2"])
+def test_ideal_imu_at_rest_senses_the_chosen_gravity_model(model):
+    # at rest f_n = -g_n: the accelerometers of a level body at 1600 m read the model's
+    # north and down components (the normal model's north part is -8.08e-9 h sin 2 lat)
+    from inskit.simulation import StationaryTrajectory
+
+    lat, h = np.radians(40.0), 1600.0
+    tr = StationaryTrajectory((lat, 0.3, h))
+    _, f = ideal_rates(tr.kinematics(np.array([0.0])), model)
+    assert np.allclose(f[0], -earth.gravity_n(lat, h, model), rtol=0, atol=1e-15)
+    imu = ideal_imu(tr, np.array([0.0, 0.01]), nodes=1, gravity=model)
+    assert np.allclose(imu.dv_b[1] / 0.01, f[0], rtol=0, atol=1e-12)
 
 
 def test_increments_converge_with_quadrature_order():

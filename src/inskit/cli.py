@@ -65,12 +65,15 @@ def _parse_init(text):
               help="Height channel (NED only): free, held to or aided by --height-ref.")
 @click.option("--height-ref", type=float, help="External height [m] for --height hold/aid (default: initial height).")
 @click.option("--no-coning", is_flag=True, help="Single-sample attitude update (no coning/sculling compensation).")
+@click.option("--gravity", type=click.Choice(["normal", "normal-simple", "j2"]), default="normal", show_default=True,
+              help="Gravity model: normal (Somigliana with both height terms and the north component), "
+              "normal-simple (first-order height term, no north component) or j2 (GM + J2 field).")
 @click.option("--no-unit-check", is_flag=True, help="Skip the unit-plausibility checks of the IMU reader.")
 @click.option("--out", "out_file", type=click.Path(dir_okay=False), help="Write the solution CSV here.")
 @click.option("--force", is_flag=True, help="Overwrite --out if it exists.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON summary object on stdout.")
-def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coning, no_unit_check, out_file, force,
-              as_json):
+def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coning, gravity, no_unit_check, out_file,
+              force, as_json):
     """Free-inertial navigation from an IMU file and an initial state."""
     from . import io
     from .strapdown import mechanize as run_mech
@@ -97,7 +100,7 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
         raise InputError("an initial state is needed: --init ... or --init-from FILE")
     if frame != "ned" and height != "free":
         raise InputError("--height hold/aid is available with --frame ned only")
-    opts = {"coning": not no_coning}
+    opts = {"coning": not no_coning, "gravity": gravity}
     if frame == "ned":
         opts["height"] = height
     href = None if height == "free" else (init.lla[2] if height_ref is None else height_ref)
@@ -121,6 +124,7 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
     rpy = end.euler / DEG
     summary = {
         "frame": frame,
+        "gravity": gravity,
         "epochs": len(sol),
         "duration_s": float(sol.time[-1] - sol.time[0]),
         "elapsed_s": elapsed,
@@ -136,7 +140,7 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
     }
     f = summary["final"]
     table = (
-        f"{len(sol)} epochs over {summary['duration_s']:.1f} s in {elapsed:.2f} s ({frame})\n"
+        f"{len(sol)} epochs over {summary['duration_s']:.1f} s in {elapsed:.2f} s ({frame}, {gravity} gravity)\n"
         f"final: lat {f['lat_deg']:.8f} deg  lon {f['lon_deg']:.8f} deg  h {f['height_m']:.2f} m\n"
         f"       v_n [{f['vn_m_s']:.3f}, {f['ve_m_s']:.3f}, {f['vd_m_s']:.3f}] m/s  "
         f"rpy [{f['roll_deg']:.3f}, {f['pitch_deg']:.3f}, {f['yaw_deg']:.3f}] deg"
@@ -235,13 +239,15 @@ def bench(quick, no_cli, as_json):
 @click.option("--truth", "truth_file", type=click.Path(dir_okay=False),
               help="A truth file (e.g. from inskit simulate; sets [truth] file): the outages are also scored "
               "against it (keys ..._vs_truth_...) and its errors added to the summary.")
+@click.option("--gravity", type=click.Choice(["normal", "normal-simple", "j2"]),
+              help="Gravity model (overrides the config's [earth] gravity).")
 @click.option("--strict", is_flag=True, help="Exit with status 3 when the run's health verdict is unhealthy.")
 @click.option("--report", "with_report", is_flag=True, help="Also write report.html, one self-contained page of "
               "the run (as `inskit report`).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_arm, imu_time_offset, scheme, outages,
-             smooth, calibrate_time_offset, out_dir, force, no_plots, output_format, output_rate, truth_file, strict,
-             with_report, as_json):
+             smooth, calibrate_time_offset, out_dir, force, no_plots, output_format, output_rate, truth_file, gravity,
+             strict, with_report, as_json):
     """INS/GNSS integration from a TOML config file or flags."""
     from .jobs import config as C
     from .jobs import navigate as N
@@ -277,6 +283,8 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
         over.setdefault("output", {})["rate_hz"] = output_rate
     if truth_file:
         over["truth"] = {"file": str(Path(truth_file).resolve())}
+    if gravity:
+        over.setdefault("earth", {})["gravity"] = gravity
     if config_file:
         cfg = C.load_config(config_file, over)
     else:
@@ -338,13 +346,17 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
 @click.option("--format", "file_format", type=click.Choice(["csv", "parquet"]), default="csv", show_default=True,
               help="imu, gnss and truth files as CSV or Parquet (typed, exact, about 20x faster to write); "
               "every inskit reader takes both.")
+@click.option("--gravity", type=click.Choice(["normal", "normal-simple", "j2"]),
+              help="Gravity model of the specific force (overrides the scenario's [earth] gravity).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, file_format, as_json):
+def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, file_format, gravity, as_json):
     """Simulate a scenario: IMU, GNSS and truth files plus a plot."""
     from .jobs.simulate import verify_ideal, write_simulation
     from .simulation.scenario import load_scenario, simulate as run_sim
 
     sc = load_scenario(scenario_file)
+    if gravity:
+        sc = sc.model_copy(update={"earth": sc.earth.model_copy(update={"gravity": gravity})})
     t0 = time.perf_counter()
     steps = ["ideal IMU", "errors and GNSS", "files"]
     from tqdm import tqdm
@@ -357,7 +369,8 @@ def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, f
         bar.update(1)
     res = {
         "scenario": sc.name, "seed": seed, "duration_s": float(sim.truth.time[-1]), "imu_epochs": len(sim.imu),
-        "imu_rate_hz": sc.imu.rate_hz, "imu_grade": sc.imu.grade, "gnss_fixes": len(sim.gnss),
+        "imu_rate_hz": sc.imu.rate_hz, "imu_grade": sc.imu.grade, "gravity": sc.earth.gravity,
+        "gnss_fixes": len(sim.gnss),
         "elapsed_s": time.perf_counter() - t0, "files": [str(f) for f in files],
         "segments": sim.trajectory.segments,
     }

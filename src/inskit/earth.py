@@ -8,6 +8,18 @@ The scalar formulas are written with numpy ufuncs only and marked
 called from the compiled mechanization kernels (:mod:`inskit.strapdown`) they
 are compiled in.  One implementation serves both.
 
+Gravity models (:data:`GRAVITY_MODELS`, chosen by name at the edges and by
+integer code inside the compiled kernels, :func:`gravity_nd`):
+
+* ``"normal"`` (default): Somigliana normal gravity with the first- and
+  second-order height terms and the north component (:func:`gravity_down`,
+  :func:`gravity_north`);
+* ``"normal-simple"``: Somigliana with the first-order height term only and
+  no north component (:func:`gravity_down_simple`), the model of most other
+  strapdown codes;
+* ``"j2"``: gravitation of a GM + J2 Earth plus centrifugal, in NED with its
+  north component (:func:`gravity_nd_j2`).
+
 References
 ----------
 SYSTEM.md §1.2-1.4 (source 000 eq. 1-21..1-42); NIMA TR8350.2 (WGS84);
@@ -129,16 +141,194 @@ def gravity_north(lat, h):
     return GAMMA_N_PER_M * h * np.sin(2.0 * lat)
 
 
-def gravity_n(lat, h):
-    """Normal plumb-bob gravity resolved in NED, shape ``(..., 3)`` [m/s^2].
+# --- selectable gravity models -------------------------------------------------
+#: integer codes of the gravity models, as the compiled kernels take them
+GRAVITY_NORMAL = 0
+GRAVITY_NORMAL_SIMPLE = 1
+GRAVITY_J2 = 2
+#: the models by the names of the configuration files and the command line
+GRAVITY_MODELS = {"normal": GRAVITY_NORMAL, "normal-simple": GRAVITY_NORMAL_SIMPLE, "j2": GRAVITY_J2}
+
+
+def gravity_model_code(model) -> int:
+    """The integer code of a gravity model given by name (or already a code).
+
+    ``"normal"`` (default): Somigliana normal gravity with the first- and
+    second-order height terms and the north component (:func:`gravity_down`,
+    :func:`gravity_north`); ``"normal-simple"``: Somigliana with the
+    first-order height term only and no north component
+    (:func:`gravity_down_simple`); ``"j2"``: the gravitation of a GM + J2
+    Earth plus the centrifugal acceleration (:func:`gravity_nd_j2`).
+
+    Raises
+    ------
+    InputError
+        An unknown name or code, naming the choices.
+    """
+    from .errors import InputError
+
+    if isinstance(model, (int, np.integer)) and not isinstance(model, bool):
+        if int(model) in GRAVITY_MODELS.values():
+            return int(model)
+    elif isinstance(model, str) and model in GRAVITY_MODELS:
+        return GRAVITY_MODELS[model]
+    raise InputError(f"gravity model {model!r} is not one of {', '.join(repr(k) for k in GRAVITY_MODELS)}")
+
+
+def gravity_model_name(model) -> str:
+    """The name (``"normal"``, ``"normal-simple"``, ``"j2"``) of a model given by name or code."""
+    code = gravity_model_code(model)
+    return next(k for k, v in GRAVITY_MODELS.items() if v == code)
+
+
+@register_jitable
+def gravity_down_simple(lat, h):
+    """Down component of the simple normal gravity [m/s^2]: Somigliana with
+    the first-order (free-air) height term only.
+
+    ``gamma_d = gamma [1 - (2/a)(1 + f + m - 2 f sin^2 phi) h]``: NIMA
+    TR8350.2 eq. 4-3 (Groves 2013 eq. 2.140) without its ``3 h^2/a^2`` term,
+    and no north component.  This is the model of most strapdown codes: the
+    height coefficient is the free-air gradient, ``3.0864e-6 1/s^2`` at
+    37 deg (PSINS writes ``g0(phi) - 3.086e-6 h``, the same to 3e-10 1/s^2 at
+    mid latitudes; KF-GINS keeps the quadratic term, also without the north
+    component).  Against the full model it leaves out ``3 g h^2/a^2``
+    (1.9e-6 m/s^2 at 1600 m) vertically and ``8.08e-9 h sin(2 phi)``
+    (1.3e-5 m/s^2 at 1600 m, 45 deg) northward.
+    """
+    s2 = np.sin(lat) ** 2
+    gamma = GAMMA_E * (1.0 + K_SOMIGLIANA * s2) / np.sqrt(1.0 - E2 * s2)
+    return gamma * (1.0 - 2.0 / A * (1.0 + F + M_RATIO - 2.0 * F * s2) * h)
+
+
+@register_jitable
+def gravity_down_simple_dh(lat, h):
+    """``d gamma_d / d h`` [1/s^2] of :func:`gravity_down_simple` (independent of ``h``)."""
+    s2 = np.sin(lat) ** 2
+    gamma = GAMMA_E * (1.0 + K_SOMIGLIANA * s2) / np.sqrt(1.0 - E2 * s2)
+    return gamma * (-2.0 / A * (1.0 + F + M_RATIO - 2.0 * F * s2)) + 0.0 * h
+
+
+@register_jitable
+def gravity_ecef_j2_xyz(x, y, z):
+    """Plumb-bob gravity of the GM + J2 field in e from ECEF coordinates,
+    ``(gx, gy, gz)`` [m/s^2]: gravitation (Groves 2013 eq. 2.142) plus the
+    centrifugal ``omega_ie^2 (x, y, 0)``.  Component form of
+    :func:`gravity_ecef_j2`, for scalars or arrays and the compiled kernels."""
+    r2 = x * x + y * y + z * z
+    r = np.sqrt(r2)
+    zr2 = 5.0 * z * z / r2
+    c = 1.5 * J2 * A * A / r2
+    k = -GM / (r2 * r)
+    w2 = OMEGA_IE * OMEGA_IE
+    return (k * x * (1.0 + c * (1.0 - zr2)) + w2 * x, k * y * (1.0 + c * (1.0 - zr2)) + w2 * y,
+            k * z * (1.0 + c * (3.0 - zr2)))
+
+
+@register_jitable
+def gravity_nd_j2(lat, h):
+    """North and down components [m/s^2] of the GM + J2 plumb-bob gravity at
+    geodetic latitude ``lat`` and height ``h`` (the east component is zero:
+    the field is symmetric about the polar axis).
+
+    The field is evaluated at the ECEF point of ``(lat, 0, h)`` (SYSTEM.md
+    §1.3 coordinates), :func:`gravity_ecef_j2_xyz`, and resolved on the north
+    ``(-sin phi, 0, cos phi)`` and down ``(-cos phi, 0, -sin phi)`` axes.
+    The J2 field is not exactly normal to the ellipsoid (it leaves out J4 and
+    higher zonal terms, about 1e-5 of g), so its north component is not zero
+    even on the ellipsoid; its growth with height is the plumb-line
+    curvature of the normal field, about ``-8.08e-9 h sin(2 phi)``.
+    """
+    sl, cl = np.sin(lat), np.cos(lat)
+    n = A / np.sqrt(1.0 - E2 * sl * sl)
+    x = (n + h) * cl
+    z = (n * (1.0 - E2) + h) * sl
+    gx, _, gz = gravity_ecef_j2_xyz(x, 0.0 * x, z)
+    return -sl * gx + cl * gz, -cl * gx - sl * gz
+
+
+#: height step [m] of the central difference in :func:`gravity_down_dh_model` (j2)
+_J2_DH_STEP = 8.0
+
+
+@register_jitable
+def gravity_nd(lat, h, model):
+    """North and down plumb-bob gravity [m/s^2] of the model ``model`` (an
+    integer code, :data:`GRAVITY_MODELS`) at scalar ``lat`` [rad], ``h`` [m]:
+    the selector the compiled mechanizations call.
+
+    ``GRAVITY_NORMAL``: :func:`gravity_north`, :func:`gravity_down` (the very
+    operations of the unselected kernels, so results are bit-identical);
+    ``GRAVITY_NORMAL_SIMPLE``: ``0``, :func:`gravity_down_simple`;
+    ``GRAVITY_J2``: :func:`gravity_nd_j2`.
+    """
+    if model == GRAVITY_J2:
+        return gravity_nd_j2(lat, h)
+    if model == GRAVITY_NORMAL_SIMPLE:
+        return 0.0, gravity_down_simple(lat, h)
+    return gravity_north(lat, h), gravity_down(lat, h)
+
+
+@register_jitable
+def gravity_down_dh_model(lat, h, model):
+    """``d gamma_d / d h`` [1/s^2] of the model ``model`` (scalar): exact for
+    the two normal models; for J2 a central difference over +-8 m (truncation
+    ~(8 m / a)^2 = 2e-12 relative, rounding ~1e-10 relative)."""
+    if model == GRAVITY_J2:
+        _, gp = gravity_nd_j2(lat, h + _J2_DH_STEP)
+        _, gm = gravity_nd_j2(lat, h - _J2_DH_STEP)
+        return (gp - gm) / (2.0 * _J2_DH_STEP)
+    if model == GRAVITY_NORMAL_SIMPLE:
+        return gravity_down_simple_dh(lat, h)
+    return gravity_down_dh(lat, h)
+
+
+@register_jitable
+def gravity_ecef_model(x, y, z, model):
+    """Plumb-bob gravity ``(gx, gy, gz)`` in e [m/s^2] of the model ``model``
+    from scalar ECEF coordinates (the ECEF and inertial mechanizations):
+    J2 directly in e; the normal models from their north and down
+    components at the point's geodetic latitude and height."""
+    if model == GRAVITY_J2:
+        return gravity_ecef_j2_xyz(x, y, z)
+    if model == GRAVITY_NORMAL_SIMPLE:
+        lat, h = geodetic_from_ecef(x, y, z)
+        gd = gravity_down_simple(lat, h)
+        sl, cl = np.sin(lat), np.cos(lat)
+        lon = np.arctan2(y, x)
+        co, so = np.cos(lon), np.sin(lon)
+        return -cl * co * gd, -cl * so * gd, -sl * gd
+    return gravity_ecef_xyz(x, y, z)
+
+
+def gravity_n(lat, h, model="normal"):
+    """Plumb-bob gravity resolved in NED, shape ``(..., 3)`` [m/s^2].
 
     This is gravitation plus centrifugal acceleration (the ``g_l`` of
     SYSTEM.md §1.2), i.e. what a plumb bob feels at rest on the Earth.
+
+    Parameters
+    ----------
+    lat, h : float or ndarray
+        Geodetic latitude [rad] and ellipsoidal height [m] (broadcast).
+    model : {"normal", "normal-simple", "j2"} or int
+        ``"normal"`` (default): Somigliana normal gravity with the first- and
+        second-order height terms and the north component; ``"normal-simple"``:
+        Somigliana with the first-order height term, no north component;
+        ``"j2"``: the GM + J2 field plus centrifugal (see
+        :func:`gravity_model_code`).
     """
+    code = gravity_model_code(model)
     lat = np.asarray(lat, dtype=float)
     h = np.asarray(h, dtype=float)
-    gn = gravity_north(lat, h)
-    return np.stack(np.broadcast_arrays(gn, np.zeros_like(gn), gravity_down(lat, h)), axis=-1)
+    if code == GRAVITY_J2:
+        gn, gd = gravity_nd_j2(lat, h)
+    elif code == GRAVITY_NORMAL_SIMPLE:
+        gd = gravity_down_simple(lat, h)
+        gn = np.zeros_like(gd)
+    else:
+        gn, gd = gravity_north(lat, h), gravity_down(lat, h)
+    return np.stack(np.broadcast_arrays(gn, np.zeros_like(gn), gd), axis=-1)
 
 
 def gravity_spherical(h):

@@ -18,7 +18,8 @@ Error model (x = estimate - truth; phi: ``C_nb_est = (I - [phi x]) C_nb``),
 after Groves 2013 eq. 14.64-14.71, position error in NED metres:
 
 * ``d pos = vel``;
-* ``d vel = [f_n x] phi - (2 w_ie + w_en) x vel - (d g / d h) pD
+* ``d vel = [f_n x] phi - (2 w_ie + w_en) x vel - (d g / d h) pD`` (the
+  gradient of the selected gravity model, :func:`inskit.earth.gravity_down_dh_model`)
   - C_nb S_a^-1 (ba + diag(f_b) sa)``;
 * ``d phi = -w_in x phi + d w_en(vel) + C_nb S_g^-1 (bg + diag(w_b) sg)``,
   ``S = diag(1 + s)`` the current scale-factor corrections;
@@ -49,7 +50,7 @@ import numpy as np
 from numba import njit
 
 from .. import earth
-from ..earth import principal_radii, radii_and_gravity_gradient
+from ..earth import gravity_down_dh_model, principal_radii, radii_and_gravity_gradient
 from ..rotations import qmul, quat_dcm, rotvec_quat
 from ..strapdown.kernels import ned_step, store_unit
 
@@ -70,7 +71,7 @@ def dcm_into(q, C):
 
 
 @njit(cache=True)
-def fill_transition(F, kidx, lla, v_n, C, f_b, w_b, sc):
+def fill_transition(F, kidx, lla, v_n, C, f_b, w_b, sc, gravity=0):
     """Write the epoch-dependent entries of the continuous-time F.
 
     Parameters
@@ -90,10 +91,16 @@ def fill_transition(F, kidx, lla, v_n, C, f_b, w_b, sc):
         :func:`sensor_corrections` of the current estimates: the corrections
         ``(raw - b dt) / (1 + s)`` make a bias error enter as ``-1 / (1 + s)``
         and a scale-factor error as ``-f / (1 + s)``.
+    gravity : int
+        Code of the gravity model (:data:`inskit.earth.GRAVITY_MODELS`): its
+        own ``d g_D / d h`` enters the height row, so F stays the Jacobian of
+        the mechanization step that uses that model.
     """
     lat, h = lla[0], lla[2]
     sl, cl = math.sin(lat), math.cos(lat)
     rn, re, dgd_dh = radii_and_gravity_gradient(sl, h)
+    if gravity != 0:
+        dgd_dh = gravity_down_dh_model(lat, h, gravity)
     tl = sl / cl
     vn, ve = v_n[0], v_n[1]
     wie0, wie2 = W_IE * cl, -W_IE * sl
@@ -293,14 +300,15 @@ def propagate(imu, nav, filt, model, out, k0, k1, flags):
         Per-row outputs; ``var`` (N, n) receives the variances of every
         state (the estimates in ``aux`` change only at updates: the caller
         records them there).
-    flags : tuple ``(coning, want_phi, open_loop, second_order)``
+    flags : tuple ``(coning, want_phi, open_loop, second_order, gravity)``
+        ``gravity``: the code of the gravity model (:data:`inskit.earth.GRAVITY_MODELS`).
     """
     t, dth_all, dv_all = imu
     lla, v_n, q_nb, carry = nav
     x, P, aux, Phi = filt
     kidx, q_psd, rows, cols, active, crow, ccol, cval = model
     out_lla, out_v, out_q, out_var = out
-    coning, want_phi, open_loop, second_order = flags
+    coning, want_phi, open_loop, second_order, gravity = flags
     n = kidx[N_STATES]
     F = np.zeros((n, n))
     for e in range(crow.shape[0]):
@@ -325,9 +333,9 @@ def propagate(imu, nav, filt, model, out, k0, k1, flags):
         dt = t[k] - carry[0]
         correct_increments(sc, dth_all[k], dv_all[k], dt, dth, dv, w_b, f_b)
         dcm_into(q_nb, C)
-        ned_step(dth, dv, dt, lla, v_n, q_nb, carry, coning, 0, 0.0, no_gains)
+        ned_step(dth, dv, dt, lla, v_n, q_nb, carry, coning, 0, 0.0, no_gains, gravity)
         carry[0] = t[k]
-        fill_transition(F, kidx, lla, v_n, C, f_b, w_b, sc)
+        fill_transition(F, kidx, lla, v_n, C, f_b, w_b, sc, gravity)
         propagate_covariance(P, F, rows, cols, active, dt, q_psd, A, B, T, second_order)
         if open_loop:
             for i in range(n):

@@ -25,6 +25,7 @@ from functools import cached_property
 
 import numpy as np
 
+from .. import earth
 from ..errors import InputError
 from ..filters.kalman import FilterDivergence, check_covariance, gate_rows, joseph_update
 from ..rotations import dcm_from_quat
@@ -65,6 +66,9 @@ class FilterSettings:
     recovery_after_s : float
         See ``gate_max_consecutive`` [s].
     coning : bool
+    gravity : {"normal", "normal-simple", "j2"}
+        Gravity model of the mechanization and of the error model's height
+        gradient (:func:`inskit.earth.gravity_n`).
     smoother_node_s : float
         Spacing of the extra smoother nodes between updates [s].
     covariance_second_order : bool
@@ -79,6 +83,7 @@ class FilterSettings:
     gate_max_consecutive: int | None = 3
     recovery_after_s: float = 15.0
     coning: bool = True
+    gravity: str = "normal"
     smoother_node_s: float = 0.25
     covariance_second_order: bool = True
 
@@ -89,6 +94,7 @@ class FilterSettings:
             raise InputError(f"filter scheme must be one of {SCHEMES}, got {self.scheme!r}")
         if not self.recovery_after_s >= 0:
             raise InputError(f"recovery_after_s must be >= 0 s, got {self.recovery_after_s}")
+        earth.gravity_model_code(self.gravity)  # an unknown model: InputError naming the choices
         if not isinstance(self.layout, StateLayout):
             raise InputError(f"FilterSettings.layout must be a StateLayout, got {type(self.layout).__name__}")
 
@@ -327,7 +333,8 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     def propagate(k0, k1, want_phi):
         filt = (x, P, aux, Phi)
         K.propagate(imu_arrays, nav, filt, model, outs, k0, k1,
-                    (settings.coning, want_phi, open_loop, settings.covariance_second_order))
+                    (settings.coning, want_phi, open_loop, settings.covariance_second_order,
+                     earth.gravity_model_code(settings.gravity)))
 
     write_row(0)
     extra_noise = {int(k): np.asarray(v, float) for k, v in (extra_noise or {}).items()}

@@ -20,7 +20,7 @@ from .measurements import ned_difference
 
 
 def run_uncoupled(imu: ImuData, initial: NavState, gnss: GnssData, *, use=None, lever_arm_b=(0.0, 0.0, 0.0),
-                  use_velocity=None, coning=True) -> NavSolution:
+                  use_velocity=None, coning=True, gravity="normal") -> NavSolution:
     """Free-inertial NED mechanization reset to every used GNSS fix.
 
     At a fix time ``t`` (between IMU samples ``k`` and ``k+1``) the INS state
@@ -38,6 +38,9 @@ def run_uncoupled(imu: ImuData, initial: NavState, gnss: GnssData, *, use=None, 
         IMU-to-antenna lever arm, body axes [m].
     use_velocity : bool, optional
         Reset the velocity too (default: when the GNSS data carry one).
+    coning : bool
+    gravity : {"normal", "normal-simple", "j2"}
+        Gravity model of the mechanization (:func:`inskit.earth.gravity_n`).
 
     Returns
     -------
@@ -54,7 +57,7 @@ def run_uncoupled(imu: ImuData, initial: NavState, gnss: GnssData, *, use=None, 
     k = np.searchsorted(t, gnss.time[rows], side="right") - 1
     ok = (k >= 1) & (gnss.time[rows] <= t[-1])
     rows, k = rows[ok], k[ok]
-    ins = NedIntegrator(initial, coning=coning)
+    ins = NedIntegrator(initial, coning=coning, gravity=gravity)
     parts = [NavSolution._trusted(t[:1], initial.lla[None], initial.v_n[None], initial.q_nb[None])]
     k_done = 1
     for r, kk in zip(rows.tolist(), k.tolist()):

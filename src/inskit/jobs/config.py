@@ -458,6 +458,17 @@ class TruthSection(_Strict):
                        "file")
 
 
+class EarthSection(_Strict):
+    """The Earth model of the mechanization and the filter."""
+
+    gravity: Literal["normal", "normal-simple", "j2"] = Field(
+        "normal", description="gravity model: normal (WGS84 Somigliana normal gravity with the first- and "
+        "second-order height terms and the north component), normal-simple (Somigliana with the first-order "
+        "height term only, no north component: what many other tools use), or j2 (gravitation of a GM + J2 Earth "
+        "plus centrifugal, with its north component); choose the model of the tool that made a truth you compare "
+        "with (at 1600 m and 40 deg the north component alone, 1.3e-5 m/s^2, is 2.2 m over 600 s free-inertial)")
+
+
 class NavigateConfig(_Strict):
     """The whole ``inskit navigate`` configuration."""
 
@@ -472,6 +483,7 @@ class NavigateConfig(_Strict):
     output: OutputSection = Field(OutputSection(), description="results")
     odometer: OdometerSection | None = Field(None, description="wheel-speed aiding (optional)")
     truth: TruthSection | None = Field(None, description="truth trajectory to score against (optional)")
+    earth: EarthSection = Field(EarthSection(), description="Earth model (gravity)")
     base_dir: Path = Field(Path("."), description="(set by the loader, not a key of the file) the folder "
                            "relative paths are taken from: the config file's")
 

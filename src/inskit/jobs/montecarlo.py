@@ -112,7 +112,8 @@ class ConsistencySpec:
         if self._prepared is None:
             T = self.trajectory.duration if self.duration is None else self.duration
             t = np.arange(0.0, T, 1.0 / self.rate_hz)
-            self._prepared = (t, ideal_imu(self.trajectory, t, nodes=3), truth_solution(self.trajectory, t))
+            imu = ideal_imu(self.trajectory, t, nodes=3, gravity=self.settings.gravity)  # the filter's model
+            self._prepared = (t, imu, truth_solution(self.trajectory, t))
         return self._prepared
 
 
@@ -236,7 +237,8 @@ def compare_schemes(scenario, outage, seed=0, schemes=("uncoupled", "open", "clo
     rng = np.random.default_rng(seed)
     tr = build_trajectory(scenario, rng)
     t = np.arange(0.0, tr.duration, 1.0 / scenario.imu.rate_hz)
-    ideal = ideal_imu(tr, t, nodes=scenario.imu.quadrature_nodes)
+    gravity = scenario.earth.gravity  # the simulation's and the filters' model
+    ideal = ideal_imu(tr, t, nodes=scenario.imu.quadrature_nodes, gravity=gravity)
     errs = imu_errors(scenario)
     imu, _ = apply_imu_errors(ideal, errs, rng)
     gnss, _ = simulate_gnss(tr, t[0], t[-1], gnss_errors(scenario), rng)
@@ -248,10 +250,10 @@ def compare_schemes(scenario, outage, seed=0, schemes=("uncoupled", "open", "clo
     lever = tuple(scenario.gnss.lever_arm_b_m)
     for scheme in schemes:
         settings = matched_settings(consistency_errors(errs), init, scheme="closed" if scheme == "uncoupled"
-                                    else scheme, gate_probability=None, lever_arm_b=lever)
+                                    else scheme, gate_probability=None, lever_arm_b=lever, gravity=gravity)
         start = perturbed_start(truth.state(0), settings, np.random.default_rng(seed + 1))
         if scheme == "uncoupled":  # GNSS resets position and velocity
-            sol = run_uncoupled(imu, start, gnss, use=use, lever_arm_b=lever)
+            sol = run_uncoupled(imu, start, gnss, use=use, lever_arm_b=lever, gravity=gravity)
         else:
             sol = run_filter(imu, start, [GnssPosition(gnss, use, lever_arm_b=lever)], settings).nav
         k_end = int(np.searchsorted(t, outage[1]))
@@ -285,7 +287,8 @@ def consistency_study(scenario, grade, runs, duration=None, seed=0, progress=Non
         raise InputError(f"--duration must be within (0, {tr.duration:.0f}] s, got {duration}")
     g = GnssErrors(rate_hz=1.0, white_h_m=1.0, white_v_m=2.0, velocity_sigma_m_s=0.0)
     r = monte_carlo(tr, scenario.imu.rate_hz, consistency_errors(preset(grade)), g, grade_initial_uncertainty(grade),
-                    runs=runs, seed=seed, duration=duration, progress=progress, map=map, gate_probability=None)
+                    runs=runs, seed=seed, duration=duration, progress=progress, map=map, gate_probability=None,
+                    gravity=scenario.earth.gravity)
     res = {"scenario": scenario.name, "grade": grade, "runs": runs, "duration_s": float(r["t"][-1]), "anees": {}}
     for b in ("pos", "vel", "att"):
         a = r["anees"][b]

@@ -309,13 +309,14 @@ def build_settings(cfg: NavigateConfig, startup: Startup | None, measured=None, 
         accel_bias0=tuple(startup.accel_bias) if startup else (0.0, 0.0, 0.0),
         scheme="closed" if f.scheme == "uncoupled" else f.scheme, gate_probability=f.gate_probability,
         gate_max_consecutive=f.gate_max_consecutive, smoother_node_s=f.smoother_node_s,
-        extra_blocks=tuple(extra_blocks),
+        extra_blocks=tuple(extra_blocks), gravity=cfg.earth.gravity,
     )
 
 
 def _uncoupled_track(imu, initial, gnss, used, lever, settings):
     """The uncoupled scheme as a Track (no estimates, no sigmas)."""
-    sol = run_uncoupled(imu, initial, gnss, use=used, lever_arm_b=lever, use_velocity=False)
+    sol = run_uncoupled(imu, initial, gnss, use=used, lever_arm_b=lever, use_velocity=False,
+                        gravity=settings.gravity)
     n = len(sol)
     lay = settings.layout
     aux = np.tile(lay.initial_aux(), (n, 1))
@@ -519,6 +520,7 @@ def summary(res: NavigateResult) -> dict:
     out = {
         "name": res.config.name,
         "scheme": res.settings.scheme,
+        "gravity": res.settings.gravity,
         "solution": "smoothed" if res.smoothed is not None else "forward",
         "states": res.settings.layout.size,
         "epochs": len(res.imu),

@@ -123,9 +123,9 @@ def odometer_study(scenario_path=DEFAULT_SCENARIO, seed=1, outages=DEFAULT_OUTAG
                             lever_arm_b=lever_odo, rng=rng_odo)
     lever = np.asarray(sc.gnss.lever_arm_b_m, float)
     errors, init = imu_errors(sc), grade_initial_uncertainty(sc.imu.grade)
-    plain = matched_settings(errors, init, scale_factors=True, lever_arm_b=tuple(lever))
+    plain = matched_settings(errors, init, scale_factors=True, lever_arm_b=tuple(lever), gravity=sc.earth.gravity)
     with_odo = matched_settings(errors, init, scale_factors=True, lever_arm_b=tuple(lever),
-                                extra_blocks=(OdometerScale(scale_sigma0),))
+                                extra_blocks=(OdometerScale(scale_sigma0),), gravity=sc.earth.gravity)
     start = perturbed_start(truth.state(0), plain, rng_start)
     used = ~withheld_mask(gnss.time, windows)
     common = [GnssPosition(gnss, used, lever_arm_b=lever), NonHolonomic([(t0, t1)], nhc_rate_hz, nhc_sigma_m_s)]

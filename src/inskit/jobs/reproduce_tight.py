@@ -157,6 +157,7 @@ def blockage(out_dir, seed=1, log=None, scenario=None):
     t_sow0 = float(truth.time[0])
     windows = [(b.start_s, b.end_s, b.keep) for b in sc.raw_gnss.blockage]
     base = {k: (dict(v) if isinstance(v, dict) else v) for k, v in BLOCKAGE_NAVIGATE.items()}
+    base["earth"] = {"gravity": sc.earth.gravity}  # navigate with the simulation's gravity model
     loose = config_from_dict(base, base_dir=out_dir, source="blockage (loose)")
     tdict = dict(base)
     tdict["gnss"] = {**base["gnss"], "coupling": "tight", "obs": "obs.rnx", "nav": "nav.rnx", "systems": ["G"]}

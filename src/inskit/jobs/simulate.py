@@ -128,7 +128,8 @@ def _plot(sim, path):
 
 def verify_ideal(sc: Scenario, frames=("ned",)):
     """Mechanize the scenario's ideal IMU at its rate and at twice its rate and
-    report how closely each reproduces the truth (the simulator's self-check)."""
+    report how closely each reproduces the truth (the simulator's self-check),
+    simulation and mechanization with the scenario's gravity model."""
     from .. import earth
     from ..strapdown import mechanize
 
@@ -138,12 +139,12 @@ def verify_ideal(sc: Scenario, frames=("ned",)):
         errs = []
         for mult in (1, 2):
             t = np.arange(0.0, tr.duration, 1.0 / (sc.imu.rate_hz * mult))
-            imu = ideal_imu(tr, t, nodes=sc.imu.quadrature_nodes)
+            imu = ideal_imu(tr, t, nodes=sc.imu.quadrature_nodes, gravity=sc.earth.gravity)
             truth = truth_solution(tr, t)
-            sol = mechanize(imu, truth.state(0), frame=frame)
+            sol = mechanize(imu, truth.state(0), frame=frame, gravity=sc.earth.gravity)
             d = earth.lla_to_ned(sol.lla, truth.lla[0]) - earth.lla_to_ned(truth.lla, truth.lla[0])
             errs.append((float(np.hypot(d[:, 0], d[:, 1]).max()), float(np.abs(d[:, 2]).max())))
         out[frame] = {"rate_hz": sc.imu.rate_hz, "horizontal_max_m": errs[0][0], "vertical_max_m": errs[0][1],
                       "double_rate_horizontal_max_m": errs[1][0],
                       "improvement_at_double_rate": errs[0][0] / max(errs[1][0], 1e-300)}
-    return {"duration_s": tr.duration, "frames": out}
+    return {"duration_s": tr.duration, "gravity": sc.earth.gravity, "frames": out}

@@ -14,8 +14,7 @@ import numpy as np
 from numba import njit
 
 from .. import earth
-from ..earth import gravity_down as _gravity_down
-from ..earth import gravity_north as _gravity_north
+from ..earth import gravity_nd as _gravity_nd
 from ..earth import principal_radii as _radii
 from .. import rotations as rot
 from ..types import ImuData, NavSolution, check_time
@@ -23,7 +22,7 @@ from ..types import ImuData, NavSolution, check_time
 W_IE = earth.OMEGA_IE
 
 
-def ideal_rates(kin):
+def ideal_rates(kin, gravity="normal"):
     """True body rate ``omega_ib_b`` and specific force ``f_b`` of a motion.
 
     ``f_n = a_n + (2 omega_ie_n + omega_en_n) x v_n - g_n`` and
@@ -32,6 +31,9 @@ def ideal_rates(kin):
     Parameters
     ----------
     kin : Kinematics
+    gravity : {"normal", "normal-simple", "j2"}
+        The gravity model ``g_n`` (:func:`inskit.earth.gravity_n`): a
+        mechanization with the same model reproduces the motion.
 
     Returns
     -------
@@ -41,7 +43,7 @@ def ideal_rates(kin):
     lat, h = kin.lla[:, 0], kin.lla[:, 2]
     w_ie = earth.rate_ie_n(lat)
     w_en = earth.rate_en_n(lat, h, kin.v_n)
-    f_n = kin.a_n + np.cross(2.0 * w_ie + w_en, kin.v_n) - earth.gravity_n(lat, h)
+    f_n = kin.a_n + np.cross(2.0 * w_ie + w_en, kin.v_n) - earth.gravity_n(lat, h, gravity)
     C_bn = np.swapaxes(kin.C_nb, -1, -2)
     f_b = np.einsum("nij,nj->ni", C_bn, f_n)
     w_ib = np.einsum("nij,nj->ni", C_bn, w_ie + w_en) + kin.omega_nb_b
@@ -60,7 +62,7 @@ def _lever_arm_terms(trajectory, tq, w_ib, lever_arm_b, delta=1e-4):
     return np.cross(w_dot, l) + np.cross(w_ib, np.cross(w_ib, l))
 
 
-def ideal_imu(trajectory, time, *, nodes=6, t_before=None, lever_arm_b=None):
+def ideal_imu(trajectory, time, *, nodes=6, t_before=None, lever_arm_b=None, gravity="normal"):
     """Exact angle and velocity increments of a trajectory.
 
     Each increment is the integral of the true rates over ``(t[k-1], t[k]]``
@@ -81,6 +83,8 @@ def ideal_imu(trajectory, time, *, nodes=6, t_before=None, lever_arm_b=None):
         IMU position relative to the trajectory point, body axes [m]: the
         accelerometers then also sense ``omega_dot x l + omega x (omega x l)``
         (the gyros sense the same rate anywhere on a rigid body).
+    gravity : {"normal", "normal-simple", "j2"}
+        Gravity model of the specific force (:func:`inskit.earth.gravity_n`).
 
     Returns
     -------
@@ -94,10 +98,11 @@ def ideal_imu(trajectory, time, *, nodes=6, t_before=None, lever_arm_b=None):
     half = 0.5 * (t - t0)
     mid = 0.5 * (t + t0)
     tq = (mid[:, None] + half[:, None] * x[None, :]).ravel()
+    earth.gravity_model_code(gravity)  # an unknown model: InputError naming the choices
     if hasattr(trajectory, "rates"):  # compiled fast path (same formulas, tested equal)
-        w_ib, f_b = trajectory.rates(tq)
+        w_ib, f_b = trajectory.rates(tq, gravity=gravity)
     else:
-        w_ib, f_b = ideal_rates(trajectory.kinematics(tq))
+        w_ib, f_b = ideal_rates(trajectory.kinematics(tq), gravity)
     if lever_arm_b is not None and np.any(np.asarray(lever_arm_b, float) != 0):
         f_b = f_b + _lever_arm_terms(trajectory, tq, w_ib, lever_arm_b)
     n = len(t)
@@ -106,18 +111,19 @@ def ideal_imu(trajectory, time, *, nodes=6, t_before=None, lever_arm_b=None):
     return ImuData(t, dth, dv)
 
 
-def truth_solution(trajectory, time, *, with_rates=False):
+def truth_solution(trajectory, time, *, with_rates=False, gravity="normal"):
     """The true navigation solution of a trajectory at ``time``.
 
     With ``with_rates`` the solution's ``extra`` also carries the rates: NED
     acceleration ``an_m_s2, ae_m_s2, ad_m_s2`` (time derivative of ``v_n``),
     the true body rate ``wx_rad_s, wy_rad_s, wz_rad_s`` (``omega_ib_b``) and
-    specific force ``fx_m_s2, fy_m_s2, fz_m_s2``.
+    specific force ``fx_m_s2, fy_m_s2, fz_m_s2`` (with the gravity model
+    ``gravity``, :func:`ideal_rates`).
     """
     kin = trajectory.kinematics(np.asarray(time, dtype=float))
     extra = {}
     if with_rates:
-        w_ib, f_b = ideal_rates(kin)
+        w_ib, f_b = ideal_rates(kin, gravity)
         for j, a in enumerate("ned"):
             extra[f"a{a}_m_s2"] = kin.a_n[:, j]
         for j, a in enumerate("xyz"):
@@ -128,11 +134,12 @@ def truth_solution(trajectory, time, *, with_rates=False):
 
 
 @njit(cache=True)
-def rates_kernel(lat, h, v_n, a_n, rpy, drpy, w_out, f_out):
+def rates_kernel(lat, h, v_n, a_n, rpy, drpy, w_out, f_out, gravity=0):
     """Compiled :func:`ideal_rates` from curvilinear position, NED velocity and
     acceleration, and ZYX Euler angles with their rates (one pass, no
     temporaries): ``f_b = C_bn (a_n + (2 w_ie + w_en) x v_n - g_n)`` and
-    ``w_ib_b = C_bn (w_ie + w_en) + E(roll, pitch) rpy_dot``."""
+    ``w_ib_b = C_bn (w_ie + w_en) + E(roll, pitch) rpy_dot``; ``g_n`` of the
+    gravity model coded ``gravity`` (:func:`inskit.earth.gravity_nd`)."""
     for k in range(lat.shape[0]):
         sl, cl = math.sin(lat[k]), math.cos(lat[k])
         rn, re = _radii(lat[k], h[k])
@@ -140,8 +147,7 @@ def rates_kernel(lat, h, v_n, a_n, rpy, drpy, w_out, f_out):
         wie0, wie2 = W_IE * cl, -W_IE * sl
         wen0, wen1, wen2 = ve / re, -vn / rn, -ve * sl / cl / re
         cx, cy, cz = 2 * wie0 + wen0, wen1, 2 * wie2 + wen2
-        gd = _gravity_down(lat[k], h[k])
-        gn = _gravity_north(lat[k], h[k])
+        gn, gd = _gravity_nd(lat[k], h[k], gravity)
         fn0 = a_n[k, 0] + (cy * vd - cz * ve) - gn
         fn1 = a_n[k, 1] + (cz * vn - cx * vd)
         fn2 = a_n[k, 2] + (cx * ve - cy * vn) - gd

@@ -156,6 +156,16 @@ class RawGnssSection(_S):
         return self
 
 
+class EarthSpec(_S):
+    """The Earth model of the simulated specific force."""
+
+    gravity: Literal["normal", "normal-simple", "j2"] = Field(
+        "normal", description="gravity model of the simulated specific force (the truth): normal (WGS84 "
+        "Somigliana with the first- and second-order height terms and the north component), normal-simple "
+        "(Somigliana with the first-order height term, no north component) or j2 (GM + J2 gravitation plus "
+        "centrifugal); navigate and mechanize the data with the same model to reproduce the truth")
+
+
 class Scenario(_S):
     name: str
     description: str = ""
@@ -166,6 +176,7 @@ class Scenario(_S):
     raw_gnss: RawGnssSection | None = None
     vibration: list[VibrationSpec] = Field(default_factory=list)
     segment: list[SegmentSpec]
+    earth: EarthSpec = Field(EarthSpec(), description="Earth model (gravity) of the simulation")
 
 
 def load_scenario(path) -> Scenario:
@@ -360,6 +371,7 @@ class Simulation:
 def simulate(sc: Scenario, seed=0, *, truth_rate_hz=None, progress=None) -> Simulation:
     """Simulate a scenario: truth, ideal and measured IMU, GNSS fixes.
 
+    The specific force follows the gravity model of ``[earth] gravity``.
     One ``numpy.random.default_rng(seed)`` feeds every draw in a fixed order,
     so the same seed gives the same numbers (and byte-identical files).
     Raw GNSS observations (``[raw_gnss]``) draw from their own child
@@ -371,7 +383,8 @@ def simulate(sc: Scenario, seed=0, *, truth_rate_hz=None, progress=None) -> Simu
     t = np.arange(0.0, tr.duration + 1e-9, dt)
     if len(t) < 2:
         raise ConfigError("the scenario is shorter than one IMU sample")
-    ideal = ideal_imu(tr, t, nodes=sc.imu.quadrature_nodes, lever_arm_b=sc.imu.lever_arm_b_m)
+    ideal = ideal_imu(tr, t, nodes=sc.imu.quadrature_nodes, lever_arm_b=sc.imu.lever_arm_b_m,
+                      gravity=sc.earth.gravity)
     if progress:
         progress("ideal IMU")
     imu, draws = apply_imu_errors(ideal, imu_errors(sc), rng)
@@ -380,7 +393,7 @@ def simulate(sc: Scenario, seed=0, *, truth_rate_hz=None, progress=None) -> Simu
     if truth_rate_hz is not None and not truth_rate_hz > 0:
         raise ConfigError(f"the truth rate must be > 0 Hz, got {truth_rate_hz}")
     tt = t if truth_rate_hz is None else np.arange(0.0, tr.duration + 1e-9, 1.0 / truth_rate_hz)
-    truth = truth_solution(tr, tt, with_rates=True)
+    truth = truth_solution(tr, tt, with_rates=True, gravity=sc.earth.gravity)
     raw = None
     if sc.raw_gnss is not None and sc.raw_gnss.enabled:
         raw = simulate_raw_gnss(sc, tr, seed)

@@ -415,16 +415,18 @@ class SegmentTrajectory:
         exact angular acceleration ``omega_dot_nb_b``."""
         return _kinematics_from_ned(*self._state(t, second=True))
 
-    def rates(self, t):
+    def rates(self, t, gravity="normal"):
         """True ``(omega_ib_b, f_b)`` at times ``t``: the compiled equivalent of
-        ``ideal_rates(self.kinematics(t))``."""
+        ``ideal_rates(self.kinematics(t), gravity)``."""
+        from ..earth import gravity_model_code
         from .imu import rates_kernel
 
         t, lla, v_n, a_n, rpy, drpy = self._state(t)
         w = np.empty((len(t), 3))
         f = np.empty((len(t), 3))
         rates_kernel(np.ascontiguousarray(lla[:, 0]), np.ascontiguousarray(lla[:, 2]), np.ascontiguousarray(v_n),
-                     np.ascontiguousarray(a_n), np.ascontiguousarray(rpy), np.ascontiguousarray(drpy), w, f)
+                     np.ascontiguousarray(a_n), np.ascontiguousarray(rpy), np.ascontiguousarray(drpy), w, f,
+                     gravity_model_code(gravity))
         return w, f
 
 

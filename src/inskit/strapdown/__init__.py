@@ -66,11 +66,14 @@ def _qz(angle):
 class _Integrator:
     """Common streaming logic: carried state, chunk bookkeeping."""
 
-    def __init__(self, initial: NavState, *, coning: bool = True):
+    def __init__(self, initial: NavState, *, coning: bool = True, gravity="normal"):
         if not isinstance(initial, NavState):
             raise InputError("`initial` must be a NavState")
         self.initial = initial
         self.coning = bool(coning)
+        #: code of the gravity model (:data:`inskit.earth.GRAVITY_MODELS`) and its name
+        self._gravity = earth.gravity_model_code(gravity)
+        self.gravity = earth.gravity_model_name(gravity)
         self._carry = np.zeros(11)
         self._carry[0] = initial.time
         self._started = False
@@ -109,6 +112,9 @@ class NedIntegrator(_Integrator):
     initial : NavState
     coning : bool
         Two-sample coning and sculling compensation (default on).
+    gravity : {"normal", "normal-simple", "j2"}
+        Gravity model (:func:`inskit.earth.gravity_n`); every integrator
+        takes it.
     height : {"free", "hold", "aid"}
         Height channel: free inertial (unstable over long runs, SYSTEM.md
         §1.3's ``gamma_d`` gradient), held to an external height (height and
@@ -119,8 +125,8 @@ class NedIntegrator(_Integrator):
         [s], for ``height="aid"``.
     """
 
-    def __init__(self, initial, *, coning=True, height="free", height_time_constant=10.0):
-        super().__init__(initial, coning=coning)
+    def __init__(self, initial, *, coning=True, height="free", height_time_constant=10.0, gravity="normal"):
+        super().__init__(initial, coning=coning, gravity=gravity)
         if height not in _HEIGHT_MODES:
             raise InputError(f"`height` must be one of {sorted(_HEIGHT_MODES)}, got {height!r}")
         if not height_time_constant > 0:
@@ -157,7 +163,7 @@ class NedIntegrator(_Integrator):
         v = np.empty((n, 3))
         q = np.empty((n, 4))
         K.ned_kernel(imu.time, imu.dtheta_b, imu.dv_b, start, self._lla, self._v, self._q, self._carry,
-                     self.coning, self.height_mode, h_ref, self._gains, lla, v, q)
+                     self.coning, self.height_mode, h_ref, self._gains, lla, v, q, self._gravity)
         near = np.nonzero(~(np.abs(lla[:, 0]) < POLE_LIMIT))[0]
         if len(near):
             _check_off_pole(lla[near[0], 0], f"the solution at t = {imu.time[near[0]]:.3f} s")
@@ -193,8 +199,8 @@ class WanderIntegrator(_Integrator):
         Initial wander angle [rad].
     """
 
-    def __init__(self, initial, *, coning=True, alpha0=0.0):
-        super().__init__(initial, coning=coning)
+    def __init__(self, initial, *, coning=True, alpha0=0.0, gravity="normal"):
+        super().__init__(initial, coning=coning, gravity=gravity)
         lat, lon, h = initial.lla
         C_ew = earth.dcm_en(lat, lon) @ rot.dcm_from_quat(_qz(alpha0))
         self._q_ew = rot.quat_from_dcm(C_ew)
@@ -210,7 +216,7 @@ class WanderIntegrator(_Integrator):
         v_w = np.empty((n, 3))
         q_wb = np.empty((n, 4))
         K.wander_kernel(imu.time, imu.dtheta_b, imu.dv_b, start, self._q_ew, self._h, self._v, self._q,
-                        self._carry, self.coning, q_ew, h, v_w, q_wb)
+                        self._carry, self.coning, q_ew, h, v_w, q_wb, self._gravity)
         return wander_to_ned(imu.time, q_ew, h, v_w, q_wb)
 
 
@@ -229,8 +235,8 @@ def wander_to_ned(time, q_ew, h, v_w, q_wb) -> NavSolution:
 class EcefIntegrator(_Integrator):
     """ECEF mechanization (Groves 2013 §5.2), streaming."""
 
-    def __init__(self, initial, *, coning=True):
-        super().__init__(initial, coning=coning)
+    def __init__(self, initial, *, coning=True, gravity="normal"):
+        super().__init__(initial, coning=coning, gravity=gravity)
         lat, lon, _ = initial.lla
         C_en = earth.dcm_en(lat, lon)
         self._r = earth.lla_to_ecef(initial.lla)
@@ -244,7 +250,7 @@ class EcefIntegrator(_Integrator):
         v = np.empty((n, 3))
         q = np.empty((n, 4))
         K.ecef_kernel(imu.time, imu.dtheta_b, imu.dv_b, start, self._r, self._v, self._q, self._carry,
-                      self.coning, r, v, q)
+                      self.coning, r, v, q, self._gravity)
         return ecef_to_ned_solution(imu.time, r, v, q)
 
 
@@ -265,8 +271,8 @@ class InertialIntegrator(_Integrator):
     to Earth-referenced NED terms.
     """
 
-    def __init__(self, initial, *, coning=True):
-        super().__init__(initial, coning=coning)
+    def __init__(self, initial, *, coning=True, gravity="normal"):
+        super().__init__(initial, coning=coning, gravity=gravity)
         lat, lon, _ = initial.lla
         C_en = earth.dcm_en(lat, lon)
         self.t0 = initial.time
@@ -282,7 +288,7 @@ class InertialIntegrator(_Integrator):
         v = np.empty((n, 3))
         q = np.empty((n, 4))
         K.inertial_kernel(imu.time, imu.dtheta_b, imu.dv_b, start, self.t0, self._r, self._v, self._q,
-                          self._carry, self.coning, r, v, q)
+                          self._carry, self.coning, r, v, q, self._gravity)
         theta = earth.OMEGA_IE * (imu.time - self.t0)
         q_ei = _qz(-theta)
         C_ei = rot.dcm_from_quat(q_ei)
@@ -319,7 +325,8 @@ def mechanize(imu: ImuData, initial: NavState, *, frame="ned", chunk_size=1_000_
     height_ref : float or (n,) array, optional
         External height for ``frame="ned"`` with ``height="hold"`` or ``"aid"``.
     **options
-        Passed to the integrator (``coning``, ``height``, ``alpha0`` ...).
+        Passed to the integrator (``coning``, ``gravity``, ``height``,
+        ``alpha0`` ...).
 
     Returns
     -------

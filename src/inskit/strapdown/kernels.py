@@ -23,6 +23,11 @@ and sculling ``(dth_prev x dv + dv_prev x dth) / 12`` for a constant-rate-of-
 change of the rates, the rotation correction ``dth x dv / 2``, the rotation of
 the navigation frame over the interval ``-zeta x (C dv) / 2``, gravity, Earth and
 transport rates evaluated at the interval midpoint, trapezoidal position.
+
+Gravity: every kernel takes ``gravity``, the integer code of the model
+(:data:`inskit.earth.GRAVITY_MODELS`; 0, the full normal gravity, by default)
+and evaluates it through :func:`inskit.earth.gravity_nd` (local-level frames)
+or :func:`inskit.earth.gravity_ecef_model` (ECEF and inertial).
 """
 
 from __future__ import annotations
@@ -32,9 +37,8 @@ import math
 from numba import njit
 
 from .. import earth
-from ..earth import gravity_down as _gravity_down
-from ..earth import gravity_ecef_xyz as _gravity_ecef_xyz
-from ..earth import gravity_north as _gravity_north
+from ..earth import gravity_ecef_model as _gravity_ecef
+from ..earth import gravity_nd as _gravity_nd
 from ..earth import principal_radii as _radii
 from ..rotations import qmul, quat_rot, rotvec_quat
 
@@ -91,8 +95,10 @@ def remember(d0, d1, d2, u0, u1, u2, e0, e1, e2, carry):
 
 
 @njit(cache=True, inline="always")
-def ned_step(dth, dv, dt, lla, v_n, q_nb, carry, coning, height_mode, h_ref, h_gains):
+def ned_step(dth, dv, dt, lla, v_n, q_nb, carry, coning, height_mode, h_ref, h_gains, gravity=0):
     """One NED mechanization step over an interval of length ``dt``, in place.
+
+    ``gravity`` is the code of the gravity model (:func:`inskit.earth.gravity_nd`).
 
     ``lla``, ``v_n``, ``q_nb`` and ``carry`` advance to the interval's end.
     Intermediate quantities are scalars, not scratch arrays, so the compiler
@@ -124,8 +130,7 @@ def ned_step(dth, dv, dt, lla, v_n, q_nb, carry, coning, height_mode, h_ref, h_g
     # specific-force velocity increment in n: (I - [zeta x]/2) C_nb dvc
     q0, q1, q2, q3 = q_nb[0], q_nb[1], q_nb[2], q_nb[3]
     f0, f1, f2 = quat_rot(q0, q1, q2, q3, c0, c1, c2)
-    gd = _gravity_down(latm, hm)
-    gn = _gravity_north(latm, hm)
+    gn, gd = _gravity_nd(latm, hm, gravity)
     # Coriolis and centripetal: (2 w_ie + w_en) x v_mid
     cx = 2.0 * wie_n + wen_n
     cy = wen_e
@@ -183,14 +188,14 @@ def start_rows(start, t0, a, b, q, a_out, b_out, q_out, carry):
 
 @njit(cache=True)
 def ned_kernel(t, dth_all, dv_all, start, lla, v_n, q_nb, carry, coning,
-               height_mode, h_ref, h_gains, lla_out, v_out, q_out):
+               height_mode, h_ref, h_gains, lla_out, v_out, q_out, gravity=0):
     """Local-level NED mechanization (SYSTEM.md §1.4, source 000 eq. 1-37..42)."""
     n = t.shape[0]
     start_rows(start, t[0], lla, v_n, q_nb, lla_out, v_out, q_out, carry)
     for k in range(start, n):
         dt = t[k] - carry[0]
         href = h_ref[k] if height_mode != HEIGHT_FREE else 0.0
-        ned_step(dth_all[k], dv_all[k], dt, lla, v_n, q_nb, carry, coning, height_mode, href, h_gains)
+        ned_step(dth_all[k], dv_all[k], dt, lla, v_n, q_nb, carry, coning, height_mode, href, h_gains, gravity)
         carry[0] = t[k]
         for i in range(3):
             lla_out[k, i] = lla[i]
@@ -201,7 +206,7 @@ def ned_kernel(t, dth_all, dv_all, start, lla, v_n, q_nb, carry, coning,
 
 @njit(cache=True)
 def wander_kernel(t, dth_all, dv_all, start, q_ew, h_arr, v_w, q_wb, carry, coning,
-                  q_ew_out, h_out, v_out, q_out):
+                  q_ew_out, h_out, v_out, q_out, gravity=0):
     """Wander-azimuth mechanization (SYSTEM.md §1.1 block diagram).
 
     The wander frame w is NED turned about down by the wander angle alpha; its
@@ -251,8 +256,7 @@ def wander_kernel(t, dth_all, dv_all, start, q_ew, h_arr, v_w, q_wb, carry, coni
         z1 = (wie1 + rho1) * dt
         z2 = wie2 * dt
         f0, f1, f2 = quat_rot(q_wb[0], q_wb[1], q_wb[2], q_wb[3], c0, c1, c2)
-        gd = _gravity_down(lat, hm)
-        gn = _gravity_north(lat, hm)
+        gn, gd = _gravity_nd(lat, hm, gravity)
         cx, cy, cz = 2.0 * wie0 + rho0, 2.0 * wie1 + rho1, 2.0 * wie2
         e0 = f0 - 0.5 * (z1 * f2 - z2 * f1) + (ca * gn - (cy * m2 - cz * m1)) * dt
         e1 = f1 - 0.5 * (z2 * f0 - z0 * f2) + (-sa * gn - (cz * m0 - cx * m2)) * dt
@@ -295,7 +299,8 @@ def wander_kernel(t, dth_all, dv_all, start, q_ew, h_arr, v_w, q_wb, carry, coni
 
 
 @njit(cache=True)
-def cartesian_kernel(t, dth_all, dv_all, start, rotating, t0, r, v, q, carry, coning, r_out, v_out, q_out):
+def cartesian_kernel(t, dth_all, dv_all, start, rotating, t0, r, v, q, carry, coning, r_out, v_out, q_out,
+                     gravity=0):
     """ECEF (``rotating``) or inertial-frame mechanization: one loop for both.
 
     * ECEF: ``dv_e/dt = C_eb f_b + g_e - 2 omega_ie x v_e`` with the frame's
@@ -324,7 +329,7 @@ def cartesian_kernel(t, dth_all, dv_all, start, rotating, t0, r, v, q, carry, co
         f0, f1, f2 = quat_rot(q[0], q[1], q[2], q[3], c0, c1, c2)
         if rotating:
             z = W_IE * dt
-            g0, g1, g2 = _gravity_ecef_xyz(x, y, zr)
+            g0, g1, g2 = _gravity_ecef(x, y, zr, gravity)
             # (I - [zeta x]/2) f with zeta = (0, 0, z); Coriolis -2 w x v_mid
             e0 = f0 + 0.5 * z * f1 + (g0 + 2.0 * W_IE * m1) * dt
             e1 = f1 - 0.5 * z * f0 + (g1 - 2.0 * W_IE * m0) * dt
@@ -334,7 +339,7 @@ def cartesian_kernel(t, dth_all, dv_all, start, rotating, t0, r, v, q, carry, co
             th = W_IE * (carry[0] + 0.5 * dt - t0)
             c, s = math.cos(th), math.sin(th)
             xe, ye = c * x + s * y, -s * x + c * y
-            g0, g1, g2 = _gravity_ecef_xyz(xe, ye, zr)
+            g0, g1, g2 = _gravity_ecef(xe, ye, zr, gravity)
             g0 -= w2 * xe
             g1 -= w2 * ye
             e0 = f0 + (c * g0 - s * g1) * dt
@@ -360,11 +365,13 @@ def cartesian_kernel(t, dth_all, dv_all, start, rotating, t0, r, v, q, carry, co
             q_out[k, i] = q[i]
 
 
-def ecef_kernel(t, dth_all, dv_all, start, r_e, v_e, q_eb, carry, coning, r_out, v_out, q_out):
+def ecef_kernel(t, dth_all, dv_all, start, r_e, v_e, q_eb, carry, coning, r_out, v_out, q_out, gravity=0):
     """ECEF mechanization (see :func:`cartesian_kernel`)."""
-    cartesian_kernel(t, dth_all, dv_all, start, True, 0.0, r_e, v_e, q_eb, carry, coning, r_out, v_out, q_out)
+    cartesian_kernel(t, dth_all, dv_all, start, True, 0.0, r_e, v_e, q_eb, carry, coning, r_out, v_out, q_out,
+                     gravity)
 
 
-def inertial_kernel(t, dth_all, dv_all, start, t0, r_i, v_i, q_ib, carry, coning, r_out, v_out, q_out):
+def inertial_kernel(t, dth_all, dv_all, start, t0, r_i, v_i, q_ib, carry, coning, r_out, v_out, q_out, gravity=0):
     """Inertial-frame mechanization (see :func:`cartesian_kernel`)."""
-    cartesian_kernel(t, dth_all, dv_all, start, False, t0, r_i, v_i, q_ib, carry, coning, r_out, v_out, q_out)
+    cartesian_kernel(t, dth_all, dv_all, start, False, t0, r_i, v_i, q_ib, carry, coning, r_out, v_out, q_out,
+                     gravity)
