@@ -595,6 +595,7 @@ from .cli_gnss import register as _register_gnss  # noqa: E402
 from .cli_report import register as _register_report  # noqa: E402
 from .cli_reproduce import register as _register_reproduce  # noqa: E402
 from .cli_study import register as _register_study  # noqa: E402
+from .cli_tune import register as _register_tune  # noqa: E402
 
 _register_gyrofree(cli, reproduce)
 cli.add_command(_platform_group, "platform")
@@ -603,6 +604,7 @@ _register_gnss(cli, reproduce)
 _register_report(cli)
 _register_reproduce(reproduce)
 _register_study(cli)
+_register_tune(cli)
 
 
 def main(argv=None):

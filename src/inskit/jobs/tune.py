@@ -1,0 +1,229 @@
+"""Filter settings chosen from the data by cross-validation (``inskit tune``).
+
+A setting that makes the outages of a benchmark look good must not be chosen
+by looking at them: the withheld fixes are the test.  This job chooses among
+candidate settings with **validation outages of its own**, placed in the
+stretches where the benchmark's protocol keeps GNSS on:
+
+1. the protocol's own windows stay withheld (their fixes are never read);
+2. in every stretch between them, after ``reaid_s`` of aiding (the filter
+   settles after the protocol's outage), ``hold_s`` more seconds of fixes
+   are withheld, provided ``reaid_s`` of aiding remain before the next
+   protocol window or the end of the fixes;
+3. each candidate is run with both sets of windows withheld and scored by the
+   horizontal RMS of its error at the end of the validation outages, against
+   the validation fixes withheld there (fixes the final run will use);
+4. the candidate with the smallest score wins; its keys are printed as a
+   TOML snippet to put into the config.
+
+The score uses the same forward filter, outage length scale and data as the
+final run, and no withheld fix of the protocol.  (K-fold style validation of
+a filter's tuning on held-out aiding: e.g. the cross-validated tuning of
+Kalman-filter noise in the adaptive-estimation literature; here without any
+model of the score, by plain runs.)
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import os
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+
+from ..errors import ConfigError
+
+#: keys a candidate grid may vary: "section.key"
+_SECTIONS = ("imu", "gnss", "noise", "init", "constraints", "filter", "odometer", "earth", "height")
+
+
+def parse_grid(specs) -> dict:
+    """``["noise.bias_tau_s=300,3000", "constraints.nhc_sigma_m_s=0.1,0.3"]``
+    as ``{"noise.bias_tau_s": [300.0, 3000.0], ...}`` (numbers, true/false,
+    or text)."""
+    grid = {}
+    for spec in specs:
+        if "=" not in spec:
+            raise ConfigError(f"--grid {spec!r}: expected SECTION.KEY=V1,V2,...")
+        key, vals = spec.split("=", 1)
+        key = key.strip()
+        if key.count(".") != 1 or key.split(".")[0] not in _SECTIONS:
+            raise ConfigError(f"--grid {spec!r}: the key must be SECTION.KEY with a section of the navigate config "
+                              f"({', '.join(_SECTIONS)})")
+        if key.split(".")[0] == "outages" or key in grid:
+            raise ConfigError(f"--grid {spec!r}: the outages are the job's, and a key may be given once")
+        items = [v.strip() for v in vals.split(",") if v.strip()]
+        if not items:
+            raise ConfigError(f"--grid {spec!r}: no values")
+        grid[key] = [_value(v) for v in items]
+    if not grid:
+        raise ConfigError("give at least one --grid SECTION.KEY=V1,V2,...")
+    return grid
+
+
+def _value(text):
+    low = text.lower()
+    if low in ("true", "false"):
+        return low == "true"
+    try:
+        v = float(text)
+    except ValueError:
+        return text
+    return int(v) if v.is_integer() and "." not in text and "e" not in low else v
+
+
+def candidates(grid: dict) -> list[dict]:
+    """Every combination of the grid's values, in a fixed order."""
+    keys = list(grid)
+    return [dict(zip(keys, combo)) for combo in itertools.product(*(grid[k] for k in keys))]
+
+
+def overrides_of(params: dict) -> dict:
+    """``{"a.b": v}`` as the nested override dict of the config loader."""
+    out = {}
+    for k, v in params.items():
+        sect, key = k.split(".")
+        out.setdefault(sect, {})[key] = v
+    return out
+
+
+def validation_windows(protocol_rel, t_first_rel, t_last_rel, hold_s=10.0, reaid_s=10.0, start_after_s=60.0):
+    """Validation outages in the stretches the protocol leaves aided.
+
+    Parameters
+    ----------
+    protocol_rel : list of (start, end)
+        The protocol's windows [s after the first fix].
+    t_first_rel, t_last_rel : float
+        First and last fix [s after the first fix].
+    hold_s, reaid_s : float
+        Length of a validation outage, and the aiding kept before and after it.
+    start_after_s : float
+        No validation outage before this (start-up and first convergence).
+
+    Returns
+    -------
+    list of (start, end), [s after the first fix]
+    """
+    edges = sorted((float(a), float(b)) for a, b in protocol_rel)
+    stretches = []
+    t = t_first_rel
+    for a, b in edges:
+        if a > t:
+            stretches.append((t, a))
+        t = max(t, b)
+    if t_last_rel > t:
+        stretches.append((t, t_last_rel))
+    out = []
+    for a, b in stretches:
+        s = max(a + reaid_s, start_after_s)
+        while s + hold_s + reaid_s <= b + 1e-9:
+            out.append((s, s + hold_s))
+            s += hold_s + 2.0 * reaid_s
+    return out
+
+
+def _run_one(args):
+    config_path, params, windows_rel, val_rel = args
+    from . import config as C
+    from .navigate import navigate, summary
+
+    over = overrides_of(params)
+    over["outages"] = {"protocol": "windows", "windows_s": [list(w) for w in windows_rel], "keep_satellites": 0}
+    over.setdefault("output", {})["plots"] = False
+    cfg = C.load_config(config_path, over)
+    try:
+        s = summary(navigate(cfg))
+    except Exception as exc:  # a candidate that diverges or is refused scores as such, the search goes on
+        return {"params": params, "cv_rms_m": math.inf, "error": str(exc).splitlines()[0][:300]}
+    val = [o for o in s["outage_table"] if any(abs(o["start_s"] - v[0]) < 1e-6 for v in val_rel)]
+    errs = np.array([o["horizontal_m"] for o in val], float)
+    return {"params": params, "cv_rms_m": float(np.sqrt(np.mean(errs ** 2))) if len(errs) else math.inf,
+            "cv_max_m": float(errs.max()) if len(errs) else math.inf, "cv_outages": int(len(errs)),
+            "health": s["health"]["verdict"], "health_reasons": list(s["health"].get("reasons", []))}
+
+
+def tune(config_path, grid: dict, *, hold_s=10.0, reaid_s=10.0, start_after_s=60.0, workers=None,
+         progress=None) -> dict:
+    """Cross-validate the candidates of ``grid`` on ``config_path``'s data.
+
+    Returns a dict: ``windows_protocol_s`` and ``windows_validation_s`` (s
+    after the first fix), ``candidates`` (each with ``params``,
+    ``cv_rms_m``, ``cv_max_m``, ``cv_outages``, ``health``; ranked best
+    first), ``best`` (the params) and ``best_toml`` (a snippet).
+    """
+    from . import config as C
+    from .navigate import load_inputs, outage_windows
+
+    cfg = C.load_config(config_path)
+    if cfg.gnss.coupling == "tight":
+        raise ConfigError(f"{config_path}: tune works on loose coupling (the validation outages withhold fixes)")
+    _, gnss = load_inputs(cfg)[:2]
+    t0 = float(gnss.time[0])
+    protocol = [(a - t0, b - t0) for a, b in outage_windows(cfg, gnss)]
+    val = validation_windows(protocol, 0.0, float(gnss.time[-1]) - t0, hold_s, reaid_s, start_after_s)
+    if not val:
+        raise ConfigError(f"{config_path}: no room for a validation outage of {hold_s:g} s with {reaid_s:g} s of "
+                          "aiding on each side between the protocol's outages; shorten --hold or --reaid")
+    cands = candidates(grid)
+    jobs = [(str(config_path), p, sorted(protocol + val), val) for p in cands]
+    workers = workers or min(len(jobs), os.cpu_count() or 1)
+    results = []
+    if workers == 1:
+        for j in jobs:
+            results.append(_run_one(j))
+            if progress:
+                progress(1)
+    else:
+        with ProcessPoolExecutor(workers) as ex:
+            for r in ex.map(_run_one, jobs):
+                results.append(r)
+                if progress:
+                    progress(1)
+    ranked = sorted(results, key=lambda r: (r["cv_rms_m"], cands.index(r["params"])))
+    best = ranked[0]["params"]
+    if not math.isfinite(ranked[0]["cv_rms_m"]):
+        raise ConfigError(f"{config_path}: every candidate failed; first error: {ranked[0].get('error')}")
+    for r in ranked:  # JSON has no infinity: a failed candidate has no score
+        for k in ("cv_rms_m", "cv_max_m"):
+            if k in r and not math.isfinite(r[k]):
+                r[k] = None
+    return {"config": str(config_path), "hold_s": hold_s, "reaid_s": reaid_s,
+            "windows_protocol_s": protocol, "windows_validation_s": val, "candidates": ranked,
+            "best": best, "best_toml": toml_snippet(best)}
+
+
+def toml_snippet(params: dict) -> str:
+    """The chosen keys as TOML sections."""
+    lines = []
+    for sect, keys in overrides_of(params).items():
+        lines.append(f"[{sect}]")
+        for k, v in keys.items():
+            lines.append(f"{k} = {_toml_value(v)}")
+    return "\n".join(lines) + "\n"
+
+
+def _toml_value(v):
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(v)
+    return '"' + str(v).replace('"', '\\"') + '"'
+
+
+def table_text(res: dict) -> str:
+    """The ranking as text."""
+    keys = list(res["candidates"][0]["params"])
+    head = "  ".join(f"{k:>24}" for k in keys) + f"  {'cv RMS [m]':>11}  {'cv max [m]':>10}  health"
+    rows = [head]
+    for r in res["candidates"]:
+        vals = "  ".join(f"{str(r['params'][k]):>24}" for k in keys)
+        rms, mx = r.get("cv_rms_m"), r.get("cv_max_m")
+        rows.append(f"{vals}  {'-' if rms is None else f'{rms:.3f}':>11}  {'-' if mx is None else f'{mx:.3f}':>10}  "
+                    f"{r.get('health', 'failed: ' + r.get('error', ''))}")
+    n = len(res["windows_validation_s"])
+    rows.append(f"{n} validation outages of {res['hold_s']:g} s (after {res['reaid_s']:g} s of aiding) between the "
+                f"{len(res['windows_protocol_s'])} outages of the protocol, whose fixes were never used")
+    rows.append("best:\n" + res["best_toml"])
+    return "\n".join(rows)
