@@ -7,23 +7,26 @@ import pytest
 
 from inskit import rotations as rot
 from inskit.errors import InputError
-from inskit.integration import Measurement, SensorNoise, StateLayout, UpdateContext, ins_blocks
+from inskit.integration import Measurement, Mounting, SensorNoise, StateLayout, UpdateContext, ins_blocks
 from inskit.integration.aiding import GnssSpeedCourse, Odometer, OdometerScale, course_speed_to_ne
 from inskit.integration.measurements import numerical_jacobian
 
 LAY = StateLayout(ins_blocks(SensorNoise(1e-3, 1e-2, 1e-5, 1e-4), scale_factors=True, lever_arm=True)
-                  + [OdometerScale()])
+                  + [OdometerScale(), Mounting()])
+MOUNT = np.array([0.07, -0.035])         # the IMU 4 deg nose-down and 2 deg to the right of the vehicle
 LEVER = np.array([0.9, -0.4, -1.3])      # roof antenna
 ODO_LEVER = np.array([-1.4, 0.0, 0.35])  # rear-axle centre behind and below the IMU
 LLA = np.array([1e-3, 2e-3, 120.0])
 EPS = {"pos": 1.0, "vel": 1e-2, "att": 1e-4, "bg": 1e-4, "ba": 1e-3, "sg": 1e-4, "sa": 1e-4, "lever": 1e-3,
-       "odo_scale": 1e-4}
+       "odo_scale": 1e-4, "mounting": 1e-4}
 K_ODO = 0.004
 
 
-def context(rate=(0.05, -0.1, 0.6), v_n=(12.0, -9.0, 0.3)):
-    """An estimate in a 0.6 rad/s turn with every block estimated."""
+def context(rate=(0.05, -0.1, 0.6), v_n=(12.0, -9.0, 0.3), mount=(0.0, 0.0)):
+    """An estimate in a 0.6 rad/s turn with every block estimated (the
+    mounting at ``mount``)."""
     aux = LAY.initial_aux()
+    aux[LAY.aux_slice("mounting")] = mount
     aux[LAY.aux_slice("lever")] = LEVER
     aux[LAY.aux_slice("bg")] = [1e-3, -2e-3, 4e-3]
     aux[LAY.aux_slice("sg")] = [2e-3, -1e-3, 3e-3]
@@ -55,12 +58,13 @@ def measurements(ctx):
             GnssSpeedCourse([100.0], [sp], [co], 0.1, 0.01, lever_arm_b=LEVER)]
 
 
+@pytest.mark.parametrize("mount", [(0.0, 0.0), tuple(MOUNT)])
 @pytest.mark.parametrize("which", range(3))
-def test_H_matches_finite_differences_of_the_innovation(which):
+def test_H_matches_finite_differences_of_the_innovation(which, mount):
     """1e-6 relative to the row's largest entry, plus 1e-9: the central
     difference's third-order term (eps^2 / 6 = 2e-9 of the 1e-4 rad attitude
     step); every h here is smooth (rotations and products), no rounding step."""
-    ctx = context()
+    ctx = context(mount=mount)
     m = measurements(ctx)[which]
     assert isinstance(m, Measurement)
     nu, H, R = m.linearize(ctx, 0)
@@ -163,3 +167,47 @@ def test_scale_block_is_a_named_random_walk():
     est = b.estimate0.copy()
     b.feedback(est, np.array([0.003]))
     assert est[0] == pytest.approx(-0.003)  # closed loop: estimate -= dx
+
+
+def test_odometer_without_the_mounting_block():
+    """The IMU's forward axis taken for the vehicle's: H checked as above,
+    and the prediction the same as with a zero mounting estimate."""
+    small = StateLayout([b for b in LAY.blocks if b.name != "mounting"])
+    ctx = context()
+    c2 = UpdateContext(ctx.t, ctx.dt, ctx.lla, ctx.v_n, ctx.C_nb, ctx.omega_raw_b, small,
+                       np.delete(ctx.aux, LAY.aux_slice("mounting")))
+    for m in measurements(ctx)[:2]:
+        nu, H, _ = m.linearize(c2, 0)
+        J = fd_jacobian(m, c2)
+        assert np.allclose(H, J, rtol=0, atol=1e-6 * np.abs(J).max() + 1e-9)
+        nu0, H0, _ = m.linearize(ctx, 0)
+        assert np.allclose(nu, nu0, atol=1e-12)
+        assert np.allclose(H, np.delete(H0, LAY.slice("mounting"), axis=1), atol=1e-12)
+
+
+def test_odometer_with_the_true_mounting_sees_no_innovation():
+    """A vehicle driving straight ahead at 15 m/s with its IMU mounted 4 deg
+    nose-down and 2 deg to the right (``[imu] mount_rpy_deg`` convention): in
+    the IMU's axes the wheel moves 1 m/s up and 0.5 m/s sideways, but with
+    the mounting estimate at the truth the wheel speed and both zero rows
+    match; with no mounting estimate the zero rows see those velocities."""
+    from inskit.integration.blocks import mounting_dcm
+
+    C_vb = mounting_dcm(*MOUNT)[0]
+    assert np.allclose(C_vb, rot.dcm_from_euler([0.0, *MOUNT]).T)
+    C_nv = rot.dcm_from_euler([0.0, 0.02, 0.8])
+    v_n = C_nv @ [15.0, 0.0, 0.0]
+    C_nb = C_nv @ C_vb
+    aux = LAY.initial_aux()
+    aux[LAY.aux_slice("mounting")] = MOUNT
+    aux[LAY.aux_slice("odo_scale")] = K_ODO
+    ctx = UpdateContext(100.0, 0.0, LLA.copy(), v_n, C_nb, np.zeros(3), LAY, aux)
+    odo = Odometer([100.0], [(1 + K_ODO) * 15.0], 0.05, with_nhc=True)
+    nu, _, _ = odo.linearize(ctx, 0)
+    assert np.abs(nu).max() < 1e-12
+    aux[LAY.aux_slice("mounting")] = 0.0
+    nu0, _, _ = odo.linearize(ctx, 0)
+    v_b = C_nb.T @ v_n
+    assert np.allclose(nu0[1:], v_b[1:], atol=1e-12)
+    assert v_b[2] == pytest.approx(-15.0 * np.sin(MOUNT[0]), rel=1e-3)  # nose-down: the IMU sees itself climb
+    assert v_b[1] == pytest.approx(15.0 * np.sin(MOUNT[1]) * np.cos(MOUNT[0]), rel=1e-3)  # yawed right: drifts left

@@ -138,3 +138,38 @@ def test_custom_feedback_is_used():
     settings = FilterSettings.standard(extra_blocks=[blk])
     out = run_filter(imu, start, [GnssPosition(gnss)], settings)
     assert out.estimate("k")[-1, 0] == pytest.approx(2.0)  # unobserved: no correction at all
+
+
+def test_mounting_dcm_is_the_mount_rotation_and_its_derivatives():
+    """``C_vb = dcm_from_euler((0, pitch, yaw)).T`` (navigate's mount
+    convention) and its two derivatives against central differences (step
+    1e-6 rad: truncation 1e-13)."""
+    from inskit import rotations as rot
+    from inskit.integration.blocks import mounting_dcm
+
+    p, y, h = 0.07, -0.035, 1e-6
+    C, d_p, d_y = mounting_dcm(p, y)
+    assert np.allclose(C, rot.dcm_from_euler([0.0, p, y]).T, atol=1e-15)
+    assert np.allclose(d_p, (mounting_dcm(p + h, y)[0] - mounting_dcm(p - h, y)[0]) / (2 * h), atol=1e-9)
+    assert np.allclose(d_y, (mounting_dcm(p, y + h)[0] - mounting_dcm(p, y - h)[0]) / (2 * h), atol=1e-9)
+
+
+def test_mounting_roll_is_invisible_to_the_vehicle_constraints():
+    """Why the block has no roll: the body velocity of a vehicle moving along
+    its forward axis, ``C_bv (V, 0, 0)``, is the same for any mounting roll,
+    and the vehicle-axes velocity rows the constraints use (forward speed;
+    lateral and vertical both zero) are unchanged by any roll about the
+    forward axis."""
+    from inskit import rotations as rot
+    from inskit.integration import Mounting
+    from inskit.integration.blocks import mounting_dcm
+
+    p, y = np.radians(4.0), np.radians(2.0)
+    v_b = [rot.dcm_from_euler([r, p, y]) @ [15.0, 0.0, 0.0] for r in np.radians([-30.0, 0.0, 10.0, 90.0])]
+    assert np.allclose(v_b, v_b[1], atol=1e-12)
+    C = mounting_dcm(p, y)[0]
+    assert np.allclose(C @ v_b[0], [15.0, 0.0, 0.0], atol=1e-12)
+    b = Mounting(sigma0=np.radians(3.0), rw=1e-5)
+    assert b.axes == ("pitch", "yaw") and b.size == 2 and b.unit == "rad"
+    assert b.estimate_names() == ["mounting_pitch_rad", "mounting_yaw_rad"]
+    assert np.allclose(b.sigma0, np.radians(3.0)) and np.allclose(b.psd, 1e-10) and b.transition() == []

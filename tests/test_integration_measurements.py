@@ -1,37 +1,40 @@
 """Every measurement's H against central finite differences of its own
-innovation over the fullest layout (scale factors, lever arm, time offset and
-a user block), and the two Jacobian defects found in review."""
+innovation over the fullest layout (scale factors, lever arm, time offset,
+mounting and a user block), and the two Jacobian defects found in review."""
 
 import numpy as np
 import pytest
 
 from inskit import rotations as rot
-from inskit.integration import (GnssPosition, GnssVelocity, Measurement, NonHolonomic, SensorNoise, StateBlock,
-                                StateLayout, UpdateContext, ZeroVelocity, ins_blocks)
+from inskit.integration import (GnssPosition, GnssVelocity, Measurement, Mounting, NonHolonomic, SensorNoise,
+                                StateBlock, StateLayout, UpdateContext, ZeroVelocity, ins_blocks)
 from inskit.integration.measurements import ned_difference
 from inskit.types import GnssData
 from inskit.integration.measurements import numerical_jacobian
 
 CLOCK = StateBlock("clock", ("bias", "drift"), "m", (10.0, 1.0), (0.1, 0.01), entries=((0, "clock", 1, 1.0),))
 LAY = StateLayout(ins_blocks(SensorNoise(1e-3, 1e-2, 1e-5, 1e-4), scale_factors=True, lever_arm=True,
-                             time_offset=True) + [CLOCK])
+                             time_offset=True) + [CLOCK, Mounting()])
+MOUNT = np.array([0.07, -0.035])  # an IMU 4 deg nose-down and 2 deg to the right of the vehicle
 LEVER = np.array([0.9, -0.4, -1.3])  # a roof antenna, 1.6 m from the IMU
 # near the equator, so that latitude's rounding (2e-19 rad) does not limit the differences
 LLA = np.array([1e-3, 2e-3, 120.0])
 EPS = {"pos": 1.0, "vel": 1e-2, "att": 1e-4, "bg": 1e-4, "ba": 1e-3, "sg": 1e-4, "sa": 1e-4, "lever": 1e-3,
-       "time_offset": 1e-3, "clock": 1.0}
+       "time_offset": 1e-3, "clock": 1.0, "mounting": 1e-4}
 
 
-def context(rate=(0.05, -0.1, 0.6), dt=0.004, offset=-0.26):
+def context(rate=(0.05, -0.1, 0.6), dt=0.004, offset=-0.26, layout=LAY):
     """An estimate in a 0.6 rad/s turn, 4 ms before the fix, with every block estimated."""
-    aux = LAY.initial_aux()
+    aux = layout.initial_aux()
+    if "mounting" in layout:
+        aux[layout.aux_slice("mounting")] = MOUNT
     aux[LAY.aux_slice("lever")] = LEVER
     aux[LAY.aux_slice("time_offset")] = offset
     aux[LAY.aux_slice("bg")] = [1e-3, -2e-3, 4e-3]
     aux[LAY.aux_slice("sg")] = [2e-3, -1e-3, 3e-3]
     C = rot.dcm_from_euler([0.05, -0.08, 2.3])
     w_raw = np.asarray(rate) * (1 + aux[LAY.aux_slice("sg")]) + aux[LAY.aux_slice("bg")]
-    return UpdateContext(100.0, dt, LLA.copy(), np.array([12.0, -9.0, 0.3]), C, w_raw, LAY, aux)
+    return UpdateContext(100.0, dt, LLA.copy(), np.array([12.0, -9.0, 0.3]), C, w_raw, layout, aux)
 
 
 def gnss_near(ctx, n=3):
@@ -67,6 +70,25 @@ def test_H_matches_finite_differences_of_the_innovation(which):
     bad = [f"{m.name} row {i}, {names[j]}: H {H[i, j]:.6e}, finite differences {J[i, j]:.6e}"
            for i, j in np.argwhere(np.abs(H - J) > 1e-6 * scale + 1e-9)]
     assert not bad, "\n".join(bad)
+
+
+def test_nhc_without_the_mounting_block_uses_the_imu_axes():
+    """Without the block the constraint holds in the IMU's own axes (its H
+    checked the same way), and with it the innovation is the vehicle's
+    lateral and vertical velocity: ``v_b + [v_b x] m`` to first order, here
+    0.07 rad of pitch on 15 m/s forward, about 1 m/s."""
+    no_mount = StateLayout([b for b in LAY.blocks if b.name != "mounting"])
+    ctx = context(layout=no_mount)
+    m = NonHolonomic([(0, 200)], 10.0, 0.1)
+    nu, H, _ = m.linearize(ctx, 0)
+    J = numerical_jacobian(m, ctx, 0, EPS)
+    assert np.allclose(H, J, rtol=0, atol=1e-6 * np.abs(J).max())
+    v_b = ctx.C_nb.T @ ctx.v_n
+    assert np.allclose(nu, v_b[1:3], atol=1e-12)
+    nu_m, _, _ = m.linearize(context(), 0)
+    first_order = v_b + np.cross(v_b, [0.0, MOUNT[0], MOUNT[1]])
+    assert np.allclose(nu_m, first_order[1:3], atol=0.01 * np.linalg.norm(v_b) * np.abs(MOUNT).max())
+    assert abs(nu_m[1] - nu[1]) > 0.9
 
 
 def test_gnss_velocity_has_the_lever_arm_block():

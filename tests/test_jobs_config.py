@@ -170,6 +170,21 @@ def test_init_keys_of_the_other_mode():
 
 
 # --- --outages on the command line -------------------------------------------------
+def test_mounting_keys_need_the_mounting_and_a_lateral_constraint():
+    with pytest.raises(ConfigError, match=r"c\.toml: field 'constraints\.sigma_mounting_deg': "
+                       r"constraints\.sigma_mounting_deg would be ignored: .*mounting = true"):
+        _cfg(LOOSE, constraints={"sigma_mounting_deg": 2.0})
+    with pytest.raises(ConfigError, match=r"field 'constraints\.mounting': .*neither constraints\.nhc nor "
+                       r"odometer\.with_nhc"):
+        _cfg(LOOSE, constraints={"mounting": True, "nhc": False}, odometer={"file": "odo.csv"})
+    with pytest.raises(ConfigError, match=r"field 'constraints\.mounting': .*the uncoupled scheme has none"):
+        _cfg(LOOSE, constraints={"mounting": True}, filter={"scheme": "uncoupled"})
+    c = _cfg(LOOSE, constraints={"mounting": True, "nhc": False, "sigma_mounting_deg": 2.0},
+             odometer={"file": "odo.csv", "with_nhc": True})
+    assert c.constraints.mounting and c.constraints.sigma_mounting_deg == 2.0
+    assert not _cfg(LOOSE).constraints.mounting  # off by default
+
+
 def test_outages_spec_parsing():
     assert outages_from_spec("windows:15-25,30-40") == {"protocol": "windows", "windows_s": [[15.0, 25.0],
                                                                                             [30.0, 40.0]]}

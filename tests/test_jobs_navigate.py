@@ -50,6 +50,16 @@ def test_summary_keys_contract(result):
     assert s["states"] == 21
 
 
+def test_no_mounting_warning_on_the_drive(result):
+    """The drive's [imu] mount_rpy_deg is right: the direction of travel
+    lies within 0.2 deg of the IMU's forward axis (0.06 deg pitch, 0.00 deg
+    yaw), far below the 1 deg warning."""
+    s = summary(result)
+    assert not [w for w in s["health"]["warnings"] if w.startswith("mounting:")], s["health"]["warnings"]
+    ev = s["mounting_check"]
+    assert ev["epochs"] > 500 and abs(ev["pitch_deg"]) < 0.2 and abs(ev["yaw_deg"]) < 0.2, ev
+
+
 def test_startup_levels_the_car(result):
     rpy = np.degrees(result.startup.state.euler)
     # parked on a street: within a few degrees of level after the mount rotation

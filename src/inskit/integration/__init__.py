@@ -18,7 +18,7 @@ References: SYSTEM.md §2 and §3; Groves 2013 ch. 14.
 
 from .aiding import GnssSpeedCourse, Odometer, OdometerScale
 from .blocks import (AccelBias, AccelScale, AttitudeError, GyroBias, GyroScale, InitialUncertainty, LeverArm,
-                     PositionError, SensorNoise, StateBlock, TimeOffset, VelocityError, ins_blocks)
+                     Mounting, PositionError, SensorNoise, StateBlock, TimeOffset, VelocityError, ins_blocks)
 from .engine import FilterOutput, FilterSettings, Track, run_filter
 from .layout import StateLayout
 from .measurements import (GnssPosition, GnssVelocity, Measurement, NonHolonomic, UpdateContext, ZeroVelocity,
@@ -29,7 +29,7 @@ from .uncoupled import run_uncoupled
 __all__ = [
     "GnssSpeedCourse", "Odometer", "OdometerScale",
     "AccelBias", "AccelScale", "AttitudeError", "FilterOutput", "FilterSettings", "GnssPosition", "GnssVelocity",
-    "GyroBias", "GyroScale", "InitialUncertainty", "LeverArm", "Measurement", "NonHolonomic", "PositionError",
+    "GyroBias", "GyroScale", "InitialUncertainty", "LeverArm", "Measurement", "Mounting", "NonHolonomic", "PositionError",
     "SensorNoise", "StateBlock", "StateLayout", "TimeOffset", "Track", "UpdateContext", "VelocityError",
     "ZeroVelocity", "ins_blocks", "perturbed_context", "rts_smooth", "run_filter", "run_uncoupled",
 ]

@@ -30,7 +30,7 @@ from ..errors import InputError
 from ..rotations import skew
 from ..types import check_time
 from .blocks import StateBlock
-from .measurements import UpdateContext, _cross, _sensor_rate_columns
+from .measurements import UpdateContext, _cross, _sensor_rate_columns, vehicle_axes
 
 
 class OdometerScale(StateBlock):
@@ -105,21 +105,25 @@ class Odometer:
 
     The odometer point sits at ``l_b`` from the IMU (body axes); its velocity
     in body axes is ``v_o = C_nb^T v_n + omega_ib_b x l_b``.  The sensor reads
-    ``z = (1 + k) x_b^T v_o + noise`` (``x_b`` the forward axis, ``k`` the
-    scale-factor error; signed: negative when reversing).  The prediction
+    ``z = (1 + k) x_v^T C_vb v_o + noise`` (``x_v`` the vehicle's forward
+    axis, ``C_vb`` the IMU-to-vehicle rotation, ``k`` the scale-factor error;
+    signed: negative when reversing).  The prediction
 
-    ``h = (1 + s) x_b^T (C_nb^T v_n + omega_ib_b x l_b)``
+    ``h = (1 + s) x_v^T C_vb (C_nb^T v_n + omega_ib_b x l_b)``
 
     uses ``s``, the ``odo_scale`` block's estimate when the layout holds one
-    (else 0, and the scale is not estimated).  With ``C_nb_est = (I - [phi
-    x]) C_nb`` (:class:`.blocks.AttitudeError`),
+    (else 0, and the scale is not estimated), and ``C_vb`` of the
+    ``mounting`` block's estimate (:class:`.blocks.Mounting`; else ``I``, the
+    IMU's forward axis taken for the vehicle's).  With ``C_nb_est = (I -
+    [phi x]) C_nb`` (:class:`.blocks.AttitudeError`) and ``C_vn = C_vb C_bn``,
 
-    ``H_vel = (1 + s) x_b^T C_bn``, ``H_att = -(1 + s) x_b^T C_bn [v_n x]``,
-    ``H_rate = -(1 + s) x_b^T [l_b x]`` (through ``d omega`` into the gyro
-    bias and scale-factor columns), ``H_odo_scale = x_b^T v_o``.
+    ``H_vel = (1 + s) x_v^T C_vn``, ``H_att = -(1 + s) x_v^T C_vn [v_n x]``,
+    ``H_rate = -(1 + s) x_v^T C_vb [l_b x]`` (through ``d omega`` into the
+    gyro bias and scale-factor columns), ``H_odo_scale = x_v^T C_vb v_o``,
+    ``H_mounting = (1 + s) x_v^T [dC_vb/dpitch v_o, dC_vb/dyaw v_o]``.
 
     With ``with_nhc`` the measurement has three rows ``[z, 0, 0]`` against
-    ``diag(1 + s, 1, 1) v_o``: the lateral and vertical velocities of the
+    ``diag(1 + s, 1, 1) C_vb v_o``: the lateral and vertical velocities of the
     wheel are zero (the non-holonomic constraint at the wheel, where it
     holds, rather than at the IMU), i.e. full body-velocity aiding.
 
@@ -176,19 +180,27 @@ class Odometer:
         g = 1.0 if s_est is None else 1.0 + float(s_est[0])
         C_bn = ctx.C_nb.T
         lev = self.lever_arm_b
+        mount = vehicle_axes(ctx)
+        C_vb = np.eye(3) if mount is None else mount[0]
+        C_vn = C_bn if mount is None else C_vb @ C_bn
         v_o = C_bn @ ctx.v_n
         k = 3 if self.with_nhc else 1
         gain = np.ones(k)
         gain[0] = g
         H = np.zeros((k, lay.size))
-        H[:, lay.slice("vel")] = gain[:, None] * C_bn[:k]
-        H[:, lay.slice("att")] = -gain[:, None] * (C_bn @ skew(ctx.v_n))[:k]
+        H[:, lay.slice("vel")] = gain[:, None] * C_vn[:k]
+        H[:, lay.slice("att")] = -gain[:, None] * (C_vn @ skew(ctx.v_n))[:k]
         if lev.any():
             v_o = v_o + _cross(ctx.omega_ib_b, lev)
-            _sensor_rate_columns(H, ctx, -gain[:, None] * skew(lev)[:k])
+            _sensor_rate_columns(H, ctx, -gain[:, None] * (C_vb @ skew(lev))[:k])
+        v_ov = v_o if mount is None else C_vb @ v_o  # the wheel point's velocity in the vehicle's axes
         if s_est is not None:
-            H[0, lay.slice("odo_scale")] = v_o[0]
-        h = gain * v_o[:k]
+            H[0, lay.slice("odo_scale")] = v_ov[0]
+        if mount is not None:
+            m = lay.slice("mounting").start
+            H[:, m] = gain * (mount[1] @ v_o)[:k]
+            H[:, m + 1] = gain * (mount[2] @ v_o)[:k]
+        h = gain * v_ov[:k]
         z = np.zeros(k)
         z[0] = self.speed[row]
         R = np.diag(np.r_[self.sigma[row] ** 2, np.full(k - 1, self.nhc_sigma**2)])

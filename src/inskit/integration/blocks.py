@@ -275,6 +275,76 @@ class TimeOffset(_Named):
                          description="IMU-GNSS time offset")
 
 
+def mounting_dcm(pitch, yaw):
+    """``C_vb`` (IMU body axes to vehicle axes) of the boresight angles, and
+    its derivatives by pitch and by yaw.
+
+    ``C_vb = dcm_from_euler((0, pitch, yaw)).T``: the angles are those of
+    navigate's ``[imu] mount_rpy_deg`` (:func:`inskit.io.rtklib.mount_dcm`,
+    where ``C_bs = dcm_from_euler(mount).T`` rotates sensor readings into
+    body axes), applied after it; for small angles ``v_v = v_b + [v_b x] m``,
+    so the vehicle's vertical velocity is ``v_bz + pitch v_bx`` and its
+    lateral one ``v_by - yaw v_bx``.
+
+    Parameters
+    ----------
+    pitch, yaw : float
+        [rad].
+
+    Returns
+    -------
+    C_vb, dC_dpitch, dC_dyaw : (3, 3) ndarray
+    """
+    cp, sp, cy, sy = math.cos(pitch), math.sin(pitch), math.cos(yaw), math.sin(yaw)
+    C = np.array([[cp * cy, cp * sy, -sp], [-sy, cy, 0.0], [sp * cy, sp * sy, cp]])
+    d_p = np.array([[-sp * cy, -sp * sy, -cp], [0.0, 0.0, 0.0], [cp * cy, cp * sy, -sp]])
+    d_y = np.array([[-cp * sy, cp * cy, 0.0], [-cy, -sy, 0.0], [-sp * sy, sp * cy, 0.0]])
+    return C, d_p, d_y
+
+
+class Mounting(_Named):
+    """Boresight (mounting) angles of the vehicle axes against the IMU body
+    axes [rad], pitch and yaw: a random constant with a slow random walk of
+    PSD ``rw**2`` [rad^2/s].
+
+    The filter navigates the IMU's body axes; the vehicle-motion constraints
+    (:class:`.measurements.NonHolonomic`, :class:`.aiding.Odometer`) hold in
+    the vehicle's axes, ``v_v = C_vb v_b`` with ``C_vb`` of
+    :func:`mounting_dcm`.  They find the block by its name ``"mounting"``;
+    without it ``C_vb = I``.  The estimate is the residual mounting after
+    ``[imu] mount_rpy_deg``, in the same convention.
+
+    Why no roll: with ``C_vb = (R_z(yaw) R_y(pitch) R_x(roll))^T`` the body
+    velocity of a vehicle moving along its forward axis, ``v_b = C_bv (V, 0,
+    0)``, does not depend on the roll at all (``R_x`` leaves the forward axis
+    alone), and the constraints' rows (lateral and vertical zero, forward
+    speed) are the same for any roll about the forward axis.  A roll of the
+    mounting is therefore exactly unobservable and exactly harmless to these
+    measurements; pitch and yaw describe any mounting as they see it.
+
+    Parameters
+    ----------
+    sigma0 : float or (2,) float
+        Initial 1-sigma [rad].
+    rw : float
+        Random-walk PSD root [rad/sqrt(s)].
+    estimate0 : (2,) float
+        Initial pitch and yaw [rad].
+
+    References
+    ----------
+    Groves 2013 §16.2.3 (non-holonomic constraints, which hold in the
+    vehicle's axes, not the IMU's).
+    """
+
+    _est_names = ("mounting_pitch_rad", "mounting_yaw_rad")
+    _sig_names = ("sigma_mounting_pitch_rad", "sigma_mounting_yaw_rad")
+
+    def __init__(self, sigma0=np.radians(5.0), rw=np.radians(0.01) / 60.0, estimate0=(0.0, 0.0)):
+        super().__init__("mounting", ("pitch", "yaw"), "rad", sigma0, rw**2, math.inf, estimate0=estimate0,
+                         description="boresight of the vehicle axes against the IMU body axes")
+
+
 # --- parameter bundles for the standard layout ------------------------------------------
 @dataclass(frozen=True)
 class SensorNoise:

@@ -42,6 +42,7 @@ from .. import earth
 from ..rotations import dcm_from_quat, quat_from_dcm, skew
 from ..types import GnssData
 from . import _kernel as K
+from .blocks import mounting_dcm
 from .layout import StateLayout
 
 
@@ -320,11 +321,23 @@ class ZeroVelocity(_GridMeasurement):
         return ctx.v_n.copy(), _template(ctx.layout, 3, "vel"), np.eye(3) * self.sigma**2
 
 
+def vehicle_axes(ctx: UpdateContext):
+    """``(C_vb, dC_dpitch, dC_dyaw)`` of the ``mounting`` block's estimate
+    (:func:`.blocks.mounting_dcm`), or ``None`` when the layout has no such
+    block (the vehicle's axes are then the IMU's)."""
+    m = ctx.estimate("mounting")
+    return None if m is None else mounting_dcm(float(m[0]), float(m[1]))
+
+
 class NonHolonomic(_GridMeasurement):
     """Non-holonomic constraint: a land vehicle does not slide sideways or
-    jump, so the body-frame lateral and vertical velocities are zero.
+    jump, so its lateral and vertical velocities are zero.
 
-    ``v_b = C_nb^T v_n``; ``H_vel = C_bn[1:3]``, ``H_att = -(C_bn [v_n x])[1:3]``.
+    They are zero in the vehicle's axes: ``v_v = C_vb C_bn v_n``, with
+    ``C_vb`` of the ``mounting`` block's estimate when the layout holds one
+    (:class:`.blocks.Mounting`), else ``I`` (the IMU's axes are taken for
+    the vehicle's).  ``H_vel = (C_vb C_bn)[1:3]``, ``H_att = -(C_vb C_bn [v_n
+    x])[1:3]``, ``H_mounting = [dC_vb/dpitch v_b, dC_vb/dyaw v_b][1:3]``.
     """
 
     name = "nhc"
@@ -334,9 +347,19 @@ class NonHolonomic(_GridMeasurement):
         C_bn = ctx.C_nb.T
         v_b = C_bn @ ctx.v_n
         H = np.zeros((2, lay.size))
-        H[:, 3:6] = C_bn[1:3]
-        H[:, 6:9] = -(C_bn @ skew(ctx.v_n))[1:3]
-        return v_b[1:3], H, np.eye(2) * self.sigma**2
+        mount = vehicle_axes(ctx)
+        if mount is None:
+            H[:, 3:6] = C_bn[1:3]
+            H[:, 6:9] = -(C_bn @ skew(ctx.v_n))[1:3]
+            return v_b[1:3], H, np.eye(2) * self.sigma**2
+        C_vb, d_p, d_y = mount
+        C_vn = C_vb @ C_bn
+        H[:, 3:6] = C_vn[1:3]
+        H[:, 6:9] = -(C_vn @ skew(ctx.v_n))[1:3]
+        s = lay.slice("mounting")
+        H[:, s.start] = (d_p @ v_b)[1:3]
+        H[:, s.start + 1] = (d_y @ v_b)[1:3]
+        return (C_vb @ v_b)[1:3], H, np.eye(2) * self.sigma**2
 
 
 def numerical_jacobian(meas, ctx: UpdateContext, row=0, steps=None):

@@ -315,7 +315,12 @@ class InitSection(_Strict):
 
 
 class ConstraintsSection(_Strict):
-    """Pseudo-measurements of a vehicle's motion."""
+    """Pseudo-measurements of a vehicle's motion.
+
+    Rules: sigma_mounting_deg and mounting_rw_deg_sqrt_h need mounting =
+    true; mounting = true needs nhc = true or odometer.with_nhc = true, and a
+    filter (not the uncoupled scheme).
+    """
 
     zupt: bool = Field(True, description="zero-velocity updates while the GNSS fixes show the vehicle at rest")
     zupt_sigma_m_s: float = Field(0.02, gt=0, description="sigma of a zero-velocity update per axis")
@@ -323,6 +328,19 @@ class ConstraintsSection(_Strict):
                       "(a land vehicle; off for a handheld device)")
     nhc_sigma_m_s: float = Field(0.1, gt=0, description="sigma of the lateral and vertical body velocity")
     rate_hz: float = Field(10.0, gt=0, le=1000, description="rate of the zero-velocity and non-holonomic updates")
+    mounting: bool = Field(False, description="estimate the IMU's mounting in the vehicle (pitch and yaw of the "
+                           "vehicle axes against the IMU's, after imu.mount_rpy_deg; 2 states) for the "
+                           "non-holonomic constraint and the odometer")
+    sigma_mounting_deg: float = Field(5.0, gt=0, le=30, description="initial sigma of the mounting angles")
+    mounting_rw_deg_sqrt_h: float = Field(0.01, ge=0, description="random walk of the mounting angles")
+
+    @model_validator(mode="after")
+    def _mounting_keys(self):
+        bad = [] if self.mounting else _changed(self, ("sigma_mounting_deg", "mounting_rw_deg_sqrt_h"))
+        if bad:
+            raise _key_error(bad[0], f"{_names(bad, 'constraints')} would be ignored: the mounting is estimated "
+                             "only with constraints.mounting = true")
+        return self
 
 
 class FilterSection(_Strict):
@@ -486,6 +504,19 @@ class NavigateConfig(_Strict):
     earth: EarthSection = Field(EarthSection(), description="Earth model (gravity)")
     base_dir: Path = Field(Path("."), description="(set by the loader, not a key of the file) the folder "
                            "relative paths are taken from: the config file's")
+
+    @model_validator(mode="after")
+    def _mounting_needs_a_vehicle_constraint(self):
+        c = self.constraints
+        if c.mounting and not c.nhc and not (self.odometer is not None and self.odometer.with_nhc):
+            raise _key_error("constraints.mounting", "mounting = true estimates the mounting through the "
+                             "lateral and vertical zero velocity of the vehicle, and neither constraints.nhc nor "
+                             "odometer.with_nhc applies it (the forward speed alone sees the mounting only to "
+                             "second order)")
+        if c.mounting and self.filter.scheme == "uncoupled":
+            raise _key_error("constraints.mounting", "mounting = true needs a filter: the uncoupled scheme has "
+                             "none")
+        return self
 
     @model_validator(mode="after")
     def _keep_needs_tight(self):

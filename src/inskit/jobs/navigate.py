@@ -410,6 +410,11 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
             from ..integration import OdometerScale
 
             extra_blocks.append(OdometerScale(cfg.odometer.scale_sigma0, cfg.odometer.scale_rw))
+    if cfg.constraints.mounting:
+        from ..integration import Mounting
+
+        extra_blocks.append(Mounting(cfg.constraints.sigma_mounting_deg * DEG,
+                                     cfg.constraints.mounting_rw_deg_sqrt_h * DEG / 60.0))
     if tight:
         meas_gnss, use_rows = tight_measurements(cfg, raw, windows, lever)
         clk_blocks, clock_start = clock_blocks(cfg, raw, initial, lever, use_rows)
@@ -567,6 +572,15 @@ def summary(res: NavigateResult) -> dict:
         out["truth_file"] = str(res.config.resolve(res.config.truth.file))
         out["truth_errors"] = truth_errors(res, res.truth)
     out["health"] = health(fw, res.gaps or (), res.rate_changes or ())
+    from ..integration.mounting import mounting_check, mounting_summary
+
+    c, odo = res.config.constraints, res.config.odometer
+    out.update(mounting_summary(fw, res.config.imu.mount_rpy_deg))
+    out["mounting_check"], warn = mounting_check(
+        fw, res.gnss.select(res.used), mount_rpy_deg=res.config.imu.mount_rpy_deg,
+        constrained=res.config.filter.scheme != "uncoupled" and (c.nhc or (odo is not None and odo.with_nhc)))
+    if warn:
+        out["health"]["warnings"].append(warn)
     out["imu_rate_changes"] = [{"row": c.row, "t_s": c.t_s, "rate_before_hz": c.rate_before_hz,
                                 "rate_after_hz": c.rate_after_hz} for c in (res.rate_changes or ())]
     out["imu_gaps"] = [{"row": g.row, "start_s": g.start_s, "length_s": g.length_s} for g in (res.gaps or ())]
@@ -608,7 +622,9 @@ def health(out, gaps=(), rate_changes=()) -> dict:
     *Warnings*, listed without changing the verdict: other blocks' estimates
     beyond 5 initial sigmas (a scale factor soaking up a mounting error, say),
     and a mean NIS below a third of the degrees of freedom (conservative
-    noise, common for constraint pseudo-measurements).
+    noise, common for constraint pseudo-measurements).  :func:`summary` adds
+    the warning of a mounting the constraints do not model
+    (:func:`inskit.integration.mounting.mounting_check`).
     """
     reasons, warnings, per = [], [], {}
     if not any(len(v.get("nis", [])) for v in out.innovations.values()):

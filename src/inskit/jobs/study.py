@@ -472,6 +472,9 @@ def build_cases(spec: StudySpec, scenario_path, key="") -> list[StudyCase]:
     if any(sc.imu.lever_arm_b_m):
         raise ConfigError(f"{scenario_path}: imu.lever_arm_b_m must be zero for a study (its truth is the IMU's "
                           f"own trajectory), got {list(sc.imu.lever_arm_b_m)}")
+    if any(sc.imu.mount_rpy_deg):
+        raise ConfigError(f"{scenario_path}: imu.mount_rpy_deg must be zero for a study (its IMU is simulated in "
+                          f"the trajectory's axes), got {list(sc.imu.mount_rpy_deg)}")
     tr = build_trajectory(sc, np.random.default_rng(spec.seed))
     T = tr.duration if spec.duration_s is None else spec.duration_s
     if T > tr.duration:

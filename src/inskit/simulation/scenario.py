@@ -52,6 +52,16 @@ class ImuSpec(_S):
     quadrature_nodes: int = Field(3, ge=1, le=12)
     lever_arm_b_m: tuple[float, float, float] = Field(
         (0.0, 0.0, 0.0), description="IMU position from the trajectory (truth) point, body axes")
+    mount_rpy_deg: tuple[float, float, float] = Field(
+        (0.0, 0.0, 0.0), description="mounting of the IMU in the vehicle, in the convention of navigate's "
+        "[imu] mount_rpy_deg (the same numbers there rotate the readings back into vehicle axes); the truth file "
+        "keeps the vehicle's attitude")
+
+    @model_validator(mode="after")
+    def _mount(self):
+        if not all(abs(a) <= 360.0 for a in self.mount_rpy_deg):
+            raise ValueError(f"mount_rpy_deg must be angles within +-360 deg, got {list(self.mount_rpy_deg)}")
+        return self
 
 
 class GnssSpec(_S):
@@ -368,10 +378,40 @@ class Simulation:
     raw: object = None
 
 
+def mounted_imu(imu: ImuData, mount_rpy_deg) -> ImuData:
+    """The readings of an IMU mounted at ``mount_rpy_deg`` in the vehicle,
+    from the vehicle-axes increments ``imu``.
+
+    The angles follow navigate's ``[imu] mount_rpy_deg``
+    (:func:`inskit.io.rtklib.mount_dcm`): navigate rotates sensor readings
+    into vehicle (body) axes by ``C_bs = dcm_from_euler(mount).T``, so the
+    sensor reads ``x_s = dcm_from_euler(mount) x_b``, and the same numbers in
+    a navigate config undo the mounting exactly.  ``(0, p, 0)`` with ``p >
+    0`` is an IMU pitched nose-down by ``p`` against the vehicle; ``(0, 0,
+    y)`` one yawed to the left by ``y``.  A rigid mounting: the gyros sense
+    the vehicle's rate and the accelerometers its specific force, rotated.
+    """
+    from ..rotations import dcm_from_euler
+
+    m = np.asarray(mount_rpy_deg, float)
+    if not m.any():
+        return imu
+    C_sb = dcm_from_euler(np.radians(m))
+    return ImuData(imu.time, imu.dtheta_b @ C_sb.T, imu.dv_b @ C_sb.T)
+
+
 def simulate(sc: Scenario, seed=0, *, truth_rate_hz=None, progress=None) -> Simulation:
     """Simulate a scenario: truth, ideal and measured IMU, GNSS fixes.
 
     The specific force follows the gravity model of ``[earth] gravity``.
+
+    The truth is the vehicle's: position of the trajectory point, velocity,
+    and the attitude (and, with rates, body rate and specific force) of the
+    vehicle axes.  With ``[imu] mount_rpy_deg`` the IMU's own axes differ
+    from them (:func:`mounted_imu`): its attitude is
+    ``C_nb = C_nv dcm_from_euler(mount)^T``, and the ideal and measured IMU
+    are in its axes (the sensor errors act there).
+
     One ``numpy.random.default_rng(seed)`` feeds every draw in a fixed order,
     so the same seed gives the same numbers (and byte-identical files).
     Raw GNSS observations (``[raw_gnss]``) draw from their own child
@@ -383,8 +423,9 @@ def simulate(sc: Scenario, seed=0, *, truth_rate_hz=None, progress=None) -> Simu
     t = np.arange(0.0, tr.duration + 1e-9, dt)
     if len(t) < 2:
         raise ConfigError("the scenario is shorter than one IMU sample")
-    ideal = ideal_imu(tr, t, nodes=sc.imu.quadrature_nodes, lever_arm_b=sc.imu.lever_arm_b_m,
-                      gravity=sc.earth.gravity)
+    ideal = mounted_imu(ideal_imu(tr, t, nodes=sc.imu.quadrature_nodes, lever_arm_b=sc.imu.lever_arm_b_m,
+                                  gravity=sc.earth.gravity),
+                        sc.imu.mount_rpy_deg)
     if progress:
         progress("ideal IMU")
     imu, draws = apply_imu_errors(ideal, imu_errors(sc), rng)
