@@ -92,3 +92,4 @@ def test_short_and_moving_logs_are_refused():
     dv[len(t) // 2:, 0] += 0.02  # 2 m/s^2 forward from half way: driving off
     with pytest.raises(InputError, match="not static"):
         allan_imu(ImuData(t, np.zeros_like(dv), dv))
+

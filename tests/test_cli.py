@@ -96,6 +96,40 @@ def test_evaluate_mismatched_time_bases(files, tmp_path):
     assert r.returncode == 2 and "do not overlap" in r.stderr and len(r.stderr.strip().splitlines()) == 1
 
 
+def test_mechanize_height_ref_takes_a_number_or_a_height_log(files, tmp_path, capsys):
+    """--height-ref 50 and a log holding 50 m throughout aid the height channel
+    the same way; a log that is neither a number nor a file is one error line.
+    (In-process, through the entry point: four runs in a subprocess each would
+    cost seconds of start-up.)"""
+    from inskit.cli import main
+
+    def run(*args):
+        import warnings
+
+        with warnings.catch_warnings(), np.errstate():  # main() silences both for the process: not beyond here
+            try:
+                main([str(a) for a in args])
+                code = 0
+            except SystemExit as exc:
+                code = exc.code
+        out = capsys.readouterr()
+        return code, out.out, out.err
+
+    t = np.arange(-1.0, 61.0, 1.0)
+    (tmp_path / "h.csv").write_text("time_s,height_m\n" + "".join(f"{x},50.0\n" for x in t))
+    base = ("mechanize", files / "imu.csv", "--init-from", files / "truth.csv")
+    ends = []
+    for ref in ("50", tmp_path / "h.csv"):
+        code, out, err = run(*base, "--height", "aid", "--height-ref", ref, "--json")
+        assert code == 0, err
+        ends.append(json.loads(out)["final"]["height_m"])
+    assert ends[0] == ends[1]
+    code, _, err = run(*base, "--height", "aid", "--height-ref", tmp_path / "nosuch.csv")
+    assert code == 2 and "neither a height in metres nor a height log" in err and len(err.strip().splitlines()) == 1
+    code, _, err = run(*base, "--height-ref", "50")
+    assert code == 2 and "--height-ref would be ignored with --height free" in err
+
+
 def test_simulate_and_allan_json(tmp_path):
     scen = tmp_path / "s.toml"
     scen.write_text('name = "still"\n[start]\nlat_deg = 45\nlon_deg = 7\n[imu]\nrate_hz = 100\ngrade = "tactical"\n'
@@ -106,12 +140,24 @@ def test_simulate_and_allan_json(tmp_path):
     assert s["imu_epochs"] == 12001 and s["seed"] == 3
     r = inskit("simulate", scen, "--out", tmp_path / "o")
     assert r.returncode == 2 and "refusing to overwrite" in r.stderr
-    r = inskit("allan", tmp_path / "o" / "imu.csv", "--json", "--plot", tmp_path / "a.png")
+    r = inskit("allan", tmp_path / "o" / "imu.csv", "--json", "--plot", tmp_path / "a.png", "--toml",
+               tmp_path / "noise.toml")
     assert r.returncode == 0, r.stderr
     a = json.loads(r.stdout)
     # tactical preset: ARW 0.125 deg/sqrt(h); two minutes of data pin the white noise within 15 %
     assert abs(a["navigate_noise_section"]["gyro_arw_deg_sqrt_h"] / 0.125 - 1) < 0.15
     assert (tmp_path / "a.png").exists()
+    # the [noise] section as a file: a navigate config takes it as it is
+    import tomllib
+
+    from inskit.jobs.config import NoiseSection
+
+    text = (tmp_path / "noise.toml").read_text()
+    assert text == a["noise_toml"] and a["toml"] == str(tmp_path / "noise.toml")
+    assert NoiseSection.model_validate(tomllib.loads(text)["noise"]).gyro_arw_deg_sqrt_h == pytest.approx(
+        a["noise_section"]["gyro_arw_deg_sqrt_h"], rel=1e-4)
+    r = inskit("allan", tmp_path / "o" / "imu.csv", "--toml", tmp_path / "noise.toml")
+    assert r.returncode == 2 and "refusing to overwrite" in r.stderr
 
 
 def test_simulate_navigate_evaluate_pipeline(tmp_path):

@@ -1,14 +1,16 @@
-"""Odometer and GNSS speed-and-course plug-ins: H against central finite
-differences of their own innovations over the fullest layout, zero innovation
-at the truth, the sign of the scale factor, and the low-speed skip."""
+"""Odometer, GNSS speed-and-course and height plug-ins: H against central
+finite differences of their own innovations over the fullest layout, zero
+innovation at the truth, the sign of the scale factor, the low-speed skip,
+and the height measurement's offset column."""
 
 import numpy as np
 import pytest
 
 from inskit import rotations as rot
 from inskit.errors import InputError
-from inskit.integration import Measurement, Mounting, SensorNoise, StateLayout, UpdateContext, ins_blocks
-from inskit.integration.aiding import GnssSpeedCourse, Odometer, OdometerScale, course_speed_to_ne
+from inskit.integration import (HeightBias, Measurement, Mounting, SensorNoise, StateLayout, UpdateContext,
+                                ins_blocks)
+from inskit.integration.aiding import GnssSpeedCourse, Height, Odometer, OdometerScale, course_speed_to_ne
 from inskit.integration.measurements import numerical_jacobian
 
 LAY = StateLayout(ins_blocks(SensorNoise(1e-3, 1e-2, 1e-5, 1e-4), scale_factors=True, lever_arm=True)
@@ -211,3 +213,51 @@ def test_odometer_with_the_true_mounting_sees_no_innovation():
     assert np.allclose(nu0[1:], v_b[1:], atol=1e-12)
     assert v_b[2] == pytest.approx(-15.0 * np.sin(MOUNT[0]), rel=1e-3)  # nose-down: the IMU sees itself climb
     assert v_b[1] == pytest.approx(15.0 * np.sin(MOUNT[1]) * np.cos(MOUNT[0]), rel=1e-3)  # yawed right: drifts left
+
+
+# --- height (barometer, profile) -----------------------------------------------------------
+HLAY = StateLayout(ins_blocks(SensorNoise(1e-3, 1e-2, 1e-5, 1e-4), scale_factors=True, lever_arm=True)
+                   + [HeightBias(20.0, "random-walk", rw=0.03)])
+BARO_LEVER = np.array([0.6, -0.3, -0.8])  # in the dashboard, above and ahead of the IMU
+
+
+def height_context(dt=0.004, bias=7.5):
+    aux = HLAY.initial_aux()
+    aux[HLAY.aux_slice("height_bias")] = bias
+    C = rot.dcm_from_euler([0.05, -0.08, 2.3])
+    return UpdateContext(100.0, dt, LLA.copy(), np.array([12.0, -9.0, 0.3]), C, np.array([0.05, -0.1, 0.6]),
+                         HLAY, aux)
+
+
+def test_height_H_matches_finite_differences_and_is_zero_at_the_truth():
+    """H against central differences over the fullest layout (same tolerance
+    as above); at the truth (the sensor point's height, the state carried
+    over dt, plus the offset) the innovation is 0; the offset enters with +1,
+    the IMU height with -1 (error states estimate - truth, x_pos_d = -dh)."""
+    ctx = height_context()
+    cl = ctx.C_nb @ BARO_LEVER
+    z = LLA[2] - 0.3 * ctx.dt - cl[2] + 7.5
+    m = Height([100.0], [z], 0.5, lever_arm_b=BARO_LEVER)
+    assert isinstance(m, Measurement) and m.name == "height"
+    nu, H, R = m.linearize(ctx, 0)
+    assert abs(nu[0]) < 1e-9 and R[0, 0] == pytest.approx(0.25)
+    J = numerical_jacobian(m, ctx, 0, {**EPS, "height_bias": 1e-2})
+    assert np.allclose(H, J, rtol=1e-6, atol=1e-9), (H, J)
+    assert H[0, HLAY.slice("height_bias")][0] == 1.0 and H[0, HLAY.slice("pos")][2] == -1.0
+    assert H[0, HLAY.slice("vel")][2] == pytest.approx(-ctx.dt)
+    assert np.any(H[0, HLAY.slice("att")] != 0)  # the lever arm couples the tilt in
+    # without the offset block the measurement is the plain height, its column absent
+    lay = StateLayout(ins_blocks())
+    ctx0 = UpdateContext(100.0, 0.0, LLA.copy(), np.zeros(3), np.eye(3), np.zeros(3), lay, lay.initial_aux())
+    nu0, H0, _ = Height([100.0], [118.0], 1.0).linearize(ctx0, 0)
+    assert nu0[0] == pytest.approx(2.0) and np.count_nonzero(H0) == 1
+
+
+def test_height_refuses_bad_inputs():
+    with pytest.raises(InputError, match="sigma_m"):
+        Height([0.0, 1.0], [1.0, 2.0], 0.0)
+    with pytest.raises(InputError, match="height_m"):
+        Height([0.0, 1.0], [1.0, np.inf], 0.5)
+    with pytest.raises(InputError, match="strictly increase"):
+        Height([1.0, 0.5], [1.0, 2.0], 0.5)
+

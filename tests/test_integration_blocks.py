@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from inskit.errors import InputError
-from inskit.integration import (AccelBias, FilterSettings, GnssPosition, GyroBias, LeverArm, SensorNoise,
+from inskit.integration import (AccelBias, FilterSettings, GnssPosition, GyroBias, HeightBias, LeverArm, SensorNoise,
                                 StateBlock, TimeOffset, ins_blocks, run_filter)
 from inskit.simulation import StationaryTrajectory, ideal_imu, truth_solution
 from inskit.types import GnssData, ImuData
@@ -173,3 +173,21 @@ def test_mounting_roll_is_invisible_to_the_vehicle_constraints():
     assert b.axes == ("pitch", "yaw") and b.size == 2 and b.unit == "rad"
     assert b.estimate_names() == ["mounting_pitch_rad", "mounting_yaw_rad"]
     assert np.allclose(b.sigma0, np.radians(3.0)) and np.allclose(b.psd, 1e-10) and b.transition() == []
+
+
+def test_height_bias_block_models():
+    rw = HeightBias(10.0, "random-walk", rw=0.05)
+    assert rw.name == "height_bias" and rw.psd[0] == pytest.approx(0.0025) and rw.transition() == []
+    assert rw.estimate_names() == ["height_bias_m"] and rw.sigma_names() == ["sigma_height_bias_m"]
+    gm = HeightBias(4.0, "gauss-markov", tau_s=200.0)
+    assert gm.psd[0] * gm.tau_s / 2.0 == pytest.approx(16.0)  # steady state = sigma0
+    assert gm.transition() == [(0, "height_bias", 0, -1.0 / 200.0)]
+    const = HeightBias(3.0, "constant", rw=0.05)
+    assert const.psd[0] == 0.0 and math.isinf(const.tau_s)
+    est = np.array([2.0])
+    const.feedback(est, np.array([0.5]))
+    assert est[0] == 1.5  # closed loop: estimate -= dx
+    with pytest.raises(InputError, match="tau_s"):
+        HeightBias(4.0, "gauss-markov")
+    with pytest.raises(InputError, match="one of"):
+        HeightBias(4.0, "flicker")

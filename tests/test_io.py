@@ -239,3 +239,21 @@ def test_read_speed_reads_and_refuses_kmh_and_time_going_back(tmp_path):
     p = write(tmp_path, "cols.csv", "time_s,v\n0.0,0.0\n")
     with pytest.raises(InputError, match=r"cols\.csv.*speed_m_s"):
         io.read_speed(p)
+
+
+def test_read_height_with_and_without_sigma_and_its_bad_inputs(tmp_path):
+    t, h, s = io.read_height(write(tmp_path, "baro.csv", "time_s,height_m\n0.0,301.5\n0.1,301.7\n"))
+    assert t.tolist() == [0.0, 0.1] and h.tolist() == [301.5, 301.7] and s is None
+    t, h, s = io.read_height(write(tmp_path, "prof.csv", "time_s,height_m,sigma_m\n0.0,-12.0,0.3\n1.0,-11.0,0.4\n"))
+    assert h.tolist() == [-12.0, -11.0] and s.tolist() == [0.3, 0.4]
+    with pytest.raises(InputError, match=r"pa\.csv: line 3: column 'height_m' holds 101325\.0, beyond 100 km: a "
+                                         r"pressure"):
+        io.read_height(write(tmp_path, "pa.csv", "time_s,height_m\n0.0,300.0\n0.1,101325.0\n"))
+    with pytest.raises(InputError, match=r"sig\.csv: line 2: column 'sigma_m' is 0\.0; sigmas must be > 0"):
+        io.read_height(write(tmp_path, "sig.csv", "time_s,height_m,sigma_m\n0.0,300.0,0.0\n"))
+    with pytest.raises(InputError, match=r"cols\.csv: missing column\(s\) height_m \(a height log"):
+        io.read_height(write(tmp_path, "cols.csv", "time_s,alt_m\n0.0,300.0\n"))
+    with pytest.raises(InputError, match=r"dup\.csv: line 3: duplicate timestamp"):
+        io.read_height(write(tmp_path, "dup.csv", "time_s,height_m\n0.0,300.0\n0.0,300.0\n"))
+    with pytest.raises(InputError, match=r"nan\.csv: line 2: column 'height_m' has 'nan'; expected a finite number"):
+        io.read_height(write(tmp_path, "nan.csv", "time_s,height_m\n0.0,nan\n"))

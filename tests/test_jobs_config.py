@@ -169,6 +169,104 @@ def test_init_keys_of_the_other_mode():
     assert _cfg(LOOSE, init=given).init.lat_deg == 45.0
 
 
+# --- [noise]: bias models, correlation times, turn-on sigmas ---------------------------
+def test_bias_tau_shorthand_sets_both_and_a_specific_key_wins_where_the_shorthand_is_not_given():
+    n = _cfg(LOOSE, noise={"bias_tau_s": 120.0}).noise
+    assert n.gyro_tau_s() == n.accel_tau_s() == 120.0
+    n = _cfg(LOOSE, noise={"accel_bias_tau_s": 60.0}).noise
+    assert (n.gyro_tau_s(), n.accel_tau_s()) == (300.0, 60.0)
+    n = _cfg(LOOSE, noise={"bias_tau_s": 120.0, "gyro_bias_tau_s": 120.0}).noise  # the same value twice: fine
+    assert (n.gyro_tau_s(), n.accel_tau_s()) == (120.0, 120.0)
+
+
+def test_bias_tau_shorthand_and_a_different_specific_key_are_an_error():
+    with pytest.raises(ConfigError, match=r"field 'noise\.accel_bias_tau_s': noise\.accel_bias_tau_s = 30 "
+                                          r"contradicts the shorthand noise\.bias_tau_s = 300"):
+        _cfg(LOOSE, noise={"bias_tau_s": 300.0, "accel_bias_tau_s": 30.0})
+
+
+def test_random_walk_biases_and_their_keys():
+    n = _cfg(LOOSE, noise={"gyro_bias_model": "random-walk", "gyro_bias_rrw_deg_h_sqrt_h": 2.0}).noise
+    assert n.gyro_tau_s() == float("inf") and n.accel_tau_s() == 300.0
+    with pytest.raises(ConfigError, match=r"field 'noise\.gyro_bias_rrw_deg_h_sqrt_h': gyro_bias_model = "
+                                          r"\"random-walk\" needs noise\.gyro_bias_rrw_deg_h_sqrt_h"):
+        _cfg(LOOSE, noise={"gyro_bias_model": "random-walk"})
+    with pytest.raises(ConfigError, match=r"field 'noise\.accel_bias_tau_s': noise\.accel_bias_tau_s would be "
+                                          r"ignored: it describes a Gauss-Markov bias"):
+        _cfg(LOOSE, noise={"accel_bias_model": "random-walk", "accel_bias_rrw_ug_sqrt_h": 20.0,
+                           "accel_bias_tau_s": 100.0})
+    with pytest.raises(ConfigError, match=r"field 'noise\.accel_bias_sigma_ug': .*would be ignored"):
+        _cfg(LOOSE, noise={"accel_bias_model": "random-walk", "accel_bias_rrw_ug_sqrt_h": 20.0,
+                           "accel_bias_sigma_ug": 5.0})
+    with pytest.raises(ConfigError, match=r"field 'noise\.gyro_bias_rrw_deg_h_sqrt_h': .*would be ignored: it is the "
+                                          r"strength of a random-walk bias and gyro_bias_model = \"gauss-markov\""):
+        _cfg(LOOSE, noise={"gyro_bias_rrw_deg_h_sqrt_h": 2.0})
+    both = {"gyro_bias_model": "random-walk", "gyro_bias_rrw_deg_h_sqrt_h": 2.0, "accel_bias_model": "random-walk",
+            "accel_bias_rrw_ug_sqrt_h": 20.0}
+    with pytest.raises(ConfigError, match=r"field 'noise\.bias_tau_s': .*both biases are random walks"):
+        _cfg(LOOSE, noise={**both, "bias_tau_s": 100.0})
+    assert _cfg(LOOSE, noise={**both, "bias_tau_s": 300.0}).noise.gyro_tau_s() == float("inf")  # the default: fine
+
+
+@pytest.mark.parametrize("key", ["gyro_bias_tau_s", "accel_bias_tau_s", "bias_tau_s", "gyro_turn_on_bias_deg_h"])
+@pytest.mark.parametrize("value", [0.0, -5.0])
+def test_non_positive_times_and_sigmas_name_their_key(key, value):
+    with pytest.raises(ConfigError, match=rf"c\.toml: field 'noise\.{key}': .*greater than 0"):
+        _cfg(LOOSE, noise={key: value})
+
+
+def test_a_random_walk_time_constant_is_a_model_not_an_infinite_tau(tmp_path):
+    p = tmp_path / "c.toml"
+    p.write_text('[imu]\nfile = "a.csv"\n[gnss]\nfile = "b.csv"\n[noise]\nbias_tau_s = inf\n')
+    with pytest.raises(ConfigError, match=r"field 'noise\.bias_tau_s'.*finite"):
+        load_config(p)
+
+
+def test_turn_on_bias_in_noise_or_init_but_not_both():
+    from inskit.jobs.noise import turn_on_sigmas
+    from inskit.units import DEG, MILLI_G
+
+    assert turn_on_sigmas(_cfg(LOOSE)) == pytest.approx((0.05 * DEG, 0.05))  # the [init] defaults
+    cfg = _cfg(LOOSE, noise={"gyro_turn_on_bias_deg_h": 360.0, "accel_turn_on_bias_mg": 2.0})
+    assert turn_on_sigmas(cfg) == pytest.approx((0.1 * DEG, 2.0 * MILLI_G))  # 360 deg/h = 0.1 deg/s
+    assert turn_on_sigmas(_cfg(LOOSE, init={"sigma_accel_bias_m_s2": 0.2})) == pytest.approx((0.05 * DEG, 0.2))
+    with pytest.raises(ConfigError, match=r"field 'noise\.gyro_turn_on_bias_deg_h': noise\.gyro_turn_on_bias_deg_h "
+                                          r"and init\.sigma_gyro_bias_deg_s both give the turn-on bias sigma"):
+        _cfg(LOOSE, noise={"gyro_turn_on_bias_deg_h": 360.0}, init={"sigma_gyro_bias_deg_s": 0.1})
+    with pytest.raises(ConfigError, match=r"field 'noise\.accel_turn_on_bias_mg'"):
+        _cfg(LOOSE, noise={"accel_turn_on_bias_mg": 2.0}, init={"sigma_accel_bias_m_s2": 0.05})
+
+
+# --- [height] --------------------------------------------------------------------------
+def test_height_section_is_documented():
+    from inskit.jobs.config import HeightSection
+
+    assert _section_keys(config_doc.render(), "### `[height]`") == list(HeightSection.model_fields)
+
+
+def test_height_needs_a_file_or_a_constant_and_refuses_ignored_keys():
+    with pytest.raises(ConfigError, match=r"\[height\] needs file .* or height_m .*exactly one"):
+        _cfg(LOOSE, height={})
+    with pytest.raises(ConfigError, match=r"exactly one"):
+        _cfg(LOOSE, height={"file": "baro.csv", "height_m": 10.0})
+    with pytest.raises(ConfigError, match=r"field 'height\.time_offset_s': .*would be ignored"):
+        _cfg(LOOSE, height={"height_m": 0.0, "time_offset_s": 0.2})
+    with pytest.raises(ConfigError, match=r"field 'height\.bias_sigma0_m': height\.bias_sigma0_m would be ignored: "
+                                          r"it describes the estimated offset, and estimate_bias = false"):
+        _cfg(LOOSE, height={"height_m": 0.0, "estimate_bias": False, "bias_sigma0_m": 3.0})
+    with pytest.raises(ConfigError, match=r"field 'height\.bias_tau_s': bias_model = \"gauss-markov\" needs"):
+        _cfg(LOOSE, height={"file": "b.csv", "bias_model": "gauss-markov"})
+    with pytest.raises(ConfigError, match=r"field 'height\.bias_tau_s': .*would be ignored"):
+        _cfg(LOOSE, height={"file": "b.csv", "bias_tau_s": 600.0})
+    with pytest.raises(ConfigError, match=r"field 'height\.bias_rw_m_sqrt_h': .*would be ignored: bias_model = "
+                                          r"\"constant\""):
+        _cfg(LOOSE, height={"file": "b.csv", "bias_model": "constant", "bias_rw_m_sqrt_h": 1.0})
+    with pytest.raises(ConfigError, match=r"field 'height': \[height\] would be ignored: the uncoupled scheme"):
+        _cfg(LOOSE, height={"file": "b.csv"}, filter={"scheme": "uncoupled"})
+    h = _cfg(LOOSE, height={"file": "b.csv", "bias_model": "gauss-markov", "bias_tau_s": 600.0}).height
+    assert h.bias_tau_s == 600.0 and h.estimate_bias
+
+
 # --- --outages on the command line -------------------------------------------------
 def test_mounting_keys_need_the_mounting_and_a_lateral_constraint():
     with pytest.raises(ConfigError, match=r"c\.toml: field 'constraints\.sigma_mounting_deg': "

@@ -56,6 +56,19 @@ def _parse_init(text):
     return x
 
 
+def _height_ref(text, imu):
+    """``--height-ref``: a number [m], or a height log interpolated onto the IMU times."""
+    try:
+        return float(text)
+    except ValueError:
+        pass
+    from .jobs.height import height_profile_at
+
+    if not Path(text).is_file():
+        raise InputError(f"--height-ref: {text!r} is neither a height in metres nor a height log (no such file)")
+    return height_profile_at(text, imu.time, log=_log)
+
+
 @cli.command()
 @click.argument("imu_file", type=click.Path(dir_okay=False))
 @click.option("--init", "init_text", help="Initial state: lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg.")
@@ -63,7 +76,9 @@ def _parse_init(text):
 @click.option("--frame", type=click.Choice(["ned", "wander", "ecef", "inertial"]), default="ned", show_default=True)
 @click.option("--height", type=click.Choice(["free", "hold", "aid"]), default="free", show_default=True,
               help="Height channel (NED only): free, held to or aided by --height-ref.")
-@click.option("--height-ref", type=float, help="External height [m] for --height hold/aid (default: initial height).")
+@click.option("--height-ref", help="External height for --height hold/aid: a constant [m], or a height log (CSV "
+              "time_s, height_m: a barometer, a profile) interpolated onto the IMU times (default: the initial "
+              "height).")
 @click.option("--no-coning", is_flag=True, help="Single-sample attitude update (no coning/sculling compensation).")
 @click.option("--gravity", type=click.Choice(["normal", "normal-simple", "j2"]), default="normal", show_default=True,
               help="Gravity model: normal (Somigliana with both height terms and the north component), "
@@ -103,7 +118,9 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
     opts = {"coning": not no_coning, "gravity": gravity}
     if frame == "ned":
         opts["height"] = height
-    href = None if height == "free" else (init.lla[2] if height_ref is None else height_ref)
+    if height_ref is not None and height == "free":
+        raise InputError("--height-ref would be ignored with --height free; use --height hold or aid")
+    href = None if height == "free" else (init.lla[2] if height_ref is None else _height_ref(height_ref, imu))
     from .integration.gaps import find_gaps, find_rate_changes
 
     for ch in find_rate_changes(imu):
@@ -389,29 +406,48 @@ def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, f
 @cli.command()
 @click.argument("imu_file", type=click.Path(dir_okay=False))
 @click.option("--plot", "plot_file", type=click.Path(dir_okay=False), help="Write the Allan plot (PNG).")
-@click.option("--force", is_flag=True, help="Overwrite --plot.")
+@click.option("--toml", "toml_file", type=click.Path(dir_okay=False),
+              help="Write the [noise] section for inskit navigate (TOML) to this file.")
+@click.option("--force", is_flag=True, help="Overwrite --plot and --toml.")
 @click.option("--no-unit-check", is_flag=True, help="Skip the unit-plausibility checks of the IMU reader.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def allan(imu_file, plot_file, force, no_unit_check, as_json):
-    """Allan deviation of a static IMU log and the filter noise parameters it implies."""
+def allan(imu_file, plot_file, toml_file, force, no_unit_check, as_json):
+    """Allan deviation of a static IMU log and the filter noise parameters it
+    implies: the [noise] section of an inskit navigate config (noise_section
+    in the JSON, the TOML text with --toml)."""
     from . import io
     from .analysis.allan import plot_allan
+    from .files import check_folder_writable, same_file, write_text
     from .jobs.allan import allan_report
 
     _check_plot_file(plot_file, force)
+    if toml_file:
+        if same_file(toml_file, imu_file):
+            raise InputError(f"{toml_file}: is the input of this command; refusing to overwrite it")
+        if Path(toml_file).exists() and not force:
+            raise InputError(f"{toml_file}: already exists; refusing to overwrite it (use --force)")
+        check_folder_writable(Path(toml_file).resolve().parent)
     imu = io.read_imu(imu_file, check_units=not no_unit_check)
     r, rep = allan_report(imu)
-    gyro, acc, noise = rep["gyro"], rep["accel"], rep["navigate_noise_section"]
+    gyro, acc = rep["gyro"], rep["accel"]
     res = {"file": imu_file, "duration_s": float(imu.time[-1] - imu.time[0]), **rep}
     if plot_file:
         plot_allan(r, plot_file, title=Path(imu_file).name)
         res["plot"] = plot_file
-    lines = [f"{'axis':<6}{'ARW deg/rt(h)':>15}{'BI deg/h':>10}{'tau s':>8}   {'VRW ug/rt(Hz)':>14}{'BI ug':>9}{'tau s':>8}"]
+    if toml_file:
+        write_text(toml_file, rep["noise_toml"])
+        res["toml"] = toml_file
+    def rrw(v):
+        return f"{v:.3g}" if v is not None else "-"
+
+    lines = [f"{'axis':<6}{'ARW deg/rt(h)':>15}{'BI deg/h':>10}{'tau s':>8}{'RRW deg/h/rt(h)':>17}   "
+             f"{'VRW ug/rt(Hz)':>14}{'BI ug':>9}{'tau s':>8}{'RRW ug/rt(h)':>14}"]
     for g, a in zip(gyro, acc):
-        lines.append(f"{g['axis']:<6}{g['arw_deg_sqrt_h']:>15.4f}{g['bias_instability_deg_h']:>10.3f}{g['gm_tau_s']:>8.0f}   "
-                     f"{a['vrw_ug_sqrt_hz']:>14.2f}{a['bias_instability_ug']:>9.2f}{a['gm_tau_s']:>8.0f}")
-    lines.append("[noise] for inskit navigate: " + ", ".join(f"{k} = {v:.4g}" for k, v in noise.items()))
-    lines += [f"note: {n}" for n in rep["notes"]]
+        lines.append(f"{g['axis']:<6}{g['arw_deg_sqrt_h']:>15.4f}{g['bias_instability_deg_h']:>10.3f}{g['gm_tau_s']:>8.0f}"
+                     f"{rrw(g['rrw_deg_h_sqrt_h']):>17}   {a['vrw_ug_sqrt_hz']:>14.2f}{a['bias_instability_ug']:>9.2f}"
+                     f"{a['gm_tau_s']:>8.0f}{rrw(a['rrw_ug_sqrt_h']):>14}")
+    lines.append("for inskit navigate" + (f" (written to {toml_file})" if toml_file else "") + ":")
+    lines.append(rep["noise_toml"].rstrip())
     _emit(res, as_json, "\n".join(lines))
 
 

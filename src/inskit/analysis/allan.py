@@ -11,7 +11,10 @@ terms are read off the log-log slopes:
   variance is ``s^2 Tc / tau^2 (2 tau - Tc (3 - 4 e^{-tau/Tc} + e^{-2 tau/Tc}))``:
   a bump peaking at ``0.6174 s`` for ``tau = 1.89 Tc``.  The IEEE coefficient
   reported is ``B = 0.6174 s / 0.664`` (the flicker floor of the same height);
-* rate random walk, slope +1/2: ``K^2 tau / 3``.
+* rate random walk, slope +1/2: ``K^2 tau / 3``, kept only when the curve's
+  end rises above its low point by more than 3 relative sigmas of the last
+  point (``1 / sqrt(2 (K - 1))`` for ``K`` clusters): the last cluster times
+  rest on few clusters, and a flat or falling tail turns up by chance.
 
 The three terms are fitted together (scipy ``least_squares`` on the log of the
 deviation, started from the slope reading: white from the -1/2 region, bump
@@ -131,12 +134,38 @@ class AllanFit:
     bias_resolved: bool = True
 
 
-def fit_allan(tau, adev):
-    """Fit white noise, Gauss-Markov bias instability and rate random walk."""
+#: a rate random walk is kept only when the curve's end rises above its lowest
+#: point after the white noise (or after the bias-instability bump) by more
+#: than this many relative sigmas of the last point's Allan deviation
+RRW_RISE_SIGMAS = 3.0
+
+
+def _end_rises(a, i_from, tau_last, duration_s):
+    """Does the curve rise at its end (a +1/2 slope), beyond what chance
+    gives?  The relative sigma of an Allan deviation from ``K`` clusters is
+    ``1 / sqrt(2 (K - 1))`` (IEEE Std 952-1997 annex C; ``K = T / tau``):
+    0.17 at the end of a curve of :func:`allan_deviation` (``K = 18``), where
+    a flat or falling tail turns up by chance by 20-40 %."""
+    k = max(duration_s / tau_last, 2.0)
+    rel = 1.0 / np.sqrt(2.0 * (k - 1.0))
+    lo = float(np.min(a[i_from:]))
+    return bool(a[-1] > lo * (1.0 + RRW_RISE_SIGMAS * rel))
+
+
+def fit_allan(tau, adev, duration_s=None):
+    """Fit white noise, Gauss-Markov bias instability and rate random walk.
+
+    ``duration_s`` is the log's length (default: 18 times the longest
+    cluster time, the reach of :func:`allan_deviation`); it sets how many
+    clusters the longest cluster times rest on, hence how far the curve's
+    end may wander by chance before a rise is read as a rate random walk
+    (:data:`RRW_RISE_SIGMAS`).
+    """
     from scipy.optimize import least_squares
 
     tau = np.asarray(tau, float)
     a = np.asarray(adev, float)
+    duration_s = 18.0 * float(tau[-1]) if duration_s is None else float(duration_s)
     lt, la = np.log(tau), np.log(a)
     slope = np.gradient(la, lt)
     i_min = int(np.argmin(a))
@@ -166,12 +195,14 @@ def fit_allan(tau, adev):
         k_rep = None
         r2 = least_squares(lambda p: np.log(model_adev(tau, np.exp(p[0]), 0.0, 1.0, np.exp(p[1]))) - la,
                            [r1.x[0], p0[3]], bounds=([lo[0], lo[3]], [hi[0], hi[3]]))
-        if 2 * r2.cost < 0.5 * 2 * r1.cost:  # rate random walk without a bias bump
+        if 2 * r2.cost < 0.5 * 2 * r1.cost and _end_rises(a, 0, tau[-1], duration_s):  # RRW without a bump
             w, k_rep = float(np.exp(r2.x[0])), float(np.exp(r2.x[1]))
         floor = float(np.min(a))
         return AllanFit(w, floor / 0.664, floor / GM_PEAK, float(tau[-1] / 1.89), k_rep, bias_resolved=False)
     r4 = least_squares(lambda p: np.log(model_adev(tau, *np.exp(p))) - la, np.r_[r3.x, p0[3]], bounds=(lo, hi))
-    if 2 * r4.cost < 0.5 * 2 * r3.cost:  # the RRW term must halve the misfit to be kept
+    i_peak = int(np.searchsorted(tau, 1.89 * tc3))
+    if 2 * r4.cost < 0.5 * 2 * r3.cost and i_peak < len(tau) and _end_rises(a, i_peak, tau[-1], duration_s):
+        # the RRW term must halve the misfit, and the curve must rise after the bump
         w, sg, tc, k = np.exp(r4.x)
         k_rep = float(k)
     else:
@@ -203,8 +234,8 @@ def allan_imu(imu: ImuData):
         "tau": tau,
         "gyro_adev": ga,
         "accel_adev": aa,
-        "gyro_fit": [fit_allan(tau, ga[:, j]) for j in range(3)],
-        "accel_fit": [fit_allan(tau, aa[:, j]) for j in range(3)],
+        "gyro_fit": [fit_allan(tau, ga[:, j], duration) for j in range(3)],
+        "accel_fit": [fit_allan(tau, aa[:, j], duration) for j in range(3)],
     }
 
 

@@ -5,7 +5,7 @@
 * :mod:`.measurements`: the measurement protocol and its plug-ins (GNSS
   position and velocity, ZUPT, NHC); :mod:`.tight` (pseudorange and
   pseudorange rate per satellite) and :mod:`.aiding` (odometer, GNSS speed
-  and course) add more.
+  and course, height) add more.
 * :mod:`.engine`: the filter loop (open and closed loop).
 * :mod:`.uncoupled`: the uncoupled scheme (GNSS resets the INS).
 * :mod:`.smoother`: Rauch-Tung-Striebel smoothing of a closed-loop run.
@@ -16,9 +16,10 @@ in :mod:`inskit.jobs`.
 References: SYSTEM.md §2 and §3; Groves 2013 ch. 14.
 """
 
-from .aiding import GnssSpeedCourse, Odometer, OdometerScale
-from .blocks import (AccelBias, AccelScale, AttitudeError, GyroBias, GyroScale, InitialUncertainty, LeverArm,
-                     Mounting, PositionError, SensorNoise, StateBlock, TimeOffset, VelocityError, ins_blocks)
+from .aiding import GnssSpeedCourse, Height, Odometer, OdometerScale
+from .blocks import (AccelBias, AccelScale, AttitudeError, GyroBias, GyroScale, HeightBias, InitialUncertainty,
+                     LeverArm, Mounting, PositionError, SensorNoise, StateBlock, TimeOffset, VelocityError,
+                     ins_blocks)
 from .engine import FilterOutput, FilterSettings, Track, run_filter
 from .layout import StateLayout
 from .measurements import (GnssPosition, GnssVelocity, Measurement, NonHolonomic, UpdateContext, ZeroVelocity,
@@ -27,7 +28,7 @@ from .smoother import rts_smooth
 from .uncoupled import run_uncoupled
 
 __all__ = [
-    "GnssSpeedCourse", "Odometer", "OdometerScale",
+    "GnssSpeedCourse", "Height", "HeightBias", "Odometer", "OdometerScale",
     "AccelBias", "AccelScale", "AttitudeError", "FilterOutput", "FilterSettings", "GnssPosition", "GnssVelocity",
     "GyroBias", "GyroScale", "InitialUncertainty", "LeverArm", "Measurement", "Mounting", "NonHolonomic", "PositionError",
     "SensorNoise", "StateBlock", "StateLayout", "TimeOffset", "Track", "UpdateContext", "VelocityError",

@@ -1,7 +1,8 @@
-"""Land-vehicle aiding: odometer (wheel speed) and GNSS speed and course.
+"""Land-vehicle aiding: odometer (wheel speed), GNSS speed and course, height.
 
-Two plug-ins of the measurement protocol (:mod:`.measurements`) and one state
-block:
+Three plug-ins of the measurement protocol (:mod:`.measurements`) and one state
+block (the height sensor's offset, :class:`.blocks.HeightBias`, lives with
+the other blocks):
 
 * :class:`OdometerScale` (block ``"odo_scale"``): the wheel-speed
   scale-factor error ``k``, a random walk.
@@ -11,12 +12,15 @@ block:
 * :class:`GnssSpeedCourse`: horizontal GNSS velocity given as speed and
   course over ground (NMEA RMC/VTG, phone logs), fused as north/east
   velocity with the covariance propagated from speed and course.
+* :class:`Height`: the height of a sensor point from a barometer or a known
+  height profile, with the sensor's offset (block ``"height_bias"``) when
+  the layout holds one.
 
 Sign conventions (as everywhere in the filter): error states are
 ``x = estimate - truth``, innovations ``h(estimate) - measured = H x + noise``.
 
-References: Groves 2013 §6.3 (odometers), §14.2 and §16.2 (land-vehicle
-aiding, non-holonomic constraints); Brown & Hwang 2012 §7.1 (propagating a
+References: Groves 2013 §6.3 (odometers), §6.2.1 (barometric height), §14.2
+and §16.2 (land-vehicle aiding, non-holonomic constraints); Brown & Hwang 2012 §7.1 (propagating a
 measurement covariance through a transformation).
 """
 
@@ -329,3 +333,76 @@ class GnssSpeedCourse:
             H[:, lay.slice("lever")] = C @ skew(w)
         nu = (ctx.v_n + lever_v)[:2] - self.v_ne[row]
         return nu, H[:2].copy(), self.P_ne[row].copy()
+
+
+class Height:
+    """Height of a sensor point: a barometer's altitude or a known height
+    profile.
+
+    The sensor at ``l_b`` from the IMU (body axes) sits at the height
+    ``h_s = h - (C_nb l_b)_d``; it reads ``z = h_s + b + noise`` with the
+    offset ``b`` of the ``height_bias`` block (:class:`.blocks.HeightBias`;
+    0 and not estimated when the layout has none).  The prediction at the
+    measurement time, ``ctx.dt`` after the IMU sample, is
+
+    ``h(est) = h - v_d dt - (C_nb l_b)_d + b_est``,
+
+    and the innovation ``h(est) - z``.  With the error states ``x = estimate
+    - truth`` (``x_pos_d = -(h_est - h)``, ``C_nb_est = (I - [phi x]) C_nb``)
+
+    ``H_pos = [0, 0, -1]``, ``H_vel = [0, 0, -dt]``,
+    ``H_att = -[(C_nb l_b) x]`` row d, ``H_height_bias = 1``.
+
+    A constant height (a ship at sea level, a level site) is the same
+    measurement with a constant profile.
+
+    Parameters
+    ----------
+    time : (m,) array_like
+        Times [s], IMU time base, strictly increasing.
+    height_m : (m,) array_like
+        Measured ellipsoidal height of the sensor point [m].
+    sigma_m : float or (m,) array_like
+        1-sigma white noise of each reading [m], > 0.
+    lever_arm_b : (3,) array_like
+        IMU-to-sensor lever arm, body axes [m].
+    use : (m,) bool array, optional
+
+    References
+    ----------
+    Groves 2013 §6.2.1 (the barometric altimeter: its offset and its drift
+    with the weather), ch. 16 (aiding an INS with further sensors).
+    """
+
+    name = "height"
+    gating = "vector"
+
+    def __init__(self, time, height_m, sigma_m, *, lever_arm_b=(0.0, 0.0, 0.0), use=None):
+        self.time, self.height = _check_series(time, height_m, "height_m")
+        self.sigma = _positive(sigma_m, len(self.time), "sigma_m")
+        self.lever_arm_b = _lever(lever_arm_b)
+        self._rows = _use_rows(use, len(self.time))
+
+    def times(self):
+        return self.time[self._rows]
+
+    def rows(self):
+        return self._rows
+
+    def linearize(self, ctx: UpdateContext, row):
+        lay = ctx.layout
+        H = np.zeros((1, lay.size))
+        p, v = lay.slice("pos").start, lay.slice("vel").start
+        H[0, p + 2] = -1.0
+        H[0, v + 2] = -ctx.dt
+        h = float(ctx.lla[2]) - float(ctx.v_n[2]) * ctx.dt
+        lev = self.lever_arm_b
+        if lev.any():
+            cl = ctx.C_nb @ lev
+            h -= float(cl[2])
+            H[0, lay.slice("att")] = -skew(cl)[2]
+        b = ctx.estimate("height_bias")
+        if b is not None:
+            h += float(b[0])
+            H[0, lay.slice("height_bias")] = 1.0
+        return np.array([h - self.height[row]]), H, np.array([[self.sigma[row] ** 2]])

@@ -345,6 +345,52 @@ class Mounting(_Named):
                          description="boresight of the vehicle axes against the IMU body axes")
 
 
+#: the models of a :class:`HeightBias`
+HEIGHT_BIAS_MODELS = ("constant", "random-walk", "gauss-markov")
+
+
+class HeightBias(_Named):
+    """Offset ``b`` of a height sensor [m]: a barometer reads ``h + b`` plus
+    noise (its datum, the weather).  The :class:`.aiding.Height` measurement
+    finds it by its name ``"height_bias"``; the error state is
+    ``b_est - b``, fed back closed loop (``b_est -= dx``).
+
+    Parameters
+    ----------
+    sigma0 : float
+        Initial 1-sigma [m]; for ``"gauss-markov"`` also the steady-state sigma.
+    model : {"constant", "random-walk", "gauss-markov"}
+        A random constant (no process noise), a random walk of PSD ``rw**2``
+        [m^2/s], or first-order Gauss-Markov with ``tau_s`` (PSD
+        ``2 sigma0^2 / tau_s``, Brown & Hwang 2012 ch. 2).
+    rw : float
+        Random-walk PSD root [m/sqrt(s)] (``"random-walk"`` only).
+    tau_s : float
+        Correlation time [s] (``"gauss-markov"`` only).
+    estimate0 : float
+        Initial estimate [m].
+    """
+
+    _est_names = ("height_bias_m",)
+    _sig_names = ("sigma_height_bias_m",)
+
+    def __init__(self, sigma0=50.0, model="random-walk", rw=0.0, tau_s=math.inf, estimate0=0.0):
+        if model not in HEIGHT_BIAS_MODELS:
+            raise InputError(f"height bias model must be one of {', '.join(HEIGHT_BIAS_MODELS)}, got {model!r}")
+        if model == "gauss-markov" and not (math.isfinite(tau_s) and tau_s > 0):
+            raise InputError(f"a Gauss-Markov height bias needs a finite tau_s > 0, got {tau_s}")
+        if model == "random-walk" and not (math.isfinite(rw) and rw >= 0):
+            raise InputError(f"the height bias random walk must be finite and >= 0 m/sqrt(s), got {rw}")
+        sigma0 = float(sigma0)
+        if model == "gauss-markov":
+            psd, tau = _bias_psd(sigma0, tau_s), float(tau_s)
+        else:
+            psd, tau = (rw**2 if model == "random-walk" else 0.0), math.inf
+        object.__setattr__(self, "model", model)
+        super().__init__("height_bias", ("b",), "m", sigma0, psd, tau, estimate0=estimate0,
+                         description=f"height-sensor offset ({model})")
+
+
 # --- parameter bundles for the standard layout ------------------------------------------
 @dataclass(frozen=True)
 class SensorNoise:

@@ -12,6 +12,7 @@ column, and what was expected.
 """
 
 from .csv_formats import (  # noqa: I001
+    read_height,
     read_speed,
     read_speed_course,
     read_gnss,
@@ -22,4 +23,4 @@ from .csv_formats import (  # noqa: I001
     write_solution,
 )
 
-__all__ = ["read_gnss", "read_imu", "read_solution", "read_speed", "read_speed_course", "write_gnss", "write_imu", "write_solution"]
+__all__ = ["read_gnss", "read_height", "read_imu", "read_solution", "read_speed", "read_speed_course", "write_gnss", "write_imu", "write_solution"]

@@ -484,3 +484,41 @@ def read_speed_course(path):
                          "ground is >= 0 (the direction is in course_deg)")
     _check_positive(path, df, a[:, 3:5], SPEED_COURSE_COLUMNS[3:5])
     return a[:, 0].copy(), a[:, 1].copy(), np.radians(a[:, 2]), a[:, 3].copy(), np.radians(a[:, 4])
+
+
+#: heights beyond this many metres from the ellipsoid are taken as a wrong unit or column [m]
+HEIGHT_LIMIT_M = 100_000.0
+
+
+def read_height(path):
+    """Read a height log (a barometer's altitude, a known height profile):
+    columns ``time_s, height_m`` and optionally ``sigma_m`` (the 1-sigma of
+    each reading, > 0).
+
+    Returns
+    -------
+    (time, height, sigma) : two (n,) float arrays and an (n,) array or
+    ``None`` when the file has no ``sigma_m`` column.
+
+    Raises
+    ------
+    InputError
+        Missing columns, a cell that is not a finite number, time not
+        strictly increasing, a height beyond 100 km (a pressure in Pa or
+        another column?), a sigma not > 0; naming the file and line.
+    """
+    path, df = read_table(path)
+    require_columns(path, df, ["time_s", "height_m"], " (a height log: time_s, height_m and optionally sigma_m)")
+    cols = ["time_s", "height_m"] + (["sigma_m"] if "sigma_m" in df.columns else [])
+    a = numeric_columns(path, df, cols)
+    check_time_column(path, a[:, 0])
+    big = np.abs(a[:, 1]) > HEIGHT_LIMIT_M
+    if big.any():
+        i = int(np.argmax(big))
+        raise InputError(f"{path}: line {i + 2}: column 'height_m' holds {plain_number(a[i, 1])}, beyond 100 km: "
+                         "a pressure or another unit? expected a height in metres")
+    sigma = None
+    if len(cols) == 3:
+        _check_positive(path, df, a[:, 2:3], ["sigma_m"])
+        sigma = a[:, 2].copy()
+    return a[:, 0].copy(), a[:, 1].copy(), sigma

@@ -203,16 +203,55 @@ class GnssSection(_Strict):
 
 class NoiseSection(_Strict):
     """Sensor noise of the filter, in datasheet units (``inskit allan``
-    prints this section from a static log)."""
+    prints this section from a static log: ``--toml FILE``).
+
+    Each sensor's bias is a first-order Gauss-Markov process (its
+    steady-state sigma and correlation time) or a random walk (its rate
+    random walk, the +1/2 slope of an Allan curve).
+
+    Rules: ``bias_tau_s`` is a shorthand that sets ``gyro_bias_tau_s`` and
+    ``accel_bias_tau_s`` where they are not given; giving a specific key
+    and the shorthand with different values is an error.  A random-walk
+    bias needs its ``*_rrw_*`` key and refuses its ``*_sigma_*`` and
+    ``*_tau_s`` keys changed from their defaults (they would be ignored); a
+    Gauss-Markov bias refuses its ``*_rrw_*`` key.  The turn-on bias sigmas
+    (the initial bias uncertainty) are ``gyro_turn_on_bias_deg_h`` and
+    ``accel_turn_on_bias_mg``; the older ``[init]`` keys
+    ``sigma_gyro_bias_deg_s`` and ``sigma_accel_bias_m_s2`` still work
+    (their defaults apply when neither spelling is given), and giving both
+    spellings of one is an error.
+    """
 
     gyro_arw_deg_sqrt_h: float = Field(0.3, gt=0, description="gyro angle random walk (white rate noise)")
     accel_vrw_m_s_sqrt_h: float = Field(0.1, gt=0, description="accelerometer velocity random walk (white "
                                         "specific-force noise)")
-    gyro_bias_sigma_deg_h: float = Field(50.0, gt=0, description="steady-state sigma of the first-order "
-                                         "Gauss-Markov gyro bias (in-run variation)")
-    accel_bias_sigma_ug: float = Field(1000.0, gt=0, description="steady-state sigma of the first-order "
-                                       "Gauss-Markov accelerometer bias (in-run variation)")
-    bias_tau_s: float = Field(300.0, gt=0, description="correlation time of both Gauss-Markov biases (finite)")
+    gyro_bias_model: Literal["gauss-markov", "random-walk"] = Field(
+        "gauss-markov", description="gyro in-run bias: first-order Gauss-Markov (gyro_bias_sigma_deg_h, "
+        "gyro_bias_tau_s) or random walk (gyro_bias_rrw_deg_h_sqrt_h)")
+    gyro_bias_sigma_deg_h: float = Field(50.0, gt=0, description="gauss-markov: steady-state sigma of the gyro "
+                                         "bias (in-run variation)")
+    gyro_bias_tau_s: float | None = Field(None, gt=0, description="gauss-markov: correlation time of the gyro "
+                                          "bias (default: bias_tau_s)")
+    gyro_bias_rrw_deg_h_sqrt_h: float | None = Field(None, gt=0, description="random-walk: gyro rate random "
+                                                     "walk (the bias drifts by this much in 1 h, 1 sigma)")
+    accel_bias_model: Literal["gauss-markov", "random-walk"] = Field(
+        "gauss-markov", description="accelerometer in-run bias: first-order Gauss-Markov (accel_bias_sigma_ug, "
+        "accel_bias_tau_s) or random walk (accel_bias_rrw_ug_sqrt_h)")
+    accel_bias_sigma_ug: float = Field(1000.0, gt=0, description="gauss-markov: steady-state sigma of the "
+                                       "accelerometer bias (in-run variation)")
+    accel_bias_tau_s: float | None = Field(None, gt=0, description="gauss-markov: correlation time of the "
+                                           "accelerometer bias (default: bias_tau_s)")
+    accel_bias_rrw_ug_sqrt_h: float | None = Field(None, gt=0, description="random-walk: accelerometer rate "
+                                                   "random walk (the bias drifts by this much in 1 h, 1 sigma)")
+    bias_tau_s: float = Field(300.0, gt=0, description="shorthand: the correlation time of both Gauss-Markov "
+                              "biases, where gyro_bias_tau_s or accel_bias_tau_s is not given (finite; a random "
+                              "walk is a *_bias_model)")
+    gyro_turn_on_bias_deg_h: float | None = Field(None, gt=0, description="sigma of the gyro turn-on bias per "
+                                                  "axis: the initial bias uncertainty (default: "
+                                                  "init.sigma_gyro_bias_deg_s, 0.05 deg/s = 180 deg/h)")
+    accel_turn_on_bias_mg: float | None = Field(None, gt=0, description="sigma of the accelerometer turn-on "
+                                                "bias per axis: the initial bias uncertainty (default: "
+                                                "init.sigma_accel_bias_m_s2, 0.05 m/s^2 = 5.1 mg)")
     scale_factor_rw_ppm_sqrt_s: float = Field(1.0, gt=0, description="random walk of the gyro and accelerometer "
                                               "scale-factor errors (with filter.scale_factors)")
     time_offset_rw_s_sqrt_s: float = Field(1e-5, gt=0, description="random walk of the estimated time offset "
@@ -221,6 +260,46 @@ class NoiseSection(_Strict):
         True, description="raise ARW/VRW to the white-noise density measured on the static start "
         "(init.mode = \"static-then-track\")"
     )
+
+    @model_validator(mode="after")
+    def _bias_models(self):
+        given = self.model_fields_set
+        for sensor, rrw, sigma in (("gyro", "gyro_bias_rrw_deg_h_sqrt_h", "gyro_bias_sigma_deg_h"),
+                                   ("accel", "accel_bias_rrw_ug_sqrt_h", "accel_bias_sigma_ug")):
+            model, tau = getattr(self, f"{sensor}_bias_model"), f"{sensor}_bias_tau_s"
+            if model == "random-walk":
+                if getattr(self, rrw) is None:
+                    raise _key_error(rrw, f"{sensor}_bias_model = \"random-walk\" needs noise.{rrw}, the rate "
+                                     "random walk (inskit allan reports it)")
+                for k in _changed(self, (tau, sigma)):
+                    raise _key_error(k, f"noise.{k} would be ignored: it describes a Gauss-Markov bias and "
+                                     f"{sensor}_bias_model = \"random-walk\" (a random walk has no correlation "
+                                     f"time or steady-state sigma; its strength is noise.{rrw})")
+            else:
+                if getattr(self, rrw) is not None:
+                    raise _key_error(rrw, f"noise.{rrw} would be ignored: it is the strength of a random-walk "
+                                     f"bias and {sensor}_bias_model = \"gauss-markov\"; set {sensor}_bias_model = "
+                                     "\"random-walk\" to use it")
+                v = getattr(self, tau)
+                if v is not None and "bias_tau_s" in given and v != self.bias_tau_s:
+                    raise _key_error(tau, f"noise.{tau} = {v:g} contradicts the shorthand noise.bias_tau_s = "
+                                     f"{self.bias_tau_s:g} (which sets both correlation times); give one of them")
+        if _changed(self, ["bias_tau_s"]) and self.gyro_bias_model == self.accel_bias_model == "random-walk":
+            raise _key_error("bias_tau_s", "noise.bias_tau_s would be ignored: both biases are random walks "
+                             "(gyro_bias_model and accel_bias_model), which have no correlation time")
+        return self
+
+    def gyro_tau_s(self) -> float:
+        """Correlation time of the gyro bias [s]; ``inf`` for a random walk."""
+        if self.gyro_bias_model == "random-walk":
+            return math.inf
+        return self.bias_tau_s if self.gyro_bias_tau_s is None else self.gyro_bias_tau_s
+
+    def accel_tau_s(self) -> float:
+        """Correlation time of the accelerometer bias [s]; ``inf`` for a random walk."""
+        if self.accel_bias_model == "random-walk":
+            return math.inf
+        return self.bias_tau_s if self.accel_bias_tau_s is None else self.accel_bias_tau_s
 
 
 #: [init] keys of mode "given" (the initial state itself)
@@ -272,9 +351,11 @@ class InitSection(_Strict):
     sigma_roll_pitch_deg: float = Field(1.0, gt=0, description="initial roll and pitch sigma")
     sigma_yaw_deg: float = Field(3.0, gt=0, description="initial yaw sigma (above 10 deg the yaw bank runs)")
     sigma_gyro_bias_deg_s: float = Field(0.05, gt=0, description="initial gyro-bias sigma per axis (turn-on "
-                                         "bias class)")
+                                         "bias class; the older spelling of noise.gyro_turn_on_bias_deg_h: give "
+                                         "one)")
     sigma_accel_bias_m_s2: float = Field(0.05, gt=0, description="initial accelerometer-bias sigma per axis "
-                                         "(turn-on bias class)")
+                                         "(turn-on bias class; the older spelling of noise.accel_turn_on_bias_mg: "
+                                         "give one)")
     sigma_scale_factor: float = Field(0.02, gt=0, description="initial scale-factor sigma, a fraction (0.02 = "
                                       "2 %; with filter.scale_factors)")
     sigma_lever_arm_m: float = Field(0.1, gt=0, description="initial sigma of the estimated lever arm per axis "
@@ -487,6 +568,77 @@ class EarthSection(_Strict):
         "with (at 1600 m and 40 deg the north component alone, 1.3e-5 m/s^2, is 2.2 m over 600 s free-inertial)")
 
 
+#: [height] keys of the bias state (they need estimate_bias)
+HEIGHT_BIAS_KEYS = ("bias_model", "bias_sigma0_m", "bias_rw_m_sqrt_h", "bias_tau_s")
+
+
+class HeightSection(_Strict):
+    """Height aiding: a barometer's altitude or a known height profile (a
+    road's, a ship's sea level), fused as a measurement of the height of the
+    sensor point with its own sigma and, optionally, an estimated offset
+    ``b`` (the barometer's bias: the reading is ``h + b`` plus noise).
+
+    Rules: give ``file`` or ``height_m`` (a constant height), not both;
+    ``time_offset_s`` needs a ``file``; the bias keys need ``estimate_bias``;
+    ``bias_rw_m_sqrt_h`` belongs to bias_model "random-walk" and
+    ``bias_tau_s`` to (and is needed by) "gauss-markov"; ``sigma_m`` is
+    refused when the file has its own sigma_m column.  Heights are
+    ellipsoidal, like the filter's: heights above mean sea level need the
+    geoid separation in ``offset_m`` (or ``estimate_bias``, whose offset
+    then absorbs it).
+    """
+
+    file: Path | None = Field(None, description="height log: CSV with time_s (IMU time base), height_m and "
+                              "optionally sigma_m (docs/formats.md), relative to this config file")
+    height_m: float | None = Field(None, description="a constant height instead of a file (a vehicle on a level "
+                                   "site, a ship at sea level): the same measurement at rate_hz")
+    time_offset_s: float = Field(0.0, description="added to the log's time tags [s]")
+    offset_m: float = Field(0.0, description="added to every height, e.g. the geoid separation N for heights "
+                            "above mean sea level (ellipsoidal = sea-level height + N)")
+    sigma_m: float = Field(1.0, gt=0, description="white noise of one height reading (for a file without a "
+                           "sigma_m column, and for height_m)")
+    rate_hz: float = Field(1.0, gt=0, le=1000, description="use at most this many readings per second (the "
+                           "readings are taken as independent); the rate of a constant height_m")
+    lever_arm_b_m: tuple[float, float, float] = Field((0.0, 0.0, 0.0), description="IMU to the height sensor, "
+                                                      "body axes (forward, right, down) [m]")
+    estimate_bias: bool = Field(True, description="estimate the sensor's offset b as a state (a barometer: "
+                                "its datum and the weather); off: the heights are taken as unbiased")
+    bias_model: Literal["constant", "random-walk", "gauss-markov"] = Field(
+        "random-walk", description="how the offset changes: a random constant, a random walk "
+        "(bias_rw_m_sqrt_h) or first-order Gauss-Markov (bias_tau_s, steady-state sigma bias_sigma0_m)")
+    bias_sigma0_m: float = Field(50.0, gt=0, description="initial sigma of the offset (gauss-markov: also its "
+                                 "steady-state sigma); GNSS heights make it observable, so a loose value is "
+                                 "harmless")
+    bias_rw_m_sqrt_h: float = Field(2.0, gt=0, description="random-walk: the offset's drift in 1 h, 1 sigma (a "
+                                    "barometer: 2 m is 0.25 hPa of weather per sqrt(h))")
+    bias_tau_s: float | None = Field(None, gt=0, description="gauss-markov: correlation time of the offset")
+
+    @model_validator(mode="after")
+    def _consistent(self):
+        if (self.file is None) == (self.height_m is None):
+            raise ValueError("[height] needs file (a height log) or height_m (a constant height), exactly one")
+        if self.file is None and _changed(self, ["time_offset_s"]):
+            raise _key_error("time_offset_s", "height.time_offset_s would be ignored: it shifts the time tags of "
+                             "height.file, and a constant height_m has none")
+        if not self.estimate_bias:
+            bad = _changed(self, HEIGHT_BIAS_KEYS)
+            if bad:
+                raise _key_error(bad[0], f"{_names(bad, 'height')} would be ignored: "
+                                 f"{_they(bad, 'it describes', 'they describe')} the estimated offset, and "
+                                 "estimate_bias = false")
+            return self
+        if self.bias_model != "random-walk" and _changed(self, ["bias_rw_m_sqrt_h"]):
+            raise _key_error("bias_rw_m_sqrt_h", f"height.bias_rw_m_sqrt_h would be ignored: bias_model = "
+                             f"\"{self.bias_model}\" (it is the strength of a random-walk offset)")
+        if self.bias_model == "gauss-markov" and self.bias_tau_s is None:
+            raise _key_error("bias_tau_s", "bias_model = \"gauss-markov\" needs height.bias_tau_s, the offset's "
+                             "correlation time [s]")
+        if self.bias_model != "gauss-markov" and self.bias_tau_s is not None:
+            raise _key_error("bias_tau_s", f"height.bias_tau_s would be ignored: bias_model = \"{self.bias_model}\" "
+                             "has no correlation time (use bias_model = \"gauss-markov\")")
+        return self
+
+
 class NavigateConfig(_Strict):
     """The whole ``inskit navigate`` configuration."""
 
@@ -502,6 +654,8 @@ class NavigateConfig(_Strict):
     odometer: OdometerSection | None = Field(None, description="wheel-speed aiding (optional)")
     truth: TruthSection | None = Field(None, description="truth trajectory to score against (optional)")
     earth: EarthSection = Field(EarthSection(), description="Earth model (gravity)")
+    height: HeightSection | None = Field(None, description="height aiding: a barometer or a height profile "
+                                         "(optional)")
     base_dir: Path = Field(Path("."), description="(set by the loader, not a key of the file) the folder "
                            "relative paths are taken from: the config file's")
 
@@ -524,6 +678,18 @@ class NavigateConfig(_Strict):
             raise _key_error("outages.keep_satellites", f"keep_satellites = {self.outages.keep_satellites} "
                              "keeps satellites inside the outage windows, which only tight coupling fuses; with "
                              "coupling = \"loose\" a fix is withheld whole and it would be ignored")
+        return self
+
+    @model_validator(mode="after")
+    def _turn_on_once(self):
+        for new, old in (("gyro_turn_on_bias_deg_h", "sigma_gyro_bias_deg_s"),
+                         ("accel_turn_on_bias_mg", "sigma_accel_bias_m_s2")):
+            if getattr(self.noise, new) is not None and old in self.init.model_fields_set:
+                raise _key_error(f"noise.{new}", f"noise.{new} and init.{old} both give the turn-on bias sigma; "
+                                 f"keep one (noise.{new} is the datasheet spelling, init.{old} the older one)")
+        if self.height is not None and self.filter.scheme == "uncoupled":
+            raise _key_error("height", "[height] would be ignored: the uncoupled scheme has no filter to fuse "
+                             "heights into (use filter.scheme = \"closed\" or \"open\")")
         return self
 
     def resolve(self, p: Path) -> Path:
@@ -605,6 +771,4 @@ def config_from_dict(data, *, base_dir=Path("."), source="config", overrides=Non
         cfg = NavigateConfig.model_validate(data)
     except ValidationError as exc:
         raise ConfigError(_message(source, exc)) from None
-    if cfg.noise.bias_tau_s == math.inf:
-        raise ConfigError(f"{source}: noise.bias_tau_s must be finite (use a long time constant for a random walk)")
     return cfg

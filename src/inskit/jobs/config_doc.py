@@ -38,6 +38,9 @@ REGENERATE = "python -m inskit.jobs.config_doc --write"
 
 #: name suffix -> unit, longest first wins (the datasheet units of the files)
 SUFFIX_UNITS = {
+    "_deg_h_sqrt_h": "deg/h/sqrt(h)",
+    "_ug_sqrt_h": "micro-g/sqrt(h)",
+    "_m_sqrt_h": "m/sqrt(h)",
     "_deg_sqrt_h": "deg/sqrt(h)",
     "_m_s_sqrt_h": "m/s/sqrt(h)",
     "_ppm_sqrt_s": "ppm/sqrt(s)",
@@ -51,6 +54,7 @@ SUFFIX_UNITS = {
     "_deg": "deg",
     "_hz": "Hz",
     "_ug": "micro-g",
+    "_mg": "milli-g",
     "_us": "µs",
     "_m": "m",
     "_s": "s",

@@ -15,7 +15,7 @@ from ..errors import InputError
 from ..files import write_text
 from ..io.rtklib import read_pos, read_rtklibexplorer_imu
 from ..types import GnssData, ImuData, NavState
-from ..units import DEG, DEG_PER_HOUR, MICRO_G
+from ..units import DEG
 from ..integration import (FilterOutput, FilterSettings, GnssPosition, GnssVelocity, InitialUncertainty,
                            NonHolonomic, SensorNoise, Track, ZeroVelocity, rts_smooth, run_filter, run_uncoupled)
 from ..types import NavSolution
@@ -285,21 +285,20 @@ def static_noise_density(imu: ImuData, t_end):
 
 def sensor_noise(n, measured=None) -> SensorNoise:
     """The filter's sensor noise (SI) from a ``[noise]`` section (datasheet
-    units), the white noise raised to what the static start measured."""
-    arw = n.gyro_arw_deg_sqrt_h * DEG / 60.0
-    vrw = n.accel_vrw_m_s_sqrt_h / 60.0
-    if measured:
-        arw = max(arw, measured["gyro_arw_rad_sqrt_s"])
-        vrw = max(vrw, measured["accel_vrw_m_s_sqrt_s"])
-    return SensorNoise(arw, vrw, n.gyro_bias_sigma_deg_h * DEG_PER_HOUR, n.accel_bias_sigma_ug * MICRO_G,
-                       n.bias_tau_s, n.scale_factor_rw_ppm_sqrt_s * 1e-6, n.time_offset_rw_s_sqrt_s)
+    units), the white noise raised to what the static start measured
+    (:func:`.noise.sensor_noise`)."""
+    from .noise import sensor_noise as noise_si
+
+    return noise_si(n, measured)
 
 
 def build_settings(cfg: NavigateConfig, startup: Startup | None, measured=None, extra_blocks=()) -> FilterSettings:
+    from .noise import turn_on_sigmas
+
     noise = sensor_noise(cfg.noise, measured)
     i = cfg.init
     unc = InitialUncertainty((i.sigma_pos_m,) * 3, i.sigma_vel_m_s, i.sigma_roll_pitch_deg * DEG,
-                             i.sigma_yaw_deg * DEG, i.sigma_gyro_bias_deg_s * DEG, i.sigma_accel_bias_m_s2,
+                             i.sigma_yaw_deg * DEG, *turn_on_sigmas(cfg),
                              i.sigma_scale_factor, i.sigma_lever_arm_m, i.sigma_time_offset_s)
     f = cfg.filter
     return FilterSettings.standard(
@@ -376,13 +375,14 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     scfg, bank_on = cfg, False  # scfg: the config with the sigmas the start-up found (build_settings reads them)
     if cfg.init.mode != "given":
         from ..alignment.inmotion import STARTUP_SIGMAS, auto_startup, bank_needed
+        from .noise import turn_on_sigmas
 
         i = cfg.init
         startup = auto_startup(imu, gnss_used, lever, mode=i.mode, min_static_s=i.min_static_s,
                                heading_speed_m_s=i.heading_speed_m_s, course_average_s=i.course_average_s,
                                level_window_s=i.level_window_s,
                                yaw_guess=None if i.yaw_deg is None else i.yaw_deg * DEG,
-                               gyro_bias_sigma=i.sigma_gyro_bias_deg_s * DEG, accel_bias_sigma=i.sigma_accel_bias_m_s2,
+                               gyro_bias_sigma=turn_on_sigmas(cfg)[0], accel_bias_sigma=turn_on_sigmas(cfg)[1],
                                floors={k: getattr(i, k) for k in STARTUP_SIGMAS})
         initial = startup.state
         sig = dict(startup.sigma or {})
@@ -415,6 +415,12 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
 
         extra_blocks.append(Mounting(cfg.constraints.sigma_mounting_deg * DEG,
                                      cfg.constraints.mounting_rw_deg_sqrt_h * DEG / 60.0))
+    height = None
+    if cfg.height is not None:  # a barometer or a height profile, with its offset state
+        from .height import height_aiding
+
+        height, height_blocks = height_aiding(cfg, imu)
+        extra_blocks += height_blocks
     if tight:
         meas_gnss, use_rows = tight_measurements(cfg, raw, windows, lever)
         clk_blocks, clock_start = clock_blocks(cfg, raw, initial, lever, use_rows)
@@ -445,6 +451,8 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
             meas.append(odo)
         if cfg.gnss.speed_course is not None:
             meas.append(speed_course_measurement(cfg, windows, lever))
+        if height is not None:
+            meas.append(height)
         extra = {g.row: gap_process_noise(settings.layout, g.length_s, np.radians(cfg.imu.gap_rate_sigma_deg_s),
                                           cfg.imu.gap_accel_sigma_m_s2) for g in gaps}
         if bank_on:  # the start-up's yaw is too uncertain for the small-angle model: a bank of hypotheses

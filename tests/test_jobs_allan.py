@@ -1,0 +1,96 @@
+"""inskit allan's [noise] section: exactly NoiseSection keys (the emitted TOML
+is parsed into the config model, so the keys cannot drift), and the values of
+simulated static logs of known grade.
+
+Tolerances from the Allan deviation's confidence: a point resting on ``K``
+clusters has a relative sigma of ``1 / sqrt(2 (K - 1))`` (IEEE Std 952-1997
+annex C), and the section's values are RMS (or geometric means) over three
+axes."""
+
+import math
+import tomllib
+
+import numpy as np
+import pytest
+
+from inskit.jobs.allan import allan_report
+from inskit.jobs.config import NoiseSection
+from inskit.jobs.noise import sensor_noise
+from inskit.simulation.sensors import apply_imu_errors, preset
+from inskit.types import ImuData
+from inskit.units import MICRO_G
+
+#: the industrial-MEMS preset (ADIS16495-1): ARW 0.09 deg/sqrt(h), VRW 0.008 m/s/sqrt(h), bias instability
+#: B = 0.8 deg/h and 3.2 ug as first-order Gauss-Markov of correlation time 300 s and sigma 0.664 B / 0.6174
+GM_SIGMA_DEG_H = 0.664 * 0.8 / 0.6174
+GM_SIGMA_UG = 0.664 * 3.2 / 0.6174
+
+
+def _static(hours, rate_hz, seed, **overrides):
+    n = int(hours * 3600 * rate_hz)
+    t = np.arange(n) / rate_hz
+    imu, _ = apply_imu_errors(ImuData(t, np.zeros((n, 3)), np.zeros((n, 3))), preset("industrial-mems", **overrides),
+                              np.random.default_rng(seed))
+    return imu
+
+
+def _parsed(rep):
+    data = tomllib.loads(rep["noise_toml"])
+    assert list(data) == ["noise"]
+    n = NoiseSection.model_validate(data["noise"])  # strict: an unknown or contradictory key fails here
+    assert set(data["noise"]) == set(rep["noise_section"]) and n.model_fields_set == set(data["noise"])
+    for k, v in rep["noise_section"].items():
+        assert getattr(n, k) == (pytest.approx(v, rel=1e-4) if isinstance(v, float) else v)
+    return n
+
+
+@pytest.fixture(scope="module")
+def ten_hours():
+    """10 h at 10 Hz: the bump peaks at 1.89 x 300 s = 570 s, where K = 63
+    clusters (9 % per axis); the curve reaches 2000 s, past the bump.  In
+    this draw an accelerometer curve ends flat by chance, on 18 clusters
+    (17 % per point): before the fit asked the end to rise by 3 of those
+    sigmas it read a rate random walk there, and the section came out
+    random-walk."""
+    return allan_report(_static(10.0, 10.0, seed=3))[1]
+
+
+def test_gauss_markov_section_parses_and_recovers_the_grade(ten_hours):
+    """White noise within 3 % (read over cluster times of 0.1 to 10 s, tens of
+    thousands of clusters: 1 % per point); Gauss-Markov sigmas within 20 % (9 %
+    per axis at the peak, RMS of three); correlation times within 0.6..1.5 x
+    (the bump's top is flat: its Allan deviation is within 5 % of the peak
+    from 1.07 to 3.3 tau, less than one point's 9 % scatter, so the peak's
+    place is the least certain term)."""
+    n = _parsed(ten_hours)
+    assert n.gyro_bias_model == n.accel_bias_model == "gauss-markov"
+    assert n.gyro_arw_deg_sqrt_h == pytest.approx(0.09, rel=0.03)
+    assert n.accel_vrw_m_s_sqrt_h == pytest.approx(0.008, rel=0.03)
+    assert n.gyro_bias_sigma_deg_h == pytest.approx(GM_SIGMA_DEG_H, rel=0.20)
+    assert n.accel_bias_sigma_ug == pytest.approx(GM_SIGMA_UG, rel=0.20)
+    assert 0.6 * 300 < n.gyro_tau_s() < 1.5 * 300 and 0.6 * 300 < n.accel_tau_s() < 1.5 * 300
+    assert not ten_hours["notes"]
+    assert ten_hours["navigate_noise_section"] == ten_hours["noise_section"]  # the older JSON name
+
+
+def test_the_gauss_markov_bump_is_flat_topped():
+    from inskit.analysis.allan import gm_avar
+
+    tau = np.array([1.07, 1.89, 3.3]) * 300.0
+    a = np.sqrt(gm_avar(tau, 1.0, 300.0))
+    assert a[[0, 2]].min() > 0.95 * a[1]
+
+
+def test_rate_random_walk_gives_a_random_walk_bias_section():
+    """Accelerometers with a rate random walk of 30 ug/sqrt(h) and no bias
+    instability, 3 h at 10 Hz: the +1/2 slope from 47 s (where it crosses the
+    white noise) to the curve's end at 600 s (K = 18 clusters: 17 % per
+    point) gives accel_bias_model = "random-walk" with K within 30 %; the
+    filter's bias then drifts by that much in an hour."""
+    rep = allan_report(_static(3.0, 10.0, seed=1, accel={"bias_instability": 0.0, "rate_random_walk": 30.0}))[1]
+    n = _parsed(rep)
+    assert n.accel_bias_model == "random-walk" and n.accel_bias_rrw_ug_sqrt_h == pytest.approx(30.0, rel=0.30)
+    assert "accel_bias_sigma_ug" not in rep["noise_section"] and "accel_bias_tau_s" not in rep["noise_section"]
+    s = sensor_noise(n)
+    assert math.isinf(s.accel_bias_tau_s)
+    assert s.accel_bias_sigma * math.sqrt(3600.0) == pytest.approx(n.accel_bias_rrw_ug_sqrt_h * MICRO_G)
