@@ -169,6 +169,18 @@ def test_init_keys_of_the_other_mode():
     assert _cfg(LOOSE, init=given).init.lat_deg == 45.0
 
 
+def test_first_row_only_for_increment_files():
+    """Issue 14 item 11: [imu] first_row describes the first row of an increment file; the rtklibexplorer log
+    holds rates, so a value other than the default there would be ignored."""
+    assert _cfg(LOOSE).imu.first_row == "initial"
+    assert _cfg(LOOSE, imu={"first_row": "increment"}).imu.first_row == "increment"
+    with pytest.raises(ConfigError, match=r"field 'imu\.first_row': applies to increment files .*rtklibexplorer log "
+                                          r"holds rates"):
+        _cfg(LOOSE, imu={"format": "rtklibexplorer", "first_row": "discard"})
+    with pytest.raises(ConfigError, match=r"imu\.first_row"):
+        _cfg(LOOSE, imu={"first_row": "first"})
+
+
 # --- --outages on the command line -------------------------------------------------
 def test_outages_spec_parsing():
     assert outages_from_spec("windows:15-25,30-40") == {"protocol": "windows", "windows_s": [[15.0, 25.0],
