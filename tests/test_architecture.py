@@ -20,7 +20,7 @@ LAYERS = {
     "cli_output": 8,
     "cli_gyrofree": 9, "cli_platform": 9, "cli_gnss": 9, "cli_report": 9, "cli_reproduce": 9,
     "cli_study": 9, "cli_tune": 9,
-    "cli": 10,
+    "cli": 10, "api": 10,
     "__init__": 11, "__main__": 11,
 }
 

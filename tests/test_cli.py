@@ -55,6 +55,9 @@ BAD = {
                   "0,0,0,0,0,0,-0.098\n0,0,0,0,0,0,-0.098\n", "line 3: duplicate timestamp"),
     "backwards": ("time_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_m_s,dv_y_m_s,dv_z_m_s\n"
                   "1,0,0,0,0,0,-0.098\n0.5,0,0,0,0,0,-0.098\n", "goes back in time"),
+    "no_initial_row": ("time_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_m_s,dv_y_m_s,dv_z_m_s\n"
+                       "0.01,0,0,0,0,0,-0.098\n0.02,0,0,0,0,0,-0.098\n",
+                       "line 2 (the first data row) holds increments (dv_z_m_s=-0.098)"),
     "g_as_ms2": ("time_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s,accel_x_m_s2,accel_y_m_s2,accel_z_m_s2\n"
                  "0,0,0,0,0,0,-1\n0.01,0,0,0,0,0,-1\n", "looks like values in g"),
     "deg_as_rad": ("time_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s,accel_x_m_s2,accel_y_m_s2,accel_z_m_s2\n"
@@ -74,6 +77,19 @@ def test_bad_imu_gives_one_line(case, tmp_path):
     assert len(lines) == 1, r.stderr
     assert lines[0].startswith("inskit: error: ") and "bad.csv" in lines[0] and expected in lines[0]
     assert "Traceback" not in r.stderr
+
+
+def test_first_row_option(tmp_path):
+    """--first-row increment: the first row's increments are real, an initial epoch 0.01 s earlier is prepended
+    and the --init state is taken there (mechanize starts at the first IMU time)."""
+    p = tmp_path / "inc.csv"
+    p.write_text(BAD["no_initial_row"][0])
+    r = inskit("mechanize", p, "--init", "45,0,0,0,0,0,0,0,0", "--first-row", "increment", "--json")
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout)["duration_s"] == pytest.approx(0.02)
+    r = inskit("mechanize", p, "--init", "45,0,0,0,0,0,0,0,0", "--first-row", "discard", "--json")
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout)["duration_s"] == pytest.approx(0.01)
 
 
 def test_bad_init_and_overwrite(files, tmp_path):

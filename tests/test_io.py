@@ -257,3 +257,100 @@ def test_read_height_with_and_without_sigma_and_its_bad_inputs(tmp_path):
         io.read_height(write(tmp_path, "dup.csv", "time_s,height_m\n0.0,300.0\n0.0,300.0\n"))
     with pytest.raises(InputError, match=r"nan\.csv: line 2: column 'height_m' has 'nan'; expected a finite number"):
         io.read_height(write(tmp_path, "nan.csv", "time_s,height_m\n0.0,nan\n"))
+
+
+# --- issue 14 item 11: the first row of an increment file -------------------------------------------------------
+INC_HDR = "time_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_m_s,dv_y_m_s,dv_z_m_s"
+
+
+def _level_at_rest(dt=0.01, duration=1.0):
+    """Ideal increments of a level IMU at rest at 45 deg (row 0 the initial epoch, zero) and the truth."""
+    traj = StationaryTrajectory((np.radians(45.0), 0.1, 10.0), (0.0, 0.0, 0.3))
+    t = np.arange(0.0, duration + dt / 2, dt)
+    return ideal_imu(traj, t, nodes=1), truth_solution(traj, t)
+
+
+def _write_increments(path, t, dth, dv):
+    np.savetxt(path, np.column_stack([t, dth, dv]), delimiter=",", header=INC_HDR, comments="", fmt="%.17g")
+    return path
+
+
+def test_an_increment_file_without_its_initial_row_is_refused(tmp_path):
+    """Row 0 of an increment file is the initial epoch and its increments are unused, so a file that starts with a
+    real increment would silently lose it: refused, naming the file, the line and what to say instead."""
+    imu, _ = _level_at_rest()
+    p = _write_increments(tmp_path / "no_initial.csv", imu.time[1:], imu.dtheta_b[1:], imu.dv_b[1:])
+    with pytest.raises(InputError, match=r"no_initial\.csv: line 2 \(the first data row\) holds increments "
+                                         r"\(.*dv_z_m_s=-0\.098.*\).*lack that row.*first_row=\"increment\".*"
+                                         r"first_row=\"discard\".*\[imu\] first_row.*--first-row"):
+        io.read_imu(p)
+    # the file with its initial row (zeros, as write_imu writes it) is read as before
+    io.write_imu(tmp_path / "with_initial.csv", imu)
+    back = io.read_imu(tmp_path / "with_initial.csv")
+    assert len(back) == len(imu) and not back.dtheta_b[0].any() and not back.dv_b[0].any()
+
+
+def test_first_row_increment_keeps_every_interval_and_discard_loses_one(tmp_path):
+    """A file of real increments from the start of its first interval, t0, whose time is not in the file.
+    first_row="increment" puts the initial epoch one median interval before the first row, at t0: free-inertial
+    navigation from the truth at t0 stays at rest (the ideal increments leave only integration error).
+    "discard" drops the first increment: from the same state at t0 the first interval then carries no specific
+    force, and the velocity is off by the lost gravity compensation, g * dt = 0.098 m/s at 100 Hz."""
+    from inskit.strapdown import mechanize
+
+    dt = 0.01
+    imu, truth = _level_at_rest(dt)
+    p = _write_increments(tmp_path / "no_initial.csv", imu.time[1:], imu.dtheta_b[1:], imu.dv_b[1:])
+    inc = io.read_imu(p, first_row="increment")
+    assert len(inc) == len(imu)
+    assert inc.time[0] == pytest.approx(imu.time[0], abs=1e-12)  # one median interval before the first row
+    assert not inc.dtheta_b[0].any() and not inc.dv_b[0].any()
+    np.testing.assert_allclose(inc.dv_b[1:], imu.dv_b[1:], rtol=1e-13)  # pandas' fast parser: 1e-13
+    start = truth.state(0)
+    assert np.abs(mechanize(inc, start).v_n[-1]).max() < 1e-6
+    dis = io.read_imu(p, first_row="discard")
+    assert len(dis) == len(imu) - 1 and dis.time[0] == imu.time[1] and not dis.dv_b[0].any()
+    lost = np.linalg.norm(mechanize(dis, start).v_n[-1])
+    assert lost == pytest.approx(G0 * dt, rel=0.01)
+
+
+def test_first_row_increment_refuses_an_initial_row_and_a_single_row(tmp_path):
+    imu, _ = _level_at_rest()
+    io.write_imu(tmp_path / "with_initial.csv", imu)
+    with pytest.raises(InputError, match=r"with_initial\.csv: line 2 \(the first data row\) holds zero increments: "
+                                         r"it is the initial epoch.*first_row=\"initial\""):
+        io.read_imu(tmp_path / "with_initial.csv", first_row="increment")
+    one = _write_increments(tmp_path / "one.csv", imu.time[1:2], imu.dtheta_b[1:2], imu.dv_b[1:2])
+    with pytest.raises(InputError, match=r"one\.csv: first_row=\"increment\" needs at least two rows"):
+        io.read_imu(one, first_row="increment")
+    with pytest.raises(InputError, match=r"`first_row` must be one of 'initial', 'increment', 'discard'"):
+        io.read_imu(tmp_path / "with_initial.csv", first_row="first")
+
+
+def test_first_row_empty_tolerance_and_rate_files(tmp_path):
+    """A first row a billionth of the typical increment is empty (a writer's rounding), one a millionth of it is
+    not; first_row describes increment files, not rates."""
+    imu, _ = _level_at_rest()
+    d = imu.dv_b.copy()
+    d[0] = imu.dv_b[1] * 1e-10
+    assert len(io.read_imu(_write_increments(tmp_path / "tiny.csv", imu.time, imu.dtheta_b, d))) == len(imu)
+    d[0] = imu.dv_b[1] * 1e-6
+    with pytest.raises(InputError, match=r"small\.csv: line 2"):
+        io.read_imu(_write_increments(tmp_path / "small.csv", imu.time, imu.dtheta_b, d))
+    p = write(tmp_path, "rates.csv", HEADER_RATES + static_rows())
+    with pytest.raises(InputError, match=r"rates\.csv: first_row='increment' applies to increment files"):
+        io.read_imu(p, first_row="increment")
+
+
+def test_write_imu_writes_the_initial_epoch(tmp_path):
+    """ImuData.from_rates puts rate x step in row 0; the file format's row 0 is the initial epoch, so write_imu
+    writes zeros there and the file reads back under the default rule, every later row unchanged."""
+    from inskit.types import ImuData
+
+    t = np.arange(0.0, 1.0, 0.01)
+    imu = ImuData.from_rates(t, np.tile([0.01, 0.0, 0.0], (len(t), 1)), np.tile([0.0, 0.0, -G0], (len(t), 1)))
+    assert imu.dv_b[0].any()
+    io.write_imu(tmp_path / "r.csv", imu)
+    back = io.read_imu(tmp_path / "r.csv")
+    assert not back.dv_b[0].any()
+    np.testing.assert_allclose(back.dv_b[1:], imu.dv_b[1:], rtol=1e-13)

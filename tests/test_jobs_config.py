@@ -267,6 +267,18 @@ def test_height_needs_a_file_or_a_constant_and_refuses_ignored_keys():
     assert h.bias_tau_s == 600.0 and h.estimate_bias
 
 
+def test_first_row_only_for_increment_files():
+    """Issue 14 item 11: [imu] first_row describes the first row of an increment file; the rtklibexplorer log
+    holds rates, so a value other than the default there would be ignored."""
+    assert _cfg(LOOSE).imu.first_row == "initial"
+    assert _cfg(LOOSE, imu={"first_row": "increment"}).imu.first_row == "increment"
+    with pytest.raises(ConfigError, match=r"field 'imu\.first_row': applies to increment files .*rtklibexplorer log "
+                                          r"holds rates"):
+        _cfg(LOOSE, imu={"format": "rtklibexplorer", "first_row": "discard"})
+    with pytest.raises(ConfigError, match=r"imu\.first_row"):
+        _cfg(LOOSE, imu={"first_row": "first"})
+
+
 # --- --outages on the command line -------------------------------------------------
 def test_mounting_keys_need_the_mounting_and_a_lateral_constraint():
     with pytest.raises(ConfigError, match=r"c\.toml: field 'constraints\.sigma_mounting_deg': "

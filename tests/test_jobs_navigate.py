@@ -321,3 +321,28 @@ def test_navigate_fuses_gnss_speed_and_course(tmp_path):
             h = summary(res)["health"]["measurements"]["gnss_speed_course"]
             assert h["rejected_fraction"] < 0.02 and 0.5 < h["mean_nis"] / h["dof"] < 1.5, h
     assert rms["with"] < 1.1 * rms["without"], rms
+
+
+def test_imu_first_row_reaches_the_reader(tmp_path):
+    """[imu] first_row (issue 14 item 11): an increment log that starts with a real increment is refused by
+    default, naming the file and the key, and read with its initial epoch prepended under "increment"."""
+    from inskit import io
+    from inskit.errors import InputError
+    from inskit.jobs.config import config_from_dict
+    from inskit.jobs.navigate import load_inputs
+    from inskit.simulation import StationaryTrajectory, ideal_imu
+    from inskit.types import GnssData
+
+    t = np.arange(0.0, 2.0 + 1e-9, 0.01)
+    imu = ideal_imu(StationaryTrajectory((0.7, 0.1, 10.0)), t, nodes=1)
+    cols = np.column_stack([t, imu.dtheta_b, imu.dv_b])[1:]  # the initial row left out
+    np.savetxt(tmp_path / "imu.csv", cols, delimiter=",", comments="", fmt="%.17g",
+               header="time_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_m_s,dv_y_m_s,dv_z_m_s")
+    tg = np.arange(-0.5, 2.01, 0.5)  # from before the IMU: the run starts at its first sample
+    io.write_gnss(tmp_path / "gnss.csv", GnssData(tg, np.tile([0.7, 0.1, 10.0], (len(tg), 1)), np.ones((len(tg), 3))))
+    data = {"imu": {"file": "imu.csv"}, "gnss": {"file": "gnss.csv"}}
+    with pytest.raises(InputError, match=r"imu\.csv: line 2 \(the first data row\) holds increments.*\[imu\] first_row"):
+        load_inputs(config_from_dict(data, base_dir=tmp_path))
+    data["imu"]["first_row"] = "increment"
+    got, _ = load_inputs(config_from_dict(data, base_dir=tmp_path))
+    assert len(got) == len(t) and got.time[0] == pytest.approx(0.0, abs=1e-12)

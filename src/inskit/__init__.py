@@ -19,18 +19,73 @@ Frames: ``i`` inertial (ECI, coincident with ``e`` at the start of a run),
   and friends appear only at the edges (file readers, CLI options, plots),
   converted through the constants in :mod:`inskit.units`.
 
+The Python face (``docs/api.md``): :func:`navigate`, :func:`simulate`,
+:func:`mechanize`, the readers :func:`read_imu` (every IMU format inskit
+knows, recognised by its header: the inskit CSV and the rtklibexplorer log
+of the bundled drives), :func:`read_gnss` (inskit CSV, RTKLIB ``.pos``),
+:func:`read_solution` and :func:`read_truth`, and the data types
+:class:`ImuData`, :class:`GnssData`, :class:`NavState`,
+:class:`NavSolution` (``.to_dataframe()``).  They load on first use, so
+``import inskit`` pulls in neither numba nor scipy, pandas or matplotlib.
+
 Modules mirror the domain: :mod:`earth`, :mod:`rotations`, :mod:`strapdown`,
-:mod:`io`, :mod:`analysis`, :mod:`cli` (and later simulation, alignment,
-filters, gnss, gyro-free, platform).
+:mod:`io`, :mod:`analysis`, :mod:`simulation`, :mod:`alignment`,
+:mod:`filters`, :mod:`integration`, :mod:`gnss`, :mod:`gyrofree`,
+:mod:`platform`, :mod:`jobs` (what the commands run), :mod:`cli`.
 """
 
-from importlib.metadata import PackageNotFoundError, version
+from importlib import import_module as _import_module
 
-try:
-    __version__ = version("inskit")
-except PackageNotFoundError:  # running from a source tree without install
-    __version__ = "0.0.0"
+from .errors import ConfigError, InputError, InskitError
 
-from .errors import InputError, InskitError  # noqa: E402
+#: public name -> (module, attribute), loaded on first access (PEP 562)
+_LAZY = {
+    "navigate": ("inskit.api", "navigate"),
+    "NavigationRun": ("inskit.api", "NavigationRun"),
+    "simulate": ("inskit.api", "simulate"),
+    "mechanize": ("inskit.api", "mechanize"),
+    "read_imu": ("inskit.io.formats", "read_imu"),
+    "read_gnss": ("inskit.io.formats", "read_gnss"),
+    "read_solution": ("inskit.io.csv_formats", "read_solution"),
+    "read_truth": ("inskit.io.csv_formats", "read_solution"),  # truth files are solution files
+    "write_solution": ("inskit.io.csv_formats", "write_solution"),
+    "ImuData": ("inskit.types", "ImuData"),
+    "GnssData": ("inskit.types", "GnssData"),
+    "NavState": ("inskit.types", "NavState"),
+    "NavSolution": ("inskit.types", "NavSolution"),
+}
 
-__all__ = ["InputError", "InskitError", "__version__"]
+#: subpackages and modules reachable as attributes without their own import (``inskit.io.read_imu``)
+_SUBMODULES = ("alignment", "analysis", "api", "earth", "errors", "filters", "gnss", "gyrofree", "integration", "io",
+               "jobs", "platform", "rotations", "simulation", "strapdown", "types", "units")
+
+__all__ = ["ConfigError", "GnssData", "ImuData", "InputError", "InskitError", "NavSolution", "NavState",
+           "NavigationRun", "__version__", "mechanize", "navigate", "read_gnss", "read_imu", "read_solution",
+           "read_truth", "simulate", "write_solution"]
+
+
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("inskit")
+    except PackageNotFoundError:  # running from a source tree without install
+        return "0.0.0"
+
+
+def __getattr__(name):
+    if name in _LAZY:
+        module, attr = _LAZY[name]
+        value = getattr(_import_module(module), attr)
+    elif name in _SUBMODULES:
+        value = _import_module(f"inskit.{name}")
+    elif name == "__version__":
+        value = _version()  # importlib.metadata costs 35 ms: only when asked
+    else:
+        raise AttributeError(f"module 'inskit' has no attribute {name!r}")
+    globals()[name] = value
+    return value
+
+
+def __dir__():
+    return sorted(set(__all__) | set(_SUBMODULES) | {k for k in globals() if not k.startswith("_")})

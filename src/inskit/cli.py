@@ -84,10 +84,13 @@ def _height_ref(text, imu):
               help="Gravity model: normal (Somigliana with both height terms and the north component), "
               "normal-simple (first-order height term, no north component) or j2 (GM + J2 field).")
 @click.option("--no-unit-check", is_flag=True, help="Skip the unit-plausibility checks of the IMU reader.")
+@click.option("--first-row", type=click.Choice(["initial", "increment", "discard"]), default="initial",
+              show_default=True, help="Increment files: the first row is the initial epoch (zero increments), a "
+              "real increment (an initial epoch is prepended), or to be dropped (docs/formats.md).")
 @click.option("--out", "out_file", type=click.Path(dir_okay=False), help="Write the solution CSV here.")
 @click.option("--force", is_flag=True, help="Overwrite --out if it exists.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON summary object on stdout.")
-def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coning, gravity, no_unit_check, out_file,
+def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coning, gravity, no_unit_check, first_row, out_file,
               force, as_json):
     """Free-inertial navigation from an IMU file and an initial state."""
     from . import io
@@ -102,7 +105,7 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
         raise InputError(f"{out_file}: is an input of this command; refusing to overwrite it")
     if out_file:
         check_folder_writable(Path(out_file).resolve().parent)
-    imu = io.read_imu(imu_file, check_units=not no_unit_check)
+    imu = io.read_imu(imu_file, check_units=not no_unit_check, first_row=first_row)
     if init_text and init_from:
         raise InputError("give either --init or --init-from, not both")
     if init_from:
@@ -410,8 +413,11 @@ def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, f
               help="Write the [noise] section for inskit navigate (TOML) to this file.")
 @click.option("--force", is_flag=True, help="Overwrite --plot and --toml.")
 @click.option("--no-unit-check", is_flag=True, help="Skip the unit-plausibility checks of the IMU reader.")
+@click.option("--first-row", type=click.Choice(["initial", "increment", "discard"]), default="initial",
+              show_default=True, help="Increment files: the first row is the initial epoch (zero increments), a "
+              "real increment (an initial epoch is prepended), or to be dropped (docs/formats.md).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def allan(imu_file, plot_file, toml_file, force, no_unit_check, as_json):
+def allan(imu_file, plot_file, toml_file, force, no_unit_check, first_row, as_json):
     """Allan deviation of a static IMU log and the filter noise parameters it
     implies: the [noise] section of an inskit navigate config (noise_section
     in the JSON, the TOML text with --toml)."""
@@ -427,7 +433,7 @@ def allan(imu_file, plot_file, toml_file, force, no_unit_check, as_json):
         if Path(toml_file).exists() and not force:
             raise InputError(f"{toml_file}: already exists; refusing to overwrite it (use --force)")
         check_folder_writable(Path(toml_file).resolve().parent)
-    imu = io.read_imu(imu_file, check_units=not no_unit_check)
+    imu = io.read_imu(imu_file, check_units=not no_unit_check, first_row=first_row)
     r, rep = allan_report(imu)
     gyro, acc = rep["gyro"], rep["accel"]
     res = {"file": imu_file, "duration_s": float(imu.time[-1] - imu.time[0]), **rep}
@@ -492,9 +498,12 @@ def schemes(scenario_file, outage, seed, as_json):
 @click.option("--accel-bias-ug", type=float, help="Accelerometer bias class (1 sigma) [micro-g] for the sigmas and m.")
 @click.option("--gyro-bias-deg-h", type=float, help="Gyro bias class (1 sigma) [deg/h] for the sigmas and m.")
 @click.option("--no-unit-check", is_flag=True, help="Skip the unit-plausibility checks of the IMU reader.")
+@click.option("--first-row", type=click.Choice(["initial", "increment", "discard"]), default="initial",
+              show_default=True, help="Increment files: the first row is the initial epoch (zero increments), a "
+              "real increment (an initial epoch is prepended), or to be dropped (docs/formats.md).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def align(imu_file, lat_deg, method, m_gain, t_start, t_end, imu_format, mount_rpy, accel_bias_ug, gyro_bias_deg_h,
-          no_unit_check, as_json):
+          no_unit_check, first_row, as_json):
     """Initial alignment of a static IMU log: roll, pitch, yaw and their sigmas.
 
     The sigmas come from the sensor biases (which do not average out at rest)
@@ -527,6 +536,7 @@ def align(imu_file, lat_deg, method, m_gain, t_start, t_end, imu_format, mount_r
             raise InputError(f"{name} must be > 0, got {v}")
     res = align_static(imu_file, np.radians(lat_deg), method=method, m=m_gain, t_start=t_start, t_end=t_end,
                        imu_format=imu_format, mount_rpy=np.radians(mount), check_units=not no_unit_check,
+                       first_row=first_row,
                        accel_bias_sigma=None if accel_bias_ug is None else accel_bias_ug * MICRO_G,
                        gyro_bias_sigma=None if gyro_bias_deg_h is None else gyro_bias_deg_h * DEG_PER_HOUR)
     yaw_sigma = (f"{res['yaw_sigma_deg']:.4f}" if res["heading_usable"] else

@@ -12,6 +12,7 @@ import numpy as np
 
 from . import rotations as rot
 from .errors import InputError
+from .units import DEG
 
 
 def plain_number(x, digits=None) -> str:
@@ -73,7 +74,10 @@ class ImuData:
 
     Row ``k`` holds the increments over ``(time[k-1], time[k]]``; row 0 holds
     those over the interval that ends at ``time[0]`` (ignored when ``time[0]``
-    is the initial epoch of a run).  Irregular steps are allowed.
+    is the initial epoch of a run).  Irregular steps are allowed.  In an
+    increment file row 0 is the initial epoch and holds zeros; a file that
+    starts with a real increment is read with ``first_row="increment"``
+    (``docs/formats.md``, :func:`inskit.io.csv_formats.first_row_rule`).
 
     Attributes
     ----------
@@ -142,6 +146,32 @@ class ImuData:
         """Rows ``start:stop`` as a new ImuData."""
         s = slice(start, stop)
         return ImuData(self.time[s], self.dtheta_b[s], self.dv_b[s])
+
+    def to_dataframe(self, *, rates=False):
+        """The samples as a pandas DataFrame, columns named as the IMU file
+        format names them (``docs/formats.md``).
+
+        Parameters
+        ----------
+        rates : bool
+            False: ``time_s, dtheta_{x,y,z}_rad, dv_{x,y,z}_m_s`` (the
+            increments as held); True: ``time_s, gyro_{x,y,z}_rad_s,
+            accel_{x,y,z}_m_s2``, the mean rates over each interval
+            (:meth:`rates`).
+        """
+        import pandas as pd
+
+        if rates:
+            a, b = self.rates()
+            names = ("gyro_{}_rad_s", "accel_{}_m_s2")
+        else:
+            a, b = self.dtheta_b, self.dv_b
+            names = ("dtheta_{}_rad", "dv_{}_m_s")
+        cols = {"time_s": self.time}
+        for name, x in zip(names, (a, b)):
+            for j, axis in enumerate("xyz"):
+                cols[name.format(axis)] = x[:, j]
+        return pd.DataFrame(cols)
 
 
 @dataclass(frozen=True)
@@ -261,6 +291,54 @@ class NavSolution:
         """The NavState at row ``k``."""
         return NavState(self.time[k], self.lla[k], self.v_n[k], self.q_nb[k])
 
+    def columns(self, rows=None) -> dict:
+        """The solution as named columns, units in the names, as the solution
+        files hold them (``docs/formats.md``): ``time_s, lat_deg, lon_deg,
+        height_m, vn_m_s, ve_m_s, vd_m_s, roll_deg, pitch_deg, yaw_deg``
+        (longitude wrapped into (-180, 180], ZYX Euler angles), then every
+        ``extra`` column under its own name (an (n, k) one as ``name_0`` ..
+        ``name_{k-1}``).
+
+        Parameters
+        ----------
+        rows : (m,) int array, optional
+            Only these rows.
+
+        Returns
+        -------
+        dict of str -> (n,) or (m,) ndarray
+        """
+        sl = slice(None) if rows is None else np.asarray(rows)
+        rpy = rot.euler_from_quat(self.q_nb[sl]) / DEG
+        lla, v = self.lla[sl], self.v_n[sl]
+        cols = {
+            "time_s": self.time[sl],
+            "lat_deg": lla[:, 0] / DEG,
+            "lon_deg": -((-lla[:, 1] + np.pi) % (2.0 * np.pi) - np.pi) / DEG,
+            "height_m": lla[:, 2],
+            "vn_m_s": v[:, 0], "ve_m_s": v[:, 1], "vd_m_s": v[:, 2],
+            "roll_deg": rpy[:, 0], "pitch_deg": rpy[:, 1], "yaw_deg": rpy[:, 2],
+        }
+        for k, a in self.extra.items():
+            a = np.asarray(a)[sl]
+            if a.ndim == 1:
+                cols[k] = a
+            else:
+                for j in range(a.shape[1]):
+                    cols[f"{k}_{j}"] = a[:, j]
+        return cols
+
+    def to_dataframe(self):
+        """The solution as a pandas DataFrame with the columns of
+        :meth:`columns` (the names of the solution CSV and Parquet files).
+
+        ``df.set_index("time_s")`` gives a time index; ``extra`` columns
+        (sigmas, estimates) follow the navigation ones.
+        """
+        import pandas as pd
+
+        return pd.DataFrame(self.columns())
+
     def slice(self, start, stop=None):
         s = slice(start, stop)
         return NavSolution(self.time[s], self.lla[s], self.v_n[s], self.q_nb[s],
@@ -356,6 +434,26 @@ class GnssData:
     @property
     def has_velocity(self):
         return self.v_n is not None
+
+    def to_dataframe(self):
+        """The fixes as a pandas DataFrame, columns named as the GNSS file
+        format names them: ``time_s, lat_deg, lon_deg, height_m, sigma_n_m,
+        sigma_e_m, sigma_d_m`` and, with velocity, ``vn_m_s, ve_m_s, vd_m_s,
+        sigma_vn_m_s, sigma_ve_m_s, sigma_vd_m_s`` (longitude wrapped into
+        (-180, 180])."""
+        import pandas as pd
+
+        cols = {"time_s": self.time, "lat_deg": self.lla[:, 0] / DEG,
+                "lon_deg": -((-self.lla[:, 1] + np.pi) % (2.0 * np.pi) - np.pi) / DEG,
+                "height_m": self.lla[:, 2]}
+        for j, a in enumerate("ned"):
+            cols[f"sigma_{a}_m"] = self.sigma_ned[:, j]
+        if self.has_velocity:
+            for j, a in enumerate("ned"):
+                cols[f"v{a}_m_s"] = self.v_n[:, j]
+            for j, a in enumerate("ned"):
+                cols[f"sigma_v{a}_m_s"] = self.sigma_v_ned[:, j]
+        return pd.DataFrame(cols)
 
     def select(self, mask):
         """Fixes where ``mask`` is true."""

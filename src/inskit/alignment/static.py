@@ -66,14 +66,14 @@ NO_HEADING_SIGMA_DEG = 180.0
 GYRO_CONSISTENCY_SIGMAS = 5.0
 
 
-def read_static(path, imu_format="inskit", mount_rpy=(0.0, 0.0, 0.0), check_units=True) -> ImuData:
+def read_static(path, imu_format="inskit", mount_rpy=(0.0, 0.0, 0.0), check_units=True,
+                first_row="initial") -> ImuData:
     from .. import io
-    from ..io.rtklib import mount_dcm, read_rtklibexplorer_imu
+    from ..io.rtklib import mount_dcm
 
     if imu_format == "rtklibexplorer":
-        imu, _ = read_rtklibexplorer_imu(path, mount_rpy=mount_rpy, check_units=check_units)
-        return imu
-    raw = io.read_imu(path, check_units=check_units)
+        return io.read_imu(path, format=imu_format, mount_rpy=mount_rpy, check_units=check_units, first_row=first_row)
+    raw = io.read_imu(path, format=imu_format, check_units=check_units, first_row=first_row)
     C = mount_dcm(mount_rpy)
     return ImuData(raw.time, raw.dtheta_b @ C.T, raw.dv_b @ C.T)
 
@@ -447,9 +447,10 @@ def align_imu(imu: ImuData, lat, *, method="blend", m=None, t_start=None, t_end=
 
 def align_static(path, lat, *, method="blend", m=None, t_start=None, t_end=None, imu_format="inskit",
                  mount_rpy=(0.0, 0.0, 0.0), check_units=True, accel_bias_sigma=None, gyro_bias_sigma=None,
-                 grade=DEFAULT_GRADE):
+                 grade=DEFAULT_GRADE, first_row="initial"):
     """Align on the static interval of a log file (:func:`align_imu`);
-    returns a flat dict (JSON-ready)."""
-    imu = read_static(path, imu_format, mount_rpy, check_units)
+    returns a flat dict (JSON-ready).  ``first_row``: that of an increment
+    file (:func:`inskit.io.csv_formats.first_row_rule`)."""
+    imu = read_static(path, imu_format, mount_rpy, check_units, first_row)
     return align_imu(imu, lat, method=method, m=m, t_start=t_start, t_end=t_end, accel_bias_sigma=accel_bias_sigma,
                      gyro_bias_sigma=gyro_bias_sigma, grade=grade, name=str(path), check_units=check_units)

@@ -124,13 +124,16 @@ def _find_triplet(df, prefix, units):
     return None
 
 
-def read_imu(path, *, check_units=True, sampled="instant") -> ImuData:
-    """Read an IMU CSV file.
+def read_imu(path, *, check_units=True, sampled="instant", first_row="initial") -> ImuData:
+    """Read an IMU CSV file of the inskit format (``docs/formats.md``).
 
     Columns: ``time_s`` and either rates ``gyro_{x,y,z}_{rad_s|deg_s|deg_h}``
     with ``accel_{x,y,z}_{m_s2|g}``, or increments
     ``dtheta_{x,y,z}_{rad|deg}`` with ``dv_{x,y,z}_m_s`` (over the interval
     that ends at the row's time).  Body axes forward-right-down.
+
+    :func:`inskit.io.read_imu` reads this format and the others inskit
+    knows, recognised by their header.
 
     Parameters
     ----------
@@ -143,13 +146,24 @@ def read_imu(path, *, check_units=True, sampled="instant") -> ImuData:
         Turn off for unusual data (free fall, spinning bodies).
     sampled : {"instant", "average"}
         How rates were sampled (see :meth:`ImuData.from_rates`).
+    first_row : {"initial", "increment", "discard"}
+        Increment files only: what their first row is (:func:`first_row_rule`).
+        ``"initial"``: the initial epoch, whose increments must be zero (a
+        first row holding increments is refused: the file seems to lack its
+        initial row and would lose its first increment); ``"increment"``: a
+        real increment, and an initial epoch one median interval earlier is
+        prepended; ``"discard"``: the initial epoch, whatever it holds is
+        dropped (set to zero).
 
     Returns
     -------
     ImuData
+        Row 0 is the initial epoch (zero increments).
     """
+    if first_row not in FIRST_ROW_MODES:
+        raise InputError(f"`first_row` must be one of {', '.join(map(repr, FIRST_ROW_MODES))}, got {first_row!r}")
     path, df = read_table(path)
-    require_columns(path, df, ["time_s"])
+    require_columns(path, df, ["time_s"], f" (the inskit IMU format; {OTHER_IMU_FORMATS_HINT})")
     t = numeric_columns(path, df, ["time_s"])[:, 0]
     check_time_column(path, t)
     gu, au = _find_triplet(df, "gyro", GYRO_UNITS), _find_triplet(df, "accel", ACCEL_UNITS)
@@ -163,12 +177,17 @@ def read_imu(path, *, check_units=True, sampled="instant") -> ImuData:
             check_imu_units(path, w, f, gcols[0], acols[0], gu, au)
         if len(t) < 2:
             raise InputError(f"{path}: needs at least two rows to integrate rates")
+        if first_row != "initial":
+            raise InputError(f"{path}: first_row={first_row!r} applies to increment files (dtheta/dv columns); this "
+                             "file holds rates, which have no first increment to lose")
         return ImuData.from_rates(t, w, f, sampled=sampled)
     if du and vu:
         tcols = [f"dtheta_{a}_{du}" for a in AXES]
         vcols = [f"dv_{a}_{vu}" for a in AXES]
-        dth = numeric_columns(path, df, tcols) * DTHETA_UNITS[du]
-        dv = numeric_columns(path, df, vcols)
+        raw = numeric_columns(path, df, tcols + vcols)
+        t, raw = first_row_rule(path, t, raw, tcols + vcols, first_row)
+        dth = raw[:, :3] * DTHETA_UNITS[du]
+        dv = raw[:, 3:] * DV_UNITS[vu]
         if check_units and len(t) > 1:
             dt = np.diff(t)
             check_imu_units(path, dth[1:] / dt[:, None], dv[1:] / dt[:, None], tcols[0], vcols[0],
@@ -176,9 +195,103 @@ def read_imu(path, *, check_units=True, sampled="instant") -> ImuData:
         return ImuData(t, dth, dv)
     raise InputError(
         f"{path}: no complete set of IMU columns: expected gyro_{{x,y,z}}_{{rad_s|deg_s|deg_h}} with "
-        f"accel_{{x,y,z}}_{{m_s2|g}}, or dtheta_{{x,y,z}}_{{rad|deg}} with dv_{{x,y,z}}_m_s; "
-        f"found {', '.join(df.columns)}"
+        f"accel_{{x,y,z}}_{{m_s2|g}}, or dtheta_{{x,y,z}}_{{rad|deg}} with dv_{{x,y,z}}_m_s "
+        f"({OTHER_IMU_FORMATS_HINT}); found {', '.join(df.columns)}"
     )
+
+
+#: what the first row of an increment file is (:func:`first_row_rule`)
+FIRST_ROW_MODES = ("initial", "increment", "discard")
+#: a first row whose increments are all at most this fraction of the median increment of the other rows is
+#: empty (the initial epoch); exactly zero when there are no other rows or they are all zero
+FIRST_ROW_EMPTY = 1e-9
+#: the IMU formats besides this one, for the messages of a file this reader cannot read
+OTHER_IMU_FORMATS_HINT = ("the other IMU format inskit reads is the rtklibexplorer log: gps_week, gps_sow_s, "
+                          "acc_{x,y,z}_g, gyro_{x,y,z}_dps, read by inskit.io.read_imu or format = "
+                          "\"rtklibexplorer\"")
+
+
+def first_row_empty(inc) -> bool:
+    """Does the first row of an increment table hold nothing?
+
+    ``inc`` is ``(n, 6)``: three angle then three velocity increments (any
+    unit).  Empty when every angle component is at most
+    :data:`FIRST_ROW_EMPTY` times the median angle-increment norm of the
+    other rows, and likewise the velocity components: a real increment is
+    of the size of its neighbours, never a billionth of it.
+    """
+    inc = np.asarray(inc, float)
+    if len(inc) < 2:
+        return not np.any(inc[0])
+    for sl in (slice(0, 3), slice(3, 6)):
+        typical = float(np.median(_norm(inc[1:, sl])))
+        if np.max(np.abs(inc[0, sl])) > FIRST_ROW_EMPTY * typical:
+            return False
+    return True
+
+
+def first_row_rule(path, t, inc, columns, first_row="initial"):
+    """Apply the first-row convention of increment files (``docs/formats.md``).
+
+    Row ``k`` holds the increments over ``(t[k-1], t[k]]``; the first row
+    has no earlier time, so it is the initial epoch of the file and its
+    increments are not used.  A file written without that row would silently
+    lose its first increment, so what the first row is must be known:
+
+    * ``"initial"``: it is the initial epoch and holds zeros
+      (:func:`first_row_empty`); increments there are refused with the file,
+      the line and the values.
+    * ``"increment"``: it is a real increment; an initial epoch one median
+      interval earlier, with zero increments, is prepended.  A zero first
+      row is refused (it is an initial epoch, and reading it as an interval
+      of zero specific force would be free fall).
+    * ``"discard"``: it is the initial epoch, whatever it holds (the first
+      packet of many sensors covers an unknown interval); its increments are
+      set to zero.
+
+    Parameters
+    ----------
+    path : Path
+        The file, for the messages.
+    t : (n,) ndarray
+        Times [s], strictly increasing.
+    inc : (n, 6) ndarray
+        Angle and velocity increments as the file holds them (file units).
+    columns : sequence of str
+        The six column names, for the messages.
+    first_row : {"initial", "increment", "discard"}
+
+    Returns
+    -------
+    (t, inc) : the times and increments, row 0 the initial epoch (zeros)
+    """
+    empty = first_row_empty(inc)
+    if first_row == "initial":
+        if not empty:
+            held = ", ".join(f"{c}={plain_number(v)}" for c, v in zip(columns, inc[0]) if v != 0)
+            raise InputError(
+                f"{path}: line 2 (the first data row) holds increments ({held}); in an increment file the first "
+                "row is the initial epoch and its increments are not used (docs/formats.md), so this file seems to "
+                "lack that row and would lose its first increment.  Say what the row is: first_row=\"increment\" "
+                "(its increments are real: an initial epoch one median interval earlier is prepended) or "
+                "first_row=\"discard\" (it is the initial epoch: its increments are dropped); [imu] first_row in a "
+                "navigate config, --first-row on the command line"
+            )
+        return t, inc
+    if first_row == "discard":
+        inc = inc.copy()
+        inc[0] = 0.0
+        return t, inc
+    if empty:
+        raise InputError(
+            f"{path}: line 2 (the first data row) holds zero increments: it is the initial epoch, not an "
+            "increment; read the file with first_row=\"initial\" (the default) rather than \"increment\""
+        )
+    if len(t) < 2:
+        raise InputError(f"{path}: first_row=\"increment\" needs at least two rows (the initial epoch is put one "
+                         "median interval before the first)")
+    dt = float(np.median(np.diff(t)))
+    return np.r_[t[0] - dt, t], np.vstack([np.zeros((1, inc.shape[1])), inc])
 
 
 def _norm(x):
@@ -252,13 +365,19 @@ def check_imu_units(path, w, f, gcol, acol, gunit, aunit):
 def write_imu(path, imu: ImuData, *, overwrite=False):
     """Write increments in the IMU format (``dtheta_*_rad``, ``dv_*_m_s``):
     Parquet when ``path`` ends in ``.parquet`` (float64, exact), else CSV with
-    17 significant digits."""
+    17 significant digits.
+
+    Row 0 is written as the format's initial epoch, with zero increments
+    (:func:`first_row_rule`): whatever ``imu`` holds there is over an
+    interval before its first time, which no reader or integrator uses
+    (``ImuData.from_rates`` puts a rate times an assumed step there).
+    """
     path = check_writable(path, overwrite)
     data = {"time_s": imu.time}
     for i, a in enumerate(AXES):
-        data[f"dtheta_{a}_rad"] = imu.dtheta_b[:, i]
+        data[f"dtheta_{a}_rad"] = np.r_[0.0, imu.dtheta_b[1:, i]]
     for i, a in enumerate(AXES):
-        data[f"dv_{a}_m_s"] = imu.dv_b[:, i]
+        data[f"dv_{a}_m_s"] = np.r_[0.0, imu.dv_b[1:, i]]
     if path.suffix == ".parquet":
         from .parquet import write_parquet
 

@@ -31,7 +31,6 @@ from ..errors import ConfigError, InputError
 from ..files import CSV_DIGITS, CSV_EXPONENT_BELOW, format_column, round_significant, write_csv_fast  # noqa: F401 (re-exported)
 from ..files import atomic_write
 from ..types import NavSolution
-from ..units import DEG
 
 #: the first four bytes (and the last four) of every Parquet file
 PARQUET_MAGIC = b"PAR1"
@@ -143,9 +142,11 @@ def decimation_index(time, rate_hz=None) -> np.ndarray:
 
 
 def solution_columns(sol: NavSolution, rows=None, path=None) -> dict:
-    """The file columns of a solution: navigation in degrees (longitude
-    wrapped into (-180, 180]), then every ``extra`` column under its own name
-    (an (n, k) extra becomes ``name_0 .. name_k-1``).
+    """The file columns of a solution (:meth:`NavSolution.columns`, whose
+    names ``NavSolution.to_dataframe`` shares): navigation in degrees
+    (longitude wrapped into (-180, 180]), then every ``extra`` column under
+    its own name (an (n, k) extra becomes ``name_0 .. name_k-1``), after
+    refusing a latitude beyond a pole.
 
     Parameters
     ----------
@@ -169,30 +170,7 @@ def solution_columns(sol: NavSolution, rows=None, path=None) -> dict:
         row = int(bad[0]) if rows is None else int(np.asarray(rows)[bad[0]])
         raise InputError(f"{where}refusing to write latitude {np.degrees(lat[bad[0]]):.6f} deg at row {row} "
                          "(outside [-90, 90]: the solution passed a pole in a frame that cannot)")
-    if rows is None:
-        rpy = sol.euler
-    else:
-        from .. import rotations as rot
-
-        rpy = rot.euler_from_quat(sol.q_nb[sl])
-    rpy = rpy / DEG
-    lla, v = sol.lla[sl], sol.v_n[sl]
-    cols = {
-        "time_s": sol.time[sl],
-        "lat_deg": lat / DEG,
-        "lon_deg": -((-lla[:, 1] + np.pi) % (2.0 * np.pi) - np.pi) / DEG,
-        "height_m": lla[:, 2],
-        "vn_m_s": v[:, 0], "ve_m_s": v[:, 1], "vd_m_s": v[:, 2],
-        "roll_deg": rpy[:, 0], "pitch_deg": rpy[:, 1], "yaw_deg": rpy[:, 2],
-    }
-    for k, a in sol.extra.items():
-        a = np.asarray(a)[sl]
-        if a.ndim == 1:
-            cols[k] = a
-        else:
-            for j in range(a.shape[1]):
-                cols[f"{k}_{j}"] = a[:, j]
-    return cols
+    return sol.columns(rows)
 
 
 def _check_finite(path, cols):

@@ -58,7 +58,11 @@ class _Strict(BaseModel):
 
 
 class ImuSection(_Strict):
-    """The IMU log and how to read it."""
+    """The IMU log and how to read it.
+
+    Rules: first_row other than "initial" needs format = "inskit" (the
+    rtklibexplorer log holds rates).
+    """
 
     file: Path = Field(..., description="IMU log, relative to this config file (plain or .gz)")
     format: Literal["inskit", "rtklibexplorer"] = Field(
@@ -71,11 +75,23 @@ class ImuSection(_Strict):
         "down) to the sensor axes; the readings are rotated into body axes")
     check_units: bool = Field(True, description="refuse a log whose magnitudes betray a wrong unit (e.g. deg/s "
                               "under a rad/s header; docs/formats.md)")
+    first_row: Literal["initial", "increment", "discard"] = Field(
+        "initial", description="what the first row of an increment file (dtheta/dv columns) is: 'initial' (the "
+        "initial epoch, zero increments; a first row that holds increments is refused, the file seems to lack its "
+        "initial row), 'increment' (a real increment: an initial epoch one median interval earlier is prepended) "
+        "or 'discard' (the initial epoch: its increments are dropped); docs/formats.md")
     start_s: float | None = Field(None, description="ignore IMU data before this time (IMU time scale, after "
                                   "time_offset_s; default: the first GNSS epoch)")
     gap_factor: float = Field(5.0, gt=1.0, description="an interval longer than this many median intervals is a gap")
     gap_rate_sigma_deg_s: float = Field(5.0, gt=0, description="unknown rate change assumed over a bridged gap")
     gap_accel_sigma_m_s2: float = Field(1.0, gt=0, description="unknown acceleration change over a bridged gap")
+
+    @model_validator(mode="after")
+    def _first_row_needs_increments(self):
+        if self.format == "rtklibexplorer" and self.first_row != "initial":
+            raise _key_error("first_row", "applies to increment files (format \"inskit\" with dtheta/dv columns); "
+                             "the rtklibexplorer log holds rates: remove it")
+        return self
 
 
 #: [gnss] keys that configure the reading and single-point solution of the RINEX files

@@ -123,7 +123,7 @@ def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = N
         week0 = week_pos
     else:
         gpath = cfg.resolve(cfg.gnss.file)
-        g = io.read_gnss(gpath)
+        g = io.read_gnss(gpath, format="inskit")
         gnss = GnssData(g.time + cfg.gnss.time_offset_s, g.lla, g.sigma_ned, g.v_n, g.sigma_v_ned)
     if cfg.gnss.height_offset_m:
         lla = gnss.lla.copy()
@@ -134,7 +134,7 @@ def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = N
                                          mount_rpy=np.radians(cfg.imu.mount_rpy_deg),
                                          check_units=cfg.imu.check_units)
     else:
-        raw_imu = io.read_imu(ipath, check_units=cfg.imu.check_units)
+        raw_imu = io.read_imu(ipath, format="inskit", check_units=cfg.imu.check_units, first_row=cfg.imu.first_row)
         from ..io.rtklib import mount_dcm
 
         C_bs = mount_dcm(np.radians(cfg.imu.mount_rpy_deg))

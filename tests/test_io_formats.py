@@ -1,0 +1,88 @@
+"""inskit.io.read_imu / read_gnss read every format inskit knows, recognised by the header (issue 14 item 10):
+the bundled drive among them; a header of no known kind gets a message that names the formats."""
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from inskit import io
+from inskit.errors import InputError
+from inskit.io.formats import detect_gnss_format, detect_imu_format
+from inskit.io.rtklib import read_pos, read_rtklibexplorer_imu
+from inskit.units import G0
+
+ROOT = Path(__file__).resolve().parents[1]
+DRIVE_IMU = ROOT / "data" / "drive_0708" / "imu_1934_gpst.csv.gz"
+DRIVE_POS = ROOT / "data" / "drive_0708" / "gnss_1934_sf.pos.gz"
+
+
+def test_the_bundled_drive_is_read_by_read_imu():
+    """data/drive_0708: 54 860 rows of a 100 Hz consumer MEMS IMU, standing still for its first 38 s, where the
+    specific force is gravity, 9.80 m/s^2 at 40 deg N and 1600 m, to the percent of an uncalibrated MEMS scale."""
+    assert detect_imu_format(DRIVE_IMU) == "rtklibexplorer"
+    imu = io.read_imu(DRIVE_IMU)
+    assert len(imu) == 54860
+    assert np.median(np.diff(imu.time)) == pytest.approx(0.01, abs=2e-4)
+    _, f = imu.rates()
+    still = (imu.time > imu.time[0]) & (imu.time < imu.time[0] + 30.0)
+    assert np.median(np.linalg.norm(f[still], axis=1)) == pytest.approx(9.80, rel=0.02)
+    ref, week0 = read_rtklibexplorer_imu(DRIVE_IMU)
+    np.testing.assert_array_equal(imu.time, ref.time)
+    np.testing.assert_array_equal(imu.dv_b, ref.dv_b)
+    # the format's own options pass through: the mounting rotation keeps |f|, the offset shifts every tag
+    m = io.read_imu(DRIVE_IMU, mount_rpy=np.radians([180.0, -6.79, 185.35]), time_offset_s=-0.26, week0=week0)
+    np.testing.assert_allclose(np.linalg.norm(m.dv_b, axis=1), np.linalg.norm(imu.dv_b, axis=1), rtol=1e-12)
+    np.testing.assert_allclose(m.time, imu.time - 0.26, rtol=0, atol=1e-9)
+    # the body z axis points down: specific force at rest is up, about -1 g along it
+    assert np.median(m.rates()[1][still, 2]) == pytest.approx(-G0, rel=0.02)
+
+
+def test_the_bundled_fixes_are_read_by_read_gnss():
+    assert detect_gnss_format(DRIVE_POS) == "rtklib-pos"
+    g = io.read_gnss(DRIVE_POS)
+    ref, _ = read_pos(DRIVE_POS)
+    assert len(g) == len(ref) == 2197  # data/drive_0708/README.md: 2197 epochs, fixed or float (Q 1, 2)
+    np.testing.assert_array_equal(g.lla, ref.lla)
+    assert len(io.read_gnss(DRIVE_POS, quality=[1])) == 2189  # of which 2189 fixed
+
+
+def test_inskit_files_are_recognised_and_an_explicit_format_is_obeyed(tmp_path):
+    p = tmp_path / "imu.csv"
+    p.write_text("time_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s,accel_x_m_s2,accel_y_m_s2,accel_z_m_s2\n"
+                 "0,0,0,0,0,0,-9.8\n0.01,0,0,0,0,0,-9.8\n")
+    assert detect_imu_format(p) == "inskit"
+    assert len(io.read_imu(p)) == 2
+    # the drive read as inskit: the message names what is missing and the other format
+    with pytest.raises(InputError, match=r"imu_1934_gpst\.csv\.gz: missing column\(s\) time_s \(the inskit IMU "
+                                         r"format; the other IMU format inskit reads is the rtklibexplorer log"):
+        io.read_imu(DRIVE_IMU, format="inskit")
+    with pytest.raises(InputError, match=r"unknown IMU format 'xsens'; the formats are 'inskit' \(.*\); "
+                                         r"'rtklibexplorer' \(rtklibexplorer GNSS-IMU log: gps_week"):
+        io.read_imu(p, format="xsens")
+    with pytest.raises(InputError, match=r"imu\.csv: mount_rpy does not apply to the 'inskit' format"):
+        io.read_imu(p, mount_rpy=(0.0, 0.0, 0.0))
+    with pytest.raises(InputError, match=r"first_row does not apply to the 'rtklibexplorer' format"):
+        io.read_imu(DRIVE_IMU, first_row="increment")
+    with pytest.raises(InputError, match=r"quality does not apply to the 'inskit' format"):
+        io.read_gnss(p, quality=[1])
+
+
+def test_a_header_of_no_known_format_names_them(tmp_path):
+    p = tmp_path / "x.csv"
+    p.write_text("t,wx,wy,wz\n0,1,2,3\n")
+    assert detect_imu_format(p) is None
+    with pytest.raises(InputError, match=r"x\.csv: missing column\(s\) time_s .*rtklibexplorer log: gps_week, "
+                                         r"gps_sow_s, acc_\{x,y,z\}_g, gyro_\{x,y,z\}_dps.*; found t, wx, wy, wz"):
+        io.read_imu(p)
+    q = tmp_path / "g.csv"
+    q.write_text("time_s,lat_deg\n0,1\n")
+    assert detect_gnss_format(q) == "inskit"
+    with pytest.raises(InputError, match=r"g\.csv: missing column\(s\) lon_deg"):
+        io.read_gnss(q)
+    # a missing or empty file: the reader says so (detection reads nothing)
+    with pytest.raises(InputError, match=r"nope\.csv: no such file"):
+        io.read_imu(tmp_path / "nope.csv")
+    (tmp_path / "e.csv").write_text("")
+    with pytest.raises(InputError, match=r"e\.csv: the file is empty"):
+        io.read_imu(tmp_path / "e.csv")
