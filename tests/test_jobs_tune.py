@@ -56,3 +56,14 @@ def test_tune_ranks_a_wrecked_setting_last(tmp_path):
     assert ranked == [10, 0.01], res["candidates"]
     assert res["best_toml"].startswith("[noise]\ngyro_bias_sigma_deg_h = 10\n")
     json.dumps(res, allow_nan=False)
+
+
+def test_default_spacing_mimics_the_protocol():
+    from inskit.jobs.outages import rtklibexplorer_outages
+
+    w = rtklibexplorer_outages(0.0)
+    hold, reaid = T.default_spacing(w, 540.0)
+    assert hold == pytest.approx(14.75) and reaid == pytest.approx(7.75, abs=1e-5)
+    val = T.validation_windows(w, 0.0, 540.0, hold, reaid)
+    assert len(val) == 11 and all(b - a == pytest.approx(14.75) for a, b in val)
+    assert T.default_spacing([], 100.0) == (10.0, 10.0)

@@ -144,9 +144,27 @@ def _run_one(args):
             "health": s["health"]["verdict"], "health_reasons": list(s["health"].get("reasons", []))}
 
 
-def tune(config_path, grid: dict, *, hold_s=10.0, reaid_s=10.0, start_after_s=60.0, workers=None,
+def default_spacing(protocol_rel, t_last_rel):
+    """Validation outages like the protocol's: ``hold_s`` the median length of
+    its windows (10 s without any), ``reaid_s`` 10 s, or less (not under 2 s)
+    so that one validation outage fits the median aided stretch between two
+    protocol windows."""
+    if not protocol_rel:
+        return 10.0, 10.0
+    w = sorted(protocol_rel)
+    hold = float(np.median([b - a for a, b in w]))
+    gaps = [w[i + 1][0] - w[i][1] for i in range(len(w) - 1)]
+    if not gaps:
+        return hold, 10.0
+    return hold, float(min(10.0, max(2.0, (np.median(gaps) - hold) / 2.0 - 1e-6)))
+
+
+def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60.0, workers=None,
          progress=None) -> dict:
     """Cross-validate the candidates of ``grid`` on ``config_path``'s data.
+
+    ``hold_s`` and ``reaid_s`` default to :func:`default_spacing` (validation
+    outages as long as the protocol's).
 
     Returns a dict: ``windows_protocol_s`` and ``windows_validation_s`` (s
     after the first fix), ``candidates`` (each with ``params``,
@@ -162,6 +180,9 @@ def tune(config_path, grid: dict, *, hold_s=10.0, reaid_s=10.0, start_after_s=60
     _, gnss = load_inputs(cfg)[:2]
     t0 = float(gnss.time[0])
     protocol = [(a - t0, b - t0) for a, b in outage_windows(cfg, gnss)]
+    d_hold, d_reaid = default_spacing(protocol, float(gnss.time[-1]) - t0)
+    hold_s = d_hold if hold_s is None else float(hold_s)
+    reaid_s = d_reaid if reaid_s is None else float(reaid_s)
     val = validation_windows(protocol, 0.0, float(gnss.time[-1]) - t0, hold_s, reaid_s, start_after_s)
     if not val:
         raise ConfigError(f"{config_path}: no room for a validation outage of {hold_s:g} s with {reaid_s:g} s of "
