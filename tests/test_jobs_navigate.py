@@ -47,17 +47,29 @@ def test_summary_keys_contract(result):
         assert isinstance(s[k], float)
         assert isinstance(s["forward"][k], float)
     assert s["solution"] == "smoothed"
-    assert s["states"] == 21
+    assert s["states"] == 23  # 21 + the two mounting states of examples/drive_0708.toml
 
 
-def test_no_mounting_warning_on_the_drive(result):
-    """The drive's [imu] mount_rpy_deg is right: the direction of travel
-    lies within 0.2 deg of the IMU's forward axis (0.06 deg pitch, 0.00 deg
-    yaw), far below the 1 deg warning."""
-    s = summary(result)
+def test_no_mounting_warning_on_the_drive(drive_inputs):
+    """The drive's [imu] mount_rpy_deg is right: run without the mounting
+    states, the direction of travel lies within 0.2 deg of the IMU's forward
+    axis (0.06 deg pitch, 0.00 deg yaw), far below the 1 deg warning."""
+    cfg, imu, gnss, _ = drive_inputs
+    off = cfg.model_copy(update={"constraints": cfg.constraints.model_copy(update={"mounting": False})})
+    s = summary(navigate(off, inputs=(imu, gnss)))
     assert not [w for w in s["health"]["warnings"] if w.startswith("mounting:")], s["health"]["warnings"]
     ev = s["mounting_check"]
     assert ev["epochs"] > 500 and abs(ev["pitch_deg"]) < 0.2 and abs(ev["yaw_deg"]) < 0.2, ev
+
+
+def test_the_modelled_mounting_of_the_drive_is_small_and_resolved(result):
+    """With the mounting states on (the example config) the residual
+    boresight after mount_rpy_deg is a fraction of a degree, well inside
+    its 5 deg prior, and the detector stands down (the mounting is modelled)."""
+    s = summary(result)
+    m, sig = s["mounting_rpy_deg"], s["mounting_sigma_deg"]
+    assert abs(m[1]) < 0.5 and abs(m[2]) < 1.0 and 0 < sig[1] < 0.5 and 0 < sig[2] < 0.5, (m, sig)
+    assert s["mounting_check"] is None
 
 
 def test_startup_levels_the_car(result):
