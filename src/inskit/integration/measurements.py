@@ -42,6 +42,7 @@ from .. import earth
 from ..rotations import dcm_from_quat, quat_from_dcm, skew
 from ..types import GnssData
 from . import _kernel as K
+from . import _updates as U
 from .layout import StateLayout
 
 
@@ -164,6 +165,14 @@ def _template(layout, rows, block):
     return H.copy()
 
 
+def compiled_form_applies(meas, cls) -> bool:
+    """Whether ``meas`` updates by ``cls``'s own ``linearize``, vector-gated,
+    so that its compiled form (:mod:`._updates`) says the same: a subclass
+    with its own ``linearize``, or a measurement switched to per-row gating,
+    keeps the Python path."""
+    return type(meas).linearize is cls.linearize and getattr(meas, "gating", "vector") == "vector"
+
+
 def _sensor_rate_columns(H, ctx, M):
     """Add ``M d(omega_ib_b)``'s columns: ``omega = (raw - b_g) / (1 + s_g)``,
     so ``d omega / d b_g = -I / (1 + s_g)`` and ``d omega / d s_g =
@@ -243,6 +252,13 @@ class GnssPosition:
             H[:, lay.slice("time_offset")] = v_ant[:, None]
         return nu, H, np.diag(self.sigma[row] ** 2)
 
+    def compiled(self, layout):
+        """:meth:`linearize` in compiled form (:mod:`._updates`): per row the
+        fix and its sigmas."""
+        if not compiled_form_applies(self, GnssPosition):
+            return None
+        return U.spec(U.KIND_GNSS_POS, 3, np.column_stack([self.gnss.lla, self.sigma]), self.lever_arm_b)
+
 
 class GnssVelocity:
     """GNSS velocity of the antenna, ``h = v_n + C_nb (omega_ib_b x l_b)``.
@@ -293,6 +309,12 @@ class GnssVelocity:
             H[:, lay.slice("lever")] = C @ skew(w)
         return nu, H, np.diag(self.sigma[row] ** 2)
 
+    def compiled(self, layout):
+        """:meth:`linearize` in compiled form (:mod:`._updates`)."""
+        if not compiled_form_applies(self, GnssVelocity):
+            return None
+        return U.spec(U.KIND_GNSS_VEL, 3, np.column_stack([self.gnss.v_n, self.sigma]), self.lever_arm_b)
+
 
 class _GridMeasurement:
     """A pseudo-measurement on a regular time grid inside given intervals."""
@@ -319,6 +341,12 @@ class ZeroVelocity(_GridMeasurement):
     def linearize(self, ctx: UpdateContext, row):
         return ctx.v_n.copy(), _template(ctx.layout, 3, "vel"), np.eye(3) * self.sigma**2
 
+    def compiled(self, layout):
+        """:meth:`linearize` in compiled form (:mod:`._updates`)."""
+        if not compiled_form_applies(self, ZeroVelocity):
+            return None
+        return U.spec(U.KIND_ZUPT, 3, np.empty((len(self._t), 0)), self.sigma)
+
 
 class NonHolonomic(_GridMeasurement):
     """Non-holonomic constraint: a land vehicle does not slide sideways or
@@ -337,6 +365,12 @@ class NonHolonomic(_GridMeasurement):
         H[:, 3:6] = C_bn[1:3]
         H[:, 6:9] = -(C_bn @ skew(ctx.v_n))[1:3]
         return v_b[1:3], H, np.eye(2) * self.sigma**2
+
+    def compiled(self, layout):
+        """:meth:`linearize` in compiled form (:mod:`._updates`)."""
+        if not compiled_form_applies(self, NonHolonomic):
+            return None
+        return U.spec(U.KIND_NHC, 2, np.empty((len(self._t), 0)), self.sigma)
 
 
 def numerical_jacobian(meas, ctx: UpdateContext, row=0, steps=None):

@@ -1,0 +1,798 @@
+"""Compiled updates of the standard measurements, driven from a compiled loop.
+
+The filter loop of :mod:`.engine` asks every measurement for the protocol's
+``linearize(ctx, row)`` and runs the update in Python: 30-45 us per update,
+three quarters of a drive's filter time at 10 Hz ZUPT and NHC.  The standard
+measurements also offer ``compiled(layout)``: a :class:`CompiledSpec` (a
+kind code, the fixed number of innovation rows, their data packed per own
+row, a few parameters).  :func:`run_nodes` then runs, for a whole stretch of
+update nodes, what the Python loop does per node (propagate to the node,
+carry the evolving estimates, the gap noise, the smoother's store; then per
+measurement: linearize by kind, the recovery from a lost state, the
+chi-square gate, the Joseph update, the closed-loop feedback, the innovation
+record; then the covariance check and the node's output row), and hands
+back to Python only
+
+* at an item of a measurement without a compiled form (a user's plug-in,
+  the per-satellite ranges), which Python then updates on the same state;
+* every ``k_stop`` rows, for the progress callback;
+* on a divergence, which Python reports with the message of its own path.
+
+Each kind's linearization is the formula of its class's ``linearize`` (the
+class docstrings give H), written out element by element; the update is the
+Joseph form ``(I - K H) P (I - K H)^T + K R K^T`` of
+:func:`inskit.filters.kalman.joseph_update` (Bucy & Joseph 1968; Groves 2013
+eq. 3.58), evaluated as ``A = P - K (H P)``, ``A - (A H^T - K R) K^T`` over
+the non-zero columns of H only: O(n^2 k) instead of O(n^3).  Both paths are
+the same mathematics in a different order of rounding;
+``tests/test_integration_updates.py`` runs both on one drive with
+rejections and a recovery and compares them.
+
+The open-loop scheme, blocks with their own feedback and row-gated
+measurements stay on the Python path.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from .. import earth
+from . import _kernel as K
+
+KIND_ZUPT, KIND_NHC, KIND_GNSS_POS, KIND_GNSS_VEL, KIND_ODOMETER, KIND_SPEED_COURSE = 0, 1, 2, 3, 4, 5
+#: most innovation rows of a compiled kind
+KMAX = 3
+# layout index array (layout_index): state and aux starts of the blocks found by name (-1 if absent)
+L_X_LEVER, L_A_LEVER, L_X_TOFF, L_A_TOFF, L_X_ODO, L_A_ODO = 0, 1, 2, 3, 4, 5
+# loop state (ctl) of run_nodes
+C_I, C_KDONE, C_IN_NODE, C_KCUR, C_NODE, C_NROW, C_NREC, C_NRECOV, C_KSTOP = 0, 1, 2, 3, 4, 5, 6, 7, 8
+C_SIZE = 9
+# return codes of run_nodes
+DONE, HANDBACK, CHUNK, BAD_INNOVATION, NOT_PD, LOST_PD = 0, 1, 2, 3, 4, 5
+
+
+class CompiledSpec(NamedTuple):
+    """A measurement's compiled form.
+
+    Attributes
+    ----------
+    kind : int
+        One of the ``KIND_*`` codes.
+    k : int
+        Rows of every update (at most :data:`KMAX`).
+    data : (rows, w) float ndarray
+        Per own data row (the protocol's ``row``): what the kind reads.
+    par : (p,) float ndarray
+        Fixed parameters (lever arm, sigmas).
+    """
+
+    kind: int
+    k: int
+    data: np.ndarray
+    par: np.ndarray
+
+
+def spec(kind, k, data, par):
+    """A :class:`CompiledSpec` with its arrays made contiguous float64."""
+    data = np.ascontiguousarray(data, dtype=float)
+    if data.ndim != 2:
+        data = data.reshape(len(data), -1)
+    return CompiledSpec(int(kind), int(k), data, np.ascontiguousarray(np.atleast_1d(par), dtype=float).ravel())
+
+
+def layout_index(layout):
+    """int64 ``[x_lever, a_lever, x_time_offset, a_time_offset, x_odo_scale,
+    a_odo_scale]``: state start (when the layout holds the block) and aux
+    start (when the block carries an estimate) of the blocks the
+    measurements find by name; -1 if absent."""
+    out = []
+    for name in ("lever", "time_offset", "odo_scale"):
+        s, a = layout.slice(name), layout.aux_slice(name)
+        out += [-1 if s is None else s.start, -1 if a is None else a.start]
+    return np.array(out, dtype=np.int64)
+
+
+# --- linearization by kind ------------------------------------------------------------
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _body_rate(w_raw, aux, kidx, w, sf):
+    """``sf = 1 + s_g`` and the corrected rate ``w = (raw - b_g) / sf``
+    (:attr:`.measurements.UpdateContext.omega_ib_b`)."""
+    abg, asg = kidx[K.A_BG], kidx[K.A_SG]
+    for i in range(3):
+        sf[i] = 1.0 + aux[asg + i] if asg >= 0 else 1.0
+        b = w_raw[i] - aux[abg + i] if abg >= 0 else w_raw[i]
+        w[i] = b / sf[i]
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _rate_columns(H, k, M, sf, w, kidx):
+    """``M d(omega)`` into the gyro bias and scale-factor columns
+    (:func:`.measurements._sensor_rate_columns`)."""
+    xbg, xsg = kidx[K.X_BG], kidx[K.X_SG]
+    for r in range(k):
+        for j in range(3):
+            if xbg >= 0:
+                H[r, xbg + j] += -M[r, j] / sf[j]
+            if xsg >= 0:
+                H[r, xsg + j] += -M[r, j] * (w[j] / sf[j])
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _skew_into(v, S):
+    S[0, 0], S[0, 1], S[0, 2] = 0.0, -v[2], v[1]
+    S[1, 0], S[1, 1], S[1, 2] = v[2], 0.0, -v[0]
+    S[2, 0], S[2, 1], S[2, 2] = -v[1], v[0], 0.0
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _mat3_vec(C, v, out):
+    for i in range(3):
+        out[i] = C[i, 0] * v[0] + C[i, 1] * v[1] + C[i, 2] * v[2]
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _cross_into(a, b, out):
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _lever_of(aux, lidx, par, lev):
+    a = lidx[L_A_LEVER]
+    for i in range(3):
+        lev[i] = aux[a + i] if a >= 0 else par[i]
+
+
+@njit(cache=True, error_model="numpy")
+def linearize(kind, d, par, dt, lla, v_n, C, w_raw, aux, kidx, lidx, nu, H, R, vw, mw):
+    """Innovation ``nu`` (k,), ``H`` (k, n) and ``R`` (k, k) of one update of
+    a compiled kind, written into the first k rows of the scratch arrays
+    (``H`` and ``R`` zeroed first).  ``d`` is the measurement's data row;
+    ``vw`` (8, 3) and ``mw`` (2, 3, 3) are scratch.  Returns False when the
+    update is skipped (the protocol's None)."""
+    n = H.shape[1]
+    for r in range(KMAX):
+        nu[r] = 0.0
+        for j in range(n):
+            H[r, j] = 0.0
+        for j in range(KMAX):
+            R[r, j] = 0.0
+    w, sf, lev, wl, tmp, v3, c3 = vw[0], vw[1], vw[2], vw[3], vw[4], vw[5], vw[6]
+    Sk, M = mw[0], mw[1]
+    if kind == KIND_ZUPT:
+        s2 = par[0] * par[0]
+        for i in range(3):
+            nu[i] = v_n[i]
+            H[i, K.V0 + i] = 1.0
+            R[i, i] = s2
+        return True
+    if kind == KIND_NHC:
+        # v_b = C^T v_n; rows 1, 2: H_vel = C_bn[1:3], H_att = -(C_bn [v_n x])[1:3]
+        _skew_into(v_n, Sk)
+        s2 = par[0] * par[0]
+        for r in range(2):
+            b = r + 1
+            nu[r] = C[0, b] * v_n[0] + C[1, b] * v_n[1] + C[2, b] * v_n[2]
+            for j in range(3):
+                H[r, K.V0 + j] = C[j, b]
+                H[r, K.T0 + j] = -(C[0, b] * Sk[0, j] + C[1, b] * Sk[1, j] + C[2, b] * Sk[2, j])
+            R[r, r] = s2
+        return True
+    if kind == KIND_GNSS_POS:
+        # d: lla (3), sigma (3); par: lever arm (3)
+        _lever_of(aux, lidx, par, lev)
+        atoff = lidx[L_A_TOFF]
+        tau = dt + (aux[atoff] if atoff >= 0 else 0.0)
+        for i in range(3):
+            H[i, K.P0 + i] = 1.0
+            H[i, K.V0 + i] = tau
+        v_ant = v3
+        cl = c3
+        for i in range(3):
+            cl[i] = 0.0
+        xlev = lidx[L_X_LEVER]
+        if lev[0] != 0.0 or lev[1] != 0.0 or lev[2] != 0.0 or xlev >= 0:
+            _body_rate(w_raw, aux, kidx, w, sf)
+            _cross_into(w, lev, wl)
+            cwl = vw[7]
+            _mat3_vec(C, wl, cwl)
+            _mat3_vec(C, lev, cl)
+            for i in range(3):
+                v_ant[i] = v_n[i] + cwl[i]
+                tmp[i] = cl[i] + cwl[i] * tau
+            _skew_into(tmp, Sk)
+            for i in range(3):
+                for j in range(3):
+                    H[i, K.T0 + j] = Sk[i, j]
+            _skew_into(lev, Sk)
+            for i in range(3):
+                for j in range(3):
+                    M[i, j] = -(C[i, 0] * Sk[0, j] + C[i, 1] * Sk[1, j] + C[i, 2] * Sk[2, j]) * tau
+            _rate_columns(H, 3, M, sf, w, kidx)
+            if xlev >= 0:
+                _skew_into(w, Sk)
+                for i in range(3):
+                    for j in range(3):
+                        H[i, xlev + j] = C[i, j] + (C[i, 0] * Sk[0, j] + C[i, 1] * Sk[1, j]
+                                                    + C[i, 2] * Sk[2, j]) * tau
+        else:
+            for i in range(3):
+                v_ant[i] = v_n[i]
+        # ned_difference(lla, fix)
+        lat, h = d[0], d[2]
+        s = math.sin(lat)
+        wq = math.sqrt(1.0 - earth.E2 * s * s)
+        rn = earth.A * (1.0 - earth.E2) / (wq * wq * wq) + h
+        re = earth.A / wq + h
+        dlon = (lla[1] - d[1] + math.pi) % (2.0 * math.pi) - math.pi
+        tmp[0] = (lla[0] - lat) * rn
+        tmp[1] = dlon * re * math.cos(lat)
+        tmp[2] = -(lla[2] - h)
+        for i in range(3):
+            nu[i] = tmp[i] + cl[i] + v_ant[i] * tau
+            R[i, i] = d[3 + i] * d[3 + i]
+        if atoff >= 0:
+            xt = lidx[L_X_TOFF]
+            for i in range(3):
+                H[i, xt] = v_ant[i]
+        return True
+    if kind == KIND_GNSS_VEL or kind == KIND_SPEED_COURSE:
+        # GNSS velocity, d: v_n (3), sigma (3); speed and course, d: speed, min speed, v_ne (2), P_ne (4)
+        if kind == KIND_SPEED_COURSE and d[0] < d[1]:
+            return False
+        _lever_of(aux, lidx, par, lev)
+        _body_rate(w_raw, aux, kidx, w, sf)
+        _cross_into(w, lev, wl)
+        lever_v = v3
+        _mat3_vec(C, wl, lever_v)
+        kk = 3 if kind == KIND_GNSS_VEL else 2
+        _skew_into(lever_v, Sk)
+        for i in range(kk):
+            H[i, K.V0 + i] = 1.0
+            for j in range(3):
+                H[i, K.T0 + j] = Sk[i, j]
+        _skew_into(lev, Sk)
+        for i in range(3):
+            for j in range(3):
+                M[i, j] = -(C[i, 0] * Sk[0, j] + C[i, 1] * Sk[1, j] + C[i, 2] * Sk[2, j])
+        _rate_columns(H, kk, M, sf, w, kidx)
+        xlev = lidx[L_X_LEVER]
+        if xlev >= 0:
+            _skew_into(w, Sk)
+            for i in range(kk):
+                for j in range(3):
+                    H[i, xlev + j] = C[i, 0] * Sk[0, j] + C[i, 1] * Sk[1, j] + C[i, 2] * Sk[2, j]
+        if kind == KIND_GNSS_VEL:
+            for i in range(3):
+                nu[i] = v_n[i] + lever_v[i] - d[i]
+                R[i, i] = d[3 + i] * d[3 + i]
+        else:
+            for i in range(2):
+                nu[i] = (v_n[i] + lever_v[i]) - d[2 + i]
+                R[i, 0], R[i, 1] = d[4 + 2 * i], d[5 + 2 * i]
+        return True
+    if kind == KIND_ODOMETER:
+        # d: speed, sigma; par: lever arm (3), with_nhc, nhc sigma
+        kk = 3 if par[3] != 0.0 else 1
+        aodo = lidx[L_A_ODO]
+        g = 1.0 + aux[aodo] if aodo >= 0 else 1.0
+        for i in range(3):
+            lev[i] = par[i]
+        v_o = v3
+        for i in range(3):
+            v_o[i] = C[0, i] * v_n[0] + C[1, i] * v_n[1] + C[2, i] * v_n[2]
+        _skew_into(v_n, Sk)
+        for r in range(kk):
+            gr = g if r == 0 else 1.0
+            for j in range(3):
+                H[r, K.V0 + j] = gr * C[j, r]
+                H[r, K.T0 + j] = -gr * (C[0, r] * Sk[0, j] + C[1, r] * Sk[1, j] + C[2, r] * Sk[2, j])
+        if lev[0] != 0.0 or lev[1] != 0.0 or lev[2] != 0.0:
+            _body_rate(w_raw, aux, kidx, w, sf)
+            _cross_into(w, lev, wl)
+            for i in range(3):
+                v_o[i] = v_o[i] + wl[i]
+            _skew_into(lev, Sk)
+            for r in range(kk):
+                gr = g if r == 0 else 1.0
+                for j in range(3):
+                    M[r, j] = -gr * Sk[r, j]
+            _rate_columns(H, kk, M, sf, w, kidx)
+        if aodo >= 0:
+            H[0, lidx[L_X_ODO]] = v_o[0]
+        for r in range(kk):
+            gr = g if r == 0 else 1.0
+            nu[r] = gr * v_o[r] - (d[0] if r == 0 else 0.0)
+        R[0, 0] = d[1] * d[1]
+        for r in range(1, kk):
+            R[r, r] = par[4] * par[4]
+        return True
+    return False
+
+
+# --- update ---------------------------------------------------------------------------
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _innovation_stats(P, nu, H, R, k, cols, nc, PHt, S, L, w):
+    """``P H^T``, ``S = H P H^T + R``, its Cholesky factor and the NIS, over
+    the ``nc`` non-zero columns of H.  Returns ``(ok, nis)``; ``ok`` False
+    when S is not positive definite."""
+    n = P.shape[0]
+    for i in range(n):
+        for r in range(k):
+            acc = 0.0
+            for c in range(nc):
+                j = cols[c]
+                acc += P[i, j] * H[r, j]
+            PHt[i, r] = acc
+    for r in range(k):
+        for s in range(k):
+            acc = 0.0
+            for c in range(nc):
+                j = cols[c]
+                acc += H[r, j] * PHt[j, s]
+            S[r, s] = acc + R[r, s]
+    for r in range(k):
+        for s in range(r + 1):
+            acc = S[r, s]
+            for m in range(s):
+                acc -= L[r, m] * L[s, m]
+            if r == s:
+                if not acc > 0.0 or not math.isfinite(acc):
+                    return False, 0.0
+                L[r, r] = math.sqrt(acc)
+            else:
+                L[r, s] = acc / L[s, s]
+    nis = 0.0
+    for r in range(k):
+        acc = nu[r]
+        for m in range(r):
+            acc -= L[r, m] * w[m]
+        w[r] = acc / L[r, r]
+        nis += w[r] * w[r]
+    return True, nis
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True, fastmath={"contract"})
+def _joseph(P, nu, S, k, PHt, L, Kg, M, y, dx, KT, HP):
+    """Gain ``K = P H^T S^-1``, correction ``dx = K nu`` and the Joseph-form
+    posterior in place.
+
+    ``(I - K H) P (I - K H)^T + K R K^T = P - K (H P) - (P H^T - K S) K^T``
+    for any K (expand and use ``S = H P H^T + R``), so the Joseph form costs
+    one pass over the upper triangle with 2k terms (``H P = (P H^T)^T``, P
+    being symmetric), mirrored; ``M = P H^T - K S`` is the rounding-level
+    term that keeps the result second order in an error of K.  ``KT`` and
+    ``HP`` (k, n) hold K and H P by rows for the inner loops."""
+    n = P.shape[0]
+    for i in range(n):
+        for r in range(k):
+            acc = PHt[i, r]
+            for m in range(r):
+                acc -= L[r, m] * y[m]
+            y[r] = acc / L[r, r]
+        for r in range(k - 1, -1, -1):
+            acc = y[r]
+            for m in range(r + 1, k):
+                acc -= L[m, r] * Kg[i, m]
+            Kg[i, r] = acc / L[r, r]
+        acc = 0.0
+        for r in range(k):
+            acc += Kg[i, r] * nu[r]
+            KT[r, i] = Kg[i, r]
+            HP[r, i] = PHt[i, r]
+        dx[i] = acc
+        for r in range(k):
+            acc = PHt[i, r]
+            for s in range(k):
+                acc -= Kg[i, s] * S[s, r]
+            M[i, r] = acc
+    for i in range(n):
+        for r in range(k):
+            a, b = Kg[i, r], M[i, r]
+            for j in range(i, n):
+                P[i, j] -= a * HP[r, j] + b * KT[r, j]
+    for i in range(n):
+        for j in range(i + 1, n):
+            P[j, i] = P[i, j]
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _nis_inflated(P, nu, H, R, k, alpha, Pa, S, L, w):
+    """NIS of ``nu`` with the navigation rows and columns (0..8) of P scaled
+    by ``sqrt(alpha)`` each (written into ``Pa``)."""
+    n = P.shape[0]
+    sa = math.sqrt(alpha)
+    for i in range(n):
+        di = sa if i < 9 else 1.0
+        for j in range(n):
+            dj = sa if j < 9 else 1.0
+            Pa[i, j] = P[i, j] * di * dj
+    for r in range(k):
+        for s in range(k):
+            acc = 0.0
+            for i in range(n):
+                hi = H[r, i]
+                if hi != 0.0:
+                    for j in range(n):
+                        acc += hi * Pa[i, j] * H[s, j]
+            S[r, s] = acc + R[r, s]
+    # nu^T S^-1 nu by Cholesky (S is positive definite: P and R are)
+    for r in range(k):
+        for s in range(r + 1):
+            acc = S[r, s]
+            for m in range(s):
+                acc -= L[r, m] * L[s, m]
+            if r == s:
+                L[r, r] = math.sqrt(acc) if acc > 0.0 else math.nan
+            else:
+                L[r, s] = acc / L[s, s]
+    v = 0.0
+    for r in range(k):
+        acc = nu[r]
+        for m in range(r):
+            acc -= L[r, m] * w[m]
+        w[r] = acc / L[r, r]
+        v += w[r] * w[r]
+    return v
+
+
+@njit(cache=True, error_model="numpy")
+def inflate_to_pass(P, nu, H, R, k, thr, Pa, S, L, w):
+    """:func:`.engine._inflate_to_pass`: scale the navigation blocks of P by
+    the smallest ``alpha`` of 2, 8, 32, ... for which ``nu`` passes the gate
+    ``thr``; P is replaced in place."""
+    alpha = 2.0
+    v = _nis_inflated(P, nu, H, R, k, alpha, Pa, S, L, w)
+    while v > thr and alpha < 1e16:
+        alpha *= 4.0
+        v = _nis_inflated(P, nu, H, R, k, alpha, Pa, S, L, w)
+    n = P.shape[0]
+    for i in range(n):
+        for j in range(n):
+            P[i, j] = Pa[i, j]
+
+
+@njit(cache=True, error_model="numpy")
+def consistent(rej_t, rej_nu, rej_rd, count, t, nu, rd, k, P):
+    """:func:`.engine._consistent` over the last ``count`` rejections held
+    (times ``rej_t``, innovations ``rej_nu``, noise variances ``rej_rd``)
+    and the current innovation ``(t, nu, rd)``."""
+    nh = rej_t.shape[0]
+    total = count + 1
+    if total < 2:
+        return False
+    sv2 = max(P[3, 3], max(P[4, 4], P[5, 5]))
+    first = nh - count
+    for a in range(total):
+        ia = first + a
+        ta = rej_t[ia] if a < count else t
+        for b in range(a + 1, total):
+            ib = first + b
+            tb = rej_t[ib] if b < count else t
+            for r in range(k):
+                na = rej_nu[ia, r] if a < count else nu[r]
+                nb = rej_nu[ib, r] if b < count else nu[r]
+                ra = rej_rd[ia, r] if a < count else rd[r]
+                rb = rej_rd[ib, r] if b < count else rd[r]
+                tol2 = 16.0 * (ra + rb + (tb - ta) ** 2 * sv2)
+                if (na - nb) ** 2 > tol2:
+                    return False
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def predict_aux(aux, idx, F, t_aux, t):
+    """Carry the evolving estimates from ``t_aux[0]`` to ``t`` with
+    ``exp(F h)`` to third order (``I + A + A^2 / 2 + A^3 / 6``, ``A = F h``;
+    exact for a clock, whose F is nilpotent), in place."""
+    h = t - t_aux[0]
+    m = idx.shape[0]
+    if h > 0 and m > 0:
+        A = F * h
+        A2 = np.zeros((m, m))
+        for i in range(m):
+            for j in range(m):
+                acc = 0.0
+                for r in range(m):
+                    acc += A[i, r] * A[r, j]
+                A2[i, j] = acc
+        G = np.empty((m, m))
+        for i in range(m):
+            for j in range(m):
+                acc = 0.0
+                for r in range(m):
+                    acc += A2[i, r] * A[r, j]
+                G[i, j] = (1.0 if i == j else 0.0) + A[i, j] + A2[i, j] / 2.0 + acc / 6.0
+        old = np.empty(m)
+        for i in range(m):
+            old[i] = aux[idx[i]]
+        for i in range(m):
+            acc = 0.0
+            for j in range(m):
+                acc += G[i, j] * old[j]
+            aux[idx[i]] = acc
+    t_aux[0] = t
+
+
+# --- the loop over update nodes ---------------------------------------------------------
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _covariance_ok(P):
+    for i in range(P.shape[0]):
+        d = P[i, i]
+        if not (d > 0.0) or not math.isfinite(d):
+            return False
+    return True
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _begin_node(t_imu, dth_all, q_nb, P, aux, Phi, want_store, propagated, k_end, ctl, en_k, en_var, store, dyn,
+                w_raw, C):
+    """At a node just propagated to IMU row ``k_end``: the rate of its
+    interval, the evolving estimates, the gap noise and the smoother's
+    prior."""
+    if propagated:
+        ctl[C_KDONE] = k_end + 1
+        h = t_imu[k_end] - t_imu[k_end - 1]
+        for i in range(3):
+            w_raw[i] = dth_all[k_end, i] / h
+        predict_aux(aux, dyn[0], dyn[1], dyn[2], t_imu[k_end])
+    n = P.shape[0]
+    lo, hi = 0, en_k.shape[0]  # binary search of the sorted gap rows
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if en_k[mid] < k_end:
+            lo = mid + 1
+        else:
+            hi = mid
+    if lo < en_k.shape[0] and en_k[lo] == k_end:
+        for i in range(n):
+            P[i, i] += en_var[lo, i]
+    node = ctl[C_NODE]
+    if want_store:
+        st_k, st_Pm, st_Phi, st_dx = store[0], store[1], store[3], store[4]
+        st_k[node] = k_end
+        for i in range(n):
+            for j in range(n):
+                st_Pm[node, i, j] = P[i, j]
+                st_Phi[node, i, j] = Phi[i, j]
+                Phi[i, j] = 1.0 if i == j else 0.0
+            st_dx[node, i] = 0.0
+    K.dcm_into(q_nb, C)
+    ctl[C_KCUR] = k_end
+    ctl[C_IN_NODE] = 1
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _end_node(nav, filt, outs, flags, ctl, store, nodes):
+    """The smoother's posterior and the node's output row (``write_row``)."""
+    lla, v_n, q_nb = nav[0], nav[1], nav[2]
+    P, aux = filt[1], filt[2]
+    out_lla, out_v, out_q, out_var = outs
+    n = P.shape[0]
+    node = ctl[C_NODE]
+    k = ctl[C_KCUR]
+    if flags[1]:
+        st_Pp = store[2]
+        for i in range(n):
+            for j in range(n):
+                st_Pp[node, i, j] = P[i, j]
+    for i in range(3):
+        out_lla[k, i] = lla[i]
+        out_v[k, i] = v_n[i]
+    for i in range(4):
+        out_q[k, i] = q_nb[i]
+    for i in range(n):
+        out_var[k, i] = P[i, i]
+    node_rows, node_aux = nodes
+    r = ctl[C_NROW]
+    node_rows[r] = k
+    for i in range(aux.shape[0]):
+        node_aux[r, i] = aux[i]
+    ctl[C_NROW] = r + 1
+    ctl[C_NODE] = node + 1
+    ctl[C_IN_NODE] = 0
+
+
+@njit(cache=True, error_model="numpy")
+def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstate, recs, recov, counts, store,
+              nodes, dyn, fb, w_raw, C, ctl):
+    """Run the filter over update nodes from item ``ctl[C_I]`` (see the
+    module text).
+
+    Parameters
+    ----------
+    imu, nav, filt, model, outs, flags
+        As :func:`._kernel.propagate` (closed loop: ``flags[2]`` False;
+        ``flags[1]`` keeps the smoother's store).
+    items : tuple ``(k, t, m, row, en_k, en_var)``
+        Per update item (sorted by IMU row, then time): its IMU row, time,
+        measurement (-1: a node without one) and own data row; the rows that
+        get gap noise (sorted) and their (n,) variances.
+    meas : tuple ``(kind, k, d_off, d_w, data, p_off, par)``
+        Per measurement: kind code (-1: no compiled form, handed back), rows
+        of its updates, offset and width of its data rows in ``data`` (flat)
+        and offset of its parameters in ``par``.
+    lidx : (6,) int64
+        :func:`layout_index`.
+    gate : tuple ``(gpar, thr)``
+        ``gpar = [gate on, max consecutive (-1: no recovery), recovery after
+        s]``, ``thr[k]`` the chi-square gate of k rows.
+    rstate : tuple ``(streak, first, rej_t, rej_nu, rej_rd, rej_n)``
+        Per measurement: its run of rejections (count, time of the first)
+        and the newest ones held (times, innovations, noise variances).
+    recs : tuple ``(m, item, t, nu, sigma, nis, accepted)``
+        Innovation records, filled from ``ctl[C_NREC]`` on.
+    recov : tuple ``(m, item, t, after, rejected_for)``
+        Recoveries, from ``ctl[C_NRECOV]`` on.
+    counts : (M, 3) int64
+        used, rejected, skipped.
+    store : tuple ``(k, P_minus, P_plus, Phi, dx)`` per node.
+    nodes : tuple ``(rows, aux)``
+        The output rows written and the estimates held from each.
+    dyn : tuple ``(idx, F, t_aux)``
+        :meth:`StateLayout.estimate_dynamics` and the estimates' time.
+    fb : tuple ``(aux_idx, x_idx)``
+        The default feedback ``aux[aux_idx] -= dx[x_idx]``.
+    w_raw : (3,) ndarray
+        Raw rate of the node's interval (shared with Python's contexts).
+    C : (3, 3) ndarray
+        ``C_nb`` scratch.
+    ctl : (C_SIZE,) int64
+        Loop state (item, rows done, in a node, the node's row, node count,
+        rows written, records, recoveries, row to stop at).
+
+    Returns
+    -------
+    int
+        ``DONE``, ``HANDBACK`` (at item ``ctl[C_I]``, inside its node),
+        ``CHUNK`` (``ctl[C_KSTOP]`` reached, between nodes), or a divergence:
+        ``BAD_INNOVATION``, ``NOT_PD`` (at item ``ctl[C_I]``), ``LOST_PD`` (at
+        the node of row ``ctl[C_KCUR]``).
+    """
+    lla, v_n, q_nb = nav[0], nav[1], nav[2]
+    P, aux = filt[1], filt[2]
+    it_k, it_t, it_m, it_row, en_k, en_var = items
+    kinds, mk, d_off, d_w, data, p_off, par = meas
+    gpar, thr = gate
+    streak, first_rej, rej_t, rej_nu, rej_rd, rej_n = rstate
+    rec_m, rec_i, rec_t, rec_nu, rec_sig, rec_nis, rec_acc = recs
+    rv_m, rv_i, rv_t, rv_after, rv_for = recov
+    st_dx = store[4]
+    def_aux, def_x = fb
+    t_imu = imu[0]
+    kidx = model[0]
+    n = P.shape[0]
+    want_store = flags[1]
+    gate_on = gpar[0] != 0.0
+    gmc = int(gpar[1])
+    recovery_after = gpar[2]
+    n_hold = rej_t.shape[1]
+    pwork = K.propagation_work(model, model[4].shape[0])
+    nu = np.empty(KMAX)
+    H = np.empty((KMAX, n))
+    R = np.empty((KMAX, KMAX))
+    cols = np.empty(n, np.int64)
+    PHt = np.empty((n, KMAX))
+    S = np.empty((KMAX, KMAX))
+    L = np.zeros((KMAX, KMAX))
+    wv = np.empty(KMAX)
+    rd = np.empty(KMAX)
+    Kg = np.empty((n, KMAX))
+    Aw = np.empty((n, n))
+    AHt = np.empty((n, KMAX))
+    y = np.empty(KMAX)
+    dx = np.empty(n)
+    KT = np.empty((KMAX, n))
+    HP = np.empty((KMAX, n))
+    vw = np.empty((8, 3))
+    mw = np.empty((2, 3, 3))
+    n_items = it_k.shape[0]
+    i = ctl[C_I]
+    if ctl[C_IN_NODE]:
+        K.dcm_into(q_nb, C)  # Python may have fed an update back since
+    while True:
+        if ctl[C_IN_NODE]:
+            k_cur = ctl[C_KCUR]
+            while i < n_items and it_k[i] == k_cur:
+                m = it_m[i]
+                if m < 0:
+                    i += 1
+                    continue
+                kind = kinds[m]
+                if kind < 0:
+                    ctl[C_I] = i
+                    return HANDBACK
+                k = mk[m]
+                tm = it_t[i]
+                d = data[d_off[m] + it_row[i] * d_w[m]:d_off[m] + (it_row[i] + 1) * d_w[m]]
+                pm = par[p_off[m]:]
+                if not linearize(kind, d, pm, tm - t_imu[k_cur], lla, v_n, C, w_raw, aux, kidx, lidx, nu, H, R, vw,
+                                 mw):
+                    counts[m, 2] += 1
+                    i += 1
+                    continue
+                for r in range(k):
+                    rd[r] = R[r, r]
+                    if not math.isfinite(nu[r]):
+                        ctl[C_I] = i
+                        return BAD_INNOVATION
+                nc = 0
+                for j in range(n):
+                    nz = False
+                    for r in range(k):
+                        if H[r, j] != 0.0:
+                            nz = True
+                    if nz:
+                        cols[nc] = j
+                        nc += 1
+                st = streak[m]
+                held = rej_n[m]
+                if (gate_on and gmc >= 0 and st >= gmc and tm - first_rej[m] >= recovery_after
+                        and consistent(rej_t[m], rej_nu[m], rej_rd[m], held if gmc == 0 else min(gmc, held),
+                                       tm, nu, rd, k, P)):
+                    inflate_to_pass(P, nu, H, R, k, thr[k], Aw, S, L, wv)
+                    j = ctl[C_NRECOV]
+                    rv_m[j], rv_i[j], rv_t[j], rv_after[j], rv_for[j] = m, i, tm, st, tm - first_rej[m]
+                    ctl[C_NRECOV] = j + 1
+                ok, nis = _innovation_stats(P, nu, H, R, k, cols, nc, PHt, S, L, wv)
+                if not ok:
+                    ctl[C_I] = i
+                    return NOT_PD
+                accepted = not (gate_on and nis > thr[k])
+                j = ctl[C_NREC]
+                rec_m[j], rec_i[j], rec_t[j], rec_nis[j], rec_acc[j] = m, i, tm, nis, accepted
+                for r in range(k):
+                    rec_nu[j, r] = nu[r]
+                    rec_sig[j, r] = math.sqrt(S[r, r])
+                ctl[C_NREC] = j + 1
+                if not accepted:
+                    streak[m] = st + 1
+                    if held == 0:
+                        first_rej[m] = tm
+                    # hold the newest n_hold rejections, oldest first, at the end of the rows
+                    for h in range(n_hold - 1):
+                        rej_t[m, h] = rej_t[m, h + 1]
+                        for r in range(k):
+                            rej_nu[m, h, r] = rej_nu[m, h + 1, r]
+                            rej_rd[m, h, r] = rej_rd[m, h + 1, r]
+                    rej_t[m, n_hold - 1] = tm
+                    for r in range(k):
+                        rej_nu[m, n_hold - 1, r] = nu[r]
+                        rej_rd[m, n_hold - 1, r] = rd[r]
+                    rej_n[m] = min(held + 1, n_hold)
+                    counts[m, 1] += 1
+                    i += 1
+                    continue
+                streak[m] = 0
+                rej_n[m] = 0
+                counts[m, 0] += 1
+                _joseph(P, nu, S, k, PHt, L, Kg, AHt, y, dx, KT, HP)
+                K.apply_correction(lla, v_n, q_nb, dx, 1.0, lla, v_n, q_nb)
+                for e in range(def_aux.shape[0]):
+                    aux[def_aux[e]] -= dx[def_x[e]]
+                if want_store:
+                    node = ctl[C_NODE]
+                    for e in range(n):
+                        st_dx[node, e] += dx[e]
+                K.dcm_into(q_nb, C)
+                i += 1
+            if not _covariance_ok(P):
+                ctl[C_I] = i
+                return LOST_PD
+            _end_node(nav, filt, outs, flags, ctl, store, nodes)
+        ctl[C_I] = i
+        if i >= n_items:
+            return DONE
+        k_end = it_k[i]
+        if k_end >= ctl[C_KSTOP]:
+            return CHUNK
+        propagated = k_end + 1 > ctl[C_KDONE]
+        if propagated:
+            K.propagate_rows(imu, nav, filt, model, outs, ctl[C_KDONE], k_end + 1, flags, pwork)
+        _begin_node(t_imu, imu[1], q_nb, P, aux, filt[3], want_store, propagated, k_end, ctl, en_k, en_var, store,
+                    dyn, w_raw, C)
