@@ -3,33 +3,34 @@
 The filter loop of :mod:`.engine` asks every measurement for the protocol's
 ``linearize(ctx, row)`` and runs the update in Python: 30-45 us per update,
 three quarters of a drive's filter time at 10 Hz ZUPT and NHC.  The standard
-measurements also offer ``compiled(layout)``: a :class:`CompiledSpec` (a
-kind code, the fixed number of innovation rows, their data packed per own
-row, a few parameters).  :func:`run_nodes` then runs, for a whole stretch of
-update nodes, what the Python loop does per node (propagate to the node,
-carry the evolving estimates, the gap noise, the smoother's store; then per
-measurement: linearize by kind, the recovery from a lost state, the
-chi-square gate, the Joseph update, the closed-loop feedback, the innovation
-record; then the covariance check and the node's output row), and hands
-back to Python only
+measurements (GNSS position and velocity, ZUPT, NHC, odometer, GNSS speed
+and course, pseudorange and range rate) also offer ``compiled(layout)``: a
+:class:`CompiledSpec` (a kind code, the number of innovation rows, their
+data packed per row, a few parameters).  :func:`run_nodes` then runs, for a
+whole stretch of update nodes, what the Python loop does per node (propagate
+to the node, carry the evolving estimates, the gap noise, the smoother's
+store; then per measurement: linearize by kind, the recovery from a lost
+state, the chi-square gate of the vector or of each row, the Joseph update,
+the closed-loop feedback, the innovation record; then the covariance check
+and the node's output row), and hands back to Python only
 
-* at an item of a measurement without a compiled form (a user's plug-in,
-  the per-satellite ranges), which Python then updates on the same state;
-* every ``k_stop`` rows, for the progress callback;
+* at an item of a measurement without a compiled form (a user's plug-in),
+  which Python then updates on the same state before the loop goes on;
+* every ``ctl[C_KSTOP]`` rows, for the progress callback;
 * on a divergence, which Python reports with the message of its own path.
 
 Each kind's linearization is the formula of its class's ``linearize`` (the
 class docstrings give H), written out element by element; the update is the
 Joseph form ``(I - K H) P (I - K H)^T + K R K^T`` of
 :func:`inskit.filters.kalman.joseph_update` (Bucy & Joseph 1968; Groves 2013
-eq. 3.58), evaluated as ``A = P - K (H P)``, ``A - (A H^T - K R) K^T`` over
-the non-zero columns of H only: O(n^2 k) instead of O(n^3).  Both paths are
-the same mathematics in a different order of rounding;
-``tests/test_integration_updates.py`` runs both on one drive with
-rejections and a recovery and compares them.
+eq. 3.58), expanded into one pass over the upper triangle (:func:`_joseph`)
+with ``H P H^T`` over the non-zero columns of H only: O(n^2 k) instead of
+O(n^3).  Both paths are the same mathematics in a different order of
+rounding; ``tests/test_integration_updates.py`` compares them kind by kind
+and over whole runs with rejections and recoveries.
 
-The open-loop scheme, blocks with their own feedback and row-gated
-measurements stay on the Python path.
+The open-loop scheme and blocks with their own feedback stay on the Python
+path (:func:`.engine.run_filter` decides).
 """
 
 from __future__ import annotations
@@ -44,15 +45,22 @@ from .. import earth
 from . import _kernel as K
 
 KIND_ZUPT, KIND_NHC, KIND_GNSS_POS, KIND_GNSS_VEL, KIND_ODOMETER, KIND_SPEED_COURSE = 0, 1, 2, 3, 4, 5
-#: most innovation rows of a compiled kind
+KIND_PSEUDORANGE, KIND_RANGE_RATE = 6, 7
+#: rows of the fixed-size kinds' updates, at most
 KMAX = 3
+#: columns of a range table row: satellite position (3) and velocity (3) in the ECEF frame of reception,
+#: measured value, sigma, state and aux index of the row's system time offset (-1: none)
+RANGE_WIDTH = 10
 # layout index array (layout_index): state and aux starts of the blocks found by name (-1 if absent)
-L_X_LEVER, L_A_LEVER, L_X_TOFF, L_A_TOFF, L_X_ODO, L_A_ODO = 0, 1, 2, 3, 4, 5
+L_X_LEVER, L_A_LEVER, L_X_TOFF, L_A_TOFF, L_X_ODO, L_A_ODO, L_X_CLOCK, L_A_CLOCK = 0, 1, 2, 3, 4, 5, 6, 7
 # loop state (ctl) of run_nodes
-C_I, C_KDONE, C_IN_NODE, C_KCUR, C_NODE, C_NROW, C_NREC, C_NRECOV, C_KSTOP = 0, 1, 2, 3, 4, 5, 6, 7, 8
-C_SIZE = 9
+C_I, C_KDONE, C_IN_NODE, C_KCUR, C_NODE, C_NROW, C_NREC, C_NRECOV, C_KSTOP, C_NFLAT = 0, 1, 2, 3, 4, 5, 6, 7, 8, 9
+C_SIZE = 10
+# per-measurement counts of run_nodes
+N_USED, N_REJECTED, N_SKIPPED, N_ROWS, N_ROWS_REJECTED, N_ROW_GATED = 0, 1, 2, 3, 4, 5
+N_COUNTS = 6
 # return codes of run_nodes
-DONE, HANDBACK, CHUNK, BAD_INNOVATION, NOT_PD, LOST_PD = 0, 1, 2, 3, 4, 5
+DONE, HANDBACK, CHUNK, BAD_INNOVATION, NOT_PD, LOST_PD, BAD_ROWS = 0, 1, 2, 3, 4, 5, 6
 
 
 class CompiledSpec(NamedTuple):
@@ -63,34 +71,47 @@ class CompiledSpec(NamedTuple):
     kind : int
         One of the ``KIND_*`` codes.
     k : int
-        Rows of every update (at most :data:`KMAX`).
+        Rows of every update; for a kind with ``index``, the most rows of one
+        update.
     data : (rows, w) float ndarray
-        Per own data row (the protocol's ``row``): what the kind reads.
+        Per own data row (the protocol's ``row``): what the kind reads; with
+        ``index``, per row of the table instead.
     par : (p,) float ndarray
         Fixed parameters (lever arm, sigmas).
+    index : (rows + 1,) int64 ndarray or None
+        Update ``row`` reads the table rows ``index[row]:index[row + 1]``
+        (one per satellite; an empty range skips the update).
+    per_row : bool
+        Gate each row on its own (the protocol's ``gating = "row"``).
     """
 
     kind: int
     k: int
     data: np.ndarray
     par: np.ndarray
+    index: np.ndarray | None = None
+    per_row: bool = False
 
 
-def spec(kind, k, data, par):
-    """A :class:`CompiledSpec` with its arrays made contiguous float64."""
+def spec(kind, k, data, par, index=None, per_row=False):
+    """A :class:`CompiledSpec` with its arrays made contiguous float64 (and
+    int64 for ``index``)."""
     data = np.ascontiguousarray(data, dtype=float)
     if data.ndim != 2:
         data = data.reshape(len(data), -1)
-    return CompiledSpec(int(kind), int(k), data, np.ascontiguousarray(np.atleast_1d(par), dtype=float).ravel())
+    if index is not None:
+        index = np.ascontiguousarray(index, dtype=np.int64)
+    return CompiledSpec(int(kind), int(k), data, np.ascontiguousarray(np.atleast_1d(par), dtype=float).ravel(),
+                        index, bool(per_row))
 
 
 def layout_index(layout):
     """int64 ``[x_lever, a_lever, x_time_offset, a_time_offset, x_odo_scale,
-    a_odo_scale]``: state start (when the layout holds the block) and aux
-    start (when the block carries an estimate) of the blocks the
-    measurements find by name; -1 if absent."""
+    a_odo_scale, x_clock, a_clock]``: state start (when the layout holds the
+    block) and aux start (when the block carries an estimate) of the blocks
+    the measurements find by name; -1 if absent."""
     out = []
-    for name in ("lever", "time_offset", "odo_scale"):
+    for name in ("lever", "time_offset", "odo_scale", "clock"):
         s, a = layout.slice(name), layout.aux_slice(name)
         out += [-1 if s is None else s.start, -1 if a is None else a.start]
     return np.array(out, dtype=np.int64)
@@ -315,6 +336,142 @@ def linearize(kind, d, par, dt, lla, v_n, C, w_raw, aux, kidx, lidx, nu, H, R, v
     return False
 
 
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _frame_rotation_into(lat, lon, h, C_en, w_n, out):
+    """:func:`.tight._frame_rotation`: ``d (C_en w_n) / d p_n`` (3, 3)."""
+    rn, re = earth.principal_radii(lat, h)
+    s, cl = math.sin(lat), math.cos(lat)
+    so, co = math.sin(lon), math.cos(lon)
+    for i in range(3):
+        out[i, 0] = (C_en[i, 2] * w_n[0] - C_en[i, 0] * w_n[2]) / rn
+        out[i, 2] = 0.0
+    out[0, 1] = (s * so * w_n[0] - co * w_n[1] + cl * so * w_n[2]) / (re * cl)
+    out[1, 1] = (-s * co * w_n[0] - so * w_n[1] - cl * co * w_n[2]) / (re * cl)
+    out[2, 1] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def linearize_ranges(kind, D, par, dt, lla, v_n, C, w_raw, aux, kidx, lidx, nu, H, R, Mk, vw, mw):
+    """:meth:`.tight.Pseudorange.linearize` (``KIND_PSEUDORANGE``) or
+    :meth:`.tight.PseudorangeRate.linearize` (``KIND_RANGE_RATE``) of the
+    k satellites in the rows of ``D`` (k, :data:`RANGE_WIDTH`), into the
+    first k rows of the scratch arrays; ``Mk`` (>= k, 3), ``vw`` (14, 3)
+    and ``mw`` (6, 3, 3) are scratch."""
+    k = D.shape[0]
+    n = H.shape[1]
+    for r in range(k):
+        nu[r] = 0.0
+        for j in range(n):
+            H[r, j] = 0.0
+        for j in range(k):
+            R[r, j] = 0.0
+    w, sf, lev, wl, v_a, cl, c_wl, arm, r_a, v_ae, u_e, u_n = (vw[0], vw[1], vw[2], vw[3], vw[4], vw[5], vw[6],
+                                                              vw[7], vw[8], vw[9], vw[10], vw[11])
+    g_n, a_t = vw[12], vw[13]
+    C_en, dr_dp, dv_dp, Sk, B1, B2 = mw[0], mw[1], mw[2], mw[3], mw[4], mw[5]
+    tau = dt
+    lat, lon, h = lla[0], lla[1], lla[2]
+    sl, cla, so, co = math.sin(lat), math.cos(lat), math.sin(lon), math.cos(lon)
+    C_en[0, 0], C_en[0, 1], C_en[0, 2] = -sl * co, -so, -cla * co
+    C_en[1, 0], C_en[1, 1], C_en[1, 2] = -sl * so, co, -cla * so
+    C_en[2, 0], C_en[2, 1], C_en[2, 2] = cla, 0.0, -sl
+    _lever_of(aux, lidx, par, lev)
+    _body_rate(w_raw, aux, kidx, w, sf)
+    _cross_into(w, lev, wl)
+    _mat3_vec(C, wl, c_wl)
+    _mat3_vec(C, lev, cl)
+    for i in range(3):
+        v_a[i] = v_n[i] + c_wl[i]
+        arm[i] = cl[i] + v_a[i] * tau
+    _, re0 = earth.principal_radii(lat, 0.0)
+    r_a[0] = (re0 + h) * cla * co
+    r_a[1] = (re0 + h) * cla * so
+    r_a[2] = (re0 * (1.0 - earth.E2) + h) * sl
+    for i in range(3):
+        r_a[i] += C_en[i, 0] * arm[0] + C_en[i, 1] * arm[1] + C_en[i, 2] * arm[2]
+    _mat3_vec(C_en, v_a, v_ae)
+    _frame_rotation_into(lat, lon, h, C_en, arm, dr_dp)
+    for i in range(3):
+        for j in range(3):
+            dr_dp[i, j] += C_en[i, j]
+    _frame_rotation_into(lat, lon, h, C_en, v_a, dv_dp)
+    xlev = lidx[L_X_LEVER]
+    lever_terms = lev[0] != 0.0 or lev[1] != 0.0 or lev[2] != 0.0 or xlev >= 0
+    # B1 = -C [l x] (the rate's lever term), B2 = C (I + [w x] tau); the range rate's C [w x] is B2's
+    _skew_into(lev, Sk)
+    for i in range(3):
+        for j in range(3):
+            B1[i, j] = -(C[i, 0] * Sk[0, j] + C[i, 1] * Sk[1, j] + C[i, 2] * Sk[2, j])
+    _skew_into(w, Sk)
+    for i in range(3):
+        for j in range(3):
+            B2[i, j] = C[i, 0] * Sk[0, j] + C[i, 1] * Sk[1, j] + C[i, 2] * Sk[2, j]
+    xc, ac = lidx[L_X_CLOCK], lidx[L_A_CLOCK]
+    rate = kind == KIND_RANGE_RATE
+    for i in range(3):
+        a_t[i] = cl[i] + c_wl[i] * tau
+    for r in range(k):
+        d0, d1, d2 = r_a[0] - D[r, 0], r_a[1] - D[r, 1], r_a[2] - D[r, 2]
+        rng = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        u_e[0], u_e[1], u_e[2] = d0 / rng, d1 / rng, d2 / rng
+        for j in range(3):
+            u_n[j] = u_e[0] * C_en[0, j] + u_e[1] * C_en[1, j] + u_e[2] * C_en[2, j]
+        if not rate:
+            for j in range(3):
+                H[r, K.P0 + j] = u_e[0] * dr_dp[0, j] + u_e[1] * dr_dp[1, j] + u_e[2] * dr_dp[2, j]
+                H[r, K.V0 + j] = u_n[j] * tau
+            _skew_into(a_t, Sk)
+            for j in range(3):
+                H[r, K.T0 + j] = u_n[0] * Sk[0, j] + u_n[1] * Sk[1, j] + u_n[2] * Sk[2, j]
+            if lever_terms:
+                for j in range(3):
+                    Mk[r, j] = (u_n[0] * B1[0, j] + u_n[1] * B1[1, j] + u_n[2] * B1[2, j]) * tau
+                if xlev >= 0:
+                    for j in range(3):
+                        H[r, xlev + j] = (u_n[0] * C[0, j] + u_n[1] * C[1, j] + u_n[2] * C[2, j]) + (
+                            u_n[0] * B2[0, j] + u_n[1] * B2[1, j] + u_n[2] * B2[2, j]) * tau
+            extra = aux[ac] + aux[ac + 1] * tau
+            H[r, xc] = 1.0
+            H[r, xc + 1] = tau
+            isb_x, isb_a = int(D[r, 8]), int(D[r, 9])
+            if isb_x >= 0:
+                extra += aux[isb_a]
+                H[r, isb_x] = 1.0
+            nu[r] = rng + extra - D[r, 6]
+        else:
+            dv0, dv1, dv2 = v_ae[0] - D[r, 3], v_ae[1] - D[r, 4], v_ae[2] - D[r, 5]
+            rr = u_e[0] * dv0 + u_e[1] * dv1 + u_e[2] * dv2
+            G0, G1, G2 = (dv0 - u_e[0] * rr) / rng, (dv1 - u_e[1] * rr) / rng, (dv2 - u_e[2] * rr) / rng
+            for j in range(3):
+                g_n[j] = G0 * C_en[0, j] + G1 * C_en[1, j] + G2 * C_en[2, j]
+                H[r, K.P0 + j] = (G0 * dr_dp[0, j] + G1 * dr_dp[1, j] + G2 * dr_dp[2, j]) + (
+                    u_e[0] * dv_dp[0, j] + u_e[1] * dv_dp[1, j] + u_e[2] * dv_dp[2, j])
+                H[r, K.V0 + j] = u_n[j] + g_n[j] * tau
+            _skew_into(c_wl, Sk)
+            for j in range(3):
+                H[r, K.T0 + j] = u_n[0] * Sk[0, j] + u_n[1] * Sk[1, j] + u_n[2] * Sk[2, j]
+            _skew_into(a_t, Sk)
+            for j in range(3):
+                H[r, K.T0 + j] += g_n[0] * Sk[0, j] + g_n[1] * Sk[1, j] + g_n[2] * Sk[2, j]
+            if lever_terms:
+                for j in range(3):
+                    acc = 0.0
+                    for i in range(3):
+                        acc += (u_n[i] + g_n[i] * tau) * B1[i, j]
+                    Mk[r, j] = acc
+                if xlev >= 0:
+                    for j in range(3):
+                        H[r, xlev + j] = (u_n[0] * B2[0, j] + u_n[1] * B2[1, j] + u_n[2] * B2[2, j]) + (
+                            (g_n[0] * C[0, j] + g_n[1] * C[1, j] + g_n[2] * C[2, j])
+                            + (g_n[0] * B2[0, j] + g_n[1] * B2[1, j] + g_n[2] * B2[2, j]) * tau)
+            H[r, xc + 1] = 1.0
+            nu[r] = rr + aux[ac + 1] - D[r, 6]
+        R[r, r] = D[r, 7] * D[r, 7]
+    if lever_terms:
+        _rate_columns(H, k, Mk, sf, w, kidx)
+    return True
+
+
 # --- update ---------------------------------------------------------------------------
 @njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
 def _innovation_stats(P, nu, H, R, k, cols, nc, PHt, S, L, w):
@@ -458,16 +615,20 @@ def inflate_to_pass(P, nu, H, R, k, thr, Pa, S, L, w):
 
 
 @njit(cache=True, error_model="numpy")
-def consistent(rej_t, rej_nu, rej_rd, count, t, nu, rd, k, P):
+def consistent(rej_t, rej_k, rej_nu, rej_rd, count, t, nu, rd, k, P):
     """:func:`.engine._consistent` over the last ``count`` rejections held
-    (times ``rej_t``, innovations ``rej_nu``, noise variances ``rej_rd``)
-    and the current innovation ``(t, nu, rd)``."""
+    (times ``rej_t``, rows ``rej_k``, innovations ``rej_nu``, noise
+    variances ``rej_rd``) and the current innovation ``(t, nu, rd)`` of k
+    rows: innovations of different lengths never agree."""
     nh = rej_t.shape[0]
     total = count + 1
     if total < 2:
         return False
-    sv2 = max(P[3, 3], max(P[4, 4], P[5, 5]))
     first = nh - count
+    for a in range(count):
+        if rej_k[first + a] != k:
+            return False
+    sv2 = max(P[3, 3], max(P[4, 4], P[5, 5]))
     for a in range(total):
         ia = first + a
         ta = rej_t[ia] if a < count else t
@@ -613,24 +774,29 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
         Per update item (sorted by IMU row, then time): its IMU row, time,
         measurement (-1: a node without one) and own data row; the rows that
         get gap noise (sorted) and their (n,) variances.
-    meas : tuple ``(kind, k, d_off, d_w, data, p_off, par)``
+    meas : tuple ``(kind, k, d_off, d_w, data, p_off, par, i_off, index, per_row)``
         Per measurement: kind code (-1: no compiled form, handed back), rows
-        of its updates, offset and width of its data rows in ``data`` (flat)
-        and offset of its parameters in ``par``.
-    lidx : (6,) int64
+        of its updates, offset and width of its data rows in ``data`` (flat),
+        offset of its parameters in ``par``, offset of its table index in
+        ``index`` (-1: one data row per update) and whether it is gated row
+        by row.
+    lidx : (8,) int64
         :func:`layout_index`.
     gate : tuple ``(gpar, thr)``
         ``gpar = [gate on, max consecutive (-1: no recovery), recovery after
-        s]``, ``thr[k]`` the chi-square gate of k rows.
-    rstate : tuple ``(streak, first, rej_t, rej_nu, rej_rd, rej_n)``
+        s]``; ``thr[k]`` the chi-square gate of k rows, up to the most rows
+        of any update (which sizes the scratch).
+    rstate : tuple ``(streak, first, rej_t, rej_k, rej_nu, rej_rd, rej_n)``
         Per measurement: its run of rejections (count, time of the first)
-        and the newest ones held (times, innovations, noise variances).
-    recs : tuple ``(m, item, t, nu, sigma, nis, accepted)``
-        Innovation records, filled from ``ctl[C_NREC]`` on.
+        and the newest ones held (times, rows, innovations, noise variances).
+    recs : tuple ``(m, item, t, nis, accepted, k, off, nu, sigma)``
+        Innovation records from ``ctl[C_NREC]`` on; record j's ``k`` rows of
+        innovation and sigma start at ``off[j]`` of the flat ``nu`` and
+        ``sigma`` (filled from ``ctl[C_NFLAT]`` on).
     recov : tuple ``(m, item, t, after, rejected_for)``
         Recoveries, from ``ctl[C_NRECOV]`` on.
-    counts : (M, 3) int64
-        used, rejected, skipped.
+    counts : (M, N_COUNTS) int64
+        used, rejected, skipped, rows, rows rejected, row-gated updates.
     store : tuple ``(k, P_minus, P_plus, Phi, dx)`` per node.
     nodes : tuple ``(rows, aux)``
         The output rows written and the estimates held from each.
@@ -644,23 +810,23 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
         ``C_nb`` scratch.
     ctl : (C_SIZE,) int64
         Loop state (item, rows done, in a node, the node's row, node count,
-        rows written, records, recoveries, row to stop at).
+        rows written, records, recoveries, row to stop at, flat records).
 
     Returns
     -------
     int
         ``DONE``, ``HANDBACK`` (at item ``ctl[C_I]``, inside its node),
         ``CHUNK`` (``ctl[C_KSTOP]`` reached, between nodes), or a divergence:
-        ``BAD_INNOVATION``, ``NOT_PD`` (at item ``ctl[C_I]``), ``LOST_PD`` (at
-        the node of row ``ctl[C_KCUR]``).
+        ``BAD_INNOVATION``, ``NOT_PD``, ``BAD_ROWS`` (at item ``ctl[C_I]``),
+        ``LOST_PD`` (at the node of row ``ctl[C_KCUR]``).
     """
     lla, v_n, q_nb = nav[0], nav[1], nav[2]
     P, aux = filt[1], filt[2]
     it_k, it_t, it_m, it_row, en_k, en_var = items
-    kinds, mk, d_off, d_w, data, p_off, par = meas
+    kinds, mk, d_off, d_w, data, p_off, par, i_off, index, per_row = meas
     gpar, thr = gate
-    streak, first_rej, rej_t, rej_nu, rej_rd, rej_n = rstate
-    rec_m, rec_i, rec_t, rec_nu, rec_sig, rec_nis, rec_acc = recs
+    streak, first_rej, rej_t, rej_k, rej_nu, rej_rd, rej_n = rstate
+    rec_m, rec_i, rec_t, rec_nis, rec_acc, rec_k, rec_off, rec_nu, rec_sig = recs
     rv_m, rv_i, rv_t, rv_after, rv_for = recov
     st_dx = store[4]
     def_aux, def_x = fb
@@ -671,26 +837,29 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
     gate_on = gpar[0] != 0.0
     gmc = int(gpar[1])
     recovery_after = gpar[2]
-    n_hold = rej_t.shape[1]
+    km = thr.shape[0] - 1
     pwork = K.propagation_work(model, model[4].shape[0])
-    nu = np.empty(KMAX)
-    H = np.empty((KMAX, n))
-    R = np.empty((KMAX, KMAX))
+    nu = np.empty(km)
+    H = np.empty((km, n))
+    R = np.empty((km, km))
     cols = np.empty(n, np.int64)
-    PHt = np.empty((n, KMAX))
-    S = np.empty((KMAX, KMAX))
-    L = np.zeros((KMAX, KMAX))
-    wv = np.empty(KMAX)
-    rd = np.empty(KMAX)
-    Kg = np.empty((n, KMAX))
+    PHt = np.empty((n, km))
+    S = np.empty((km, km))
+    L = np.zeros((km, km))
+    wv = np.empty(km)
+    rd = np.empty(km)
+    s_rows = np.empty(km)
+    keep = np.empty(km, np.bool_)
+    Kg = np.empty((n, km))
     Aw = np.empty((n, n))
-    AHt = np.empty((n, KMAX))
-    y = np.empty(KMAX)
+    AHt = np.empty((n, km))
+    y = np.empty(km)
     dx = np.empty(n)
-    KT = np.empty((KMAX, n))
-    HP = np.empty((KMAX, n))
-    vw = np.empty((8, 3))
-    mw = np.empty((2, 3, 3))
+    KT = np.empty((km, n))
+    HP = np.empty((km, n))
+    Mk = np.empty((km, 3))
+    vw = np.empty((14, 3))
+    mw = np.empty((6, 3, 3))
     n_items = it_k.shape[0]
     i = ctl[C_I]
     if ctl[C_IN_NODE]:
@@ -707,20 +876,29 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
                 if kind < 0:
                     ctl[C_I] = i
                     return HANDBACK
-                k = mk[m]
                 tm = it_t[i]
-                d = data[d_off[m] + it_row[i] * d_w[m]:d_off[m] + (it_row[i] + 1) * d_w[m]]
+                row = it_row[i]
                 pm = par[p_off[m]:]
-                if not linearize(kind, d, pm, tm - t_imu[k_cur], lla, v_n, C, w_raw, aux, kidx, lidx, nu, H, R, vw,
-                                 mw):
-                    counts[m, 2] += 1
+                if i_off[m] >= 0:  # a table: the rows of this update
+                    ra, rb = index[i_off[m] + row], index[i_off[m] + row + 1]
+                    k = rb - ra
+                    ok = k > 0
+                    if ok:
+                        w_m = d_w[m]
+                        D = data[d_off[m] + ra * w_m:d_off[m] + rb * w_m].reshape(k, w_m)
+                        ok = linearize_ranges(kind, D, pm, tm - t_imu[k_cur], lla, v_n, C, w_raw, aux, kidx, lidx,
+                                              nu, H, R, Mk, vw, mw)
+                else:
+                    k = mk[m]
+                    d = data[d_off[m] + row * d_w[m]:d_off[m] + (row + 1) * d_w[m]]
+                    ok = linearize(kind, d, pm, tm - t_imu[k_cur], lla, v_n, C, w_raw, aux, kidx, lidx, nu, H, R,
+                                   vw, mw)
+                if not ok:
+                    counts[m, N_SKIPPED] += 1
                     i += 1
                     continue
                 for r in range(k):
                     rd[r] = R[r, r]
-                    if not math.isfinite(nu[r]):
-                        ctl[C_I] = i
-                        return BAD_INNOVATION
                 nc = 0
                 for j in range(n):
                     nz = False
@@ -733,44 +911,93 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
                 st = streak[m]
                 held = rej_n[m]
                 if (gate_on and gmc >= 0 and st >= gmc and tm - first_rej[m] >= recovery_after
-                        and consistent(rej_t[m], rej_nu[m], rej_rd[m], held if gmc == 0 else min(gmc, held),
-                                       tm, nu, rd, k, P)):
+                        and consistent(rej_t[m], rej_k[m], rej_nu[m], rej_rd[m], held if gmc == 0 else
+                                       min(gmc, held), tm, nu, rd, k, P)):
                     inflate_to_pass(P, nu, H, R, k, thr[k], Aw, S, L, wv)
                     j = ctl[C_NRECOV]
                     rv_m[j], rv_i[j], rv_t[j], rv_after[j], rv_for[j] = m, i, tm, st, tm - first_rej[m]
                     ctl[C_NRECOV] = j + 1
+                # the record: the whole innovation, with the sigmas of the rows' own gate when rows were refused
+                jr = ctl[C_NREC]
+                o = ctl[C_NFLAT]
+                rec_m[jr], rec_i[jr], rec_t[jr], rec_k[jr], rec_off[jr] = m, i, tm, k, o
+                for r in range(k):
+                    rec_nu[o + r] = nu[r]
+                ctl[C_NREC] = jr + 1
+                ctl[C_NFLAT] = o + k
+                gate_vec = gate_on
+                refused = 0
+                if gate_on and per_row[m]:  # inskit.filters.kalman.gate_rows, then the rows that pass
+                    gate_vec = False
+                    for r in range(k):
+                        acc = 0.0
+                        for c in range(nc):
+                            j = cols[c]
+                            hp = 0.0
+                            for c2 in range(nc):
+                                hp += P[j, cols[c2]] * H[r, cols[c2]]
+                            acc += H[r, j] * hp
+                        s_rows[r] = acc + R[r, r]
+                        if not (math.isfinite(nu[r]) and math.isfinite(s_rows[r]) and s_rows[r] > 0.0):
+                            ctl[C_I] = i
+                            return BAD_ROWS
+                        keep[r] = nu[r] * nu[r] / s_rows[r] <= thr[1]
+                        if not keep[r]:
+                            refused += 1
+                    counts[m, N_ROWS] += k
+                    counts[m, N_ROWS_REJECTED] += refused
+                    counts[m, N_ROW_GATED] += 1
+                    if refused:
+                        counts[m, N_REJECTED] += 1
+                        for r in range(k):
+                            rec_sig[o + r] = math.sqrt(s_rows[r])
+                        if refused == k:
+                            nis = 0.0
+                            for r in range(k):
+                                nis += nu[r] * nu[r] / s_rows[r]
+                            rec_nis[jr], rec_acc[jr] = nis, False
+                            _hold_rejection(m, tm, nu, rd, k, streak, first_rej, rej_t, rej_k, rej_nu, rej_rd,
+                                            rej_n)
+                            i += 1
+                            continue
+                        # keep the rows that pass, in order
+                        kk = 0
+                        for r in range(k):
+                            if keep[r]:
+                                nu[kk] = nu[r]
+                                for j in range(n):
+                                    H[kk, j] = H[r, j]
+                                kk2 = 0
+                                for r2 in range(k):
+                                    if keep[r2]:
+                                        S[kk, kk2] = R[r, r2]
+                                        kk2 += 1
+                                kk += 1
+                        for r in range(kk):
+                            for r2 in range(kk):
+                                R[r, r2] = S[r, r2]
+                        k = kk
+                for r in range(k):
+                    if not math.isfinite(nu[r]):
+                        ctl[C_I] = i
+                        return BAD_INNOVATION
                 ok, nis = _innovation_stats(P, nu, H, R, k, cols, nc, PHt, S, L, wv)
                 if not ok:
                     ctl[C_I] = i
                     return NOT_PD
-                accepted = not (gate_on and nis > thr[k])
-                j = ctl[C_NREC]
-                rec_m[j], rec_i[j], rec_t[j], rec_nis[j], rec_acc[j] = m, i, tm, nis, accepted
-                for r in range(k):
-                    rec_nu[j, r] = nu[r]
-                    rec_sig[j, r] = math.sqrt(S[r, r])
-                ctl[C_NREC] = j + 1
-                if not accepted:
-                    streak[m] = st + 1
-                    if held == 0:
-                        first_rej[m] = tm
-                    # hold the newest n_hold rejections, oldest first, at the end of the rows
-                    for h in range(n_hold - 1):
-                        rej_t[m, h] = rej_t[m, h + 1]
-                        for r in range(k):
-                            rej_nu[m, h, r] = rej_nu[m, h + 1, r]
-                            rej_rd[m, h, r] = rej_rd[m, h + 1, r]
-                    rej_t[m, n_hold - 1] = tm
+                accepted = not (gate_vec and nis > thr[k])
+                rec_nis[jr], rec_acc[jr] = nis, accepted
+                if not refused:
                     for r in range(k):
-                        rej_nu[m, n_hold - 1, r] = nu[r]
-                        rej_rd[m, n_hold - 1, r] = rd[r]
-                    rej_n[m] = min(held + 1, n_hold)
-                    counts[m, 1] += 1
+                        rec_sig[o + r] = math.sqrt(S[r, r])
+                if not accepted:
+                    _hold_rejection(m, tm, nu, rd, k, streak, first_rej, rej_t, rej_k, rej_nu, rej_rd, rej_n)
+                    counts[m, N_REJECTED] += 1
                     i += 1
                     continue
                 streak[m] = 0
                 rej_n[m] = 0
-                counts[m, 0] += 1
+                counts[m, N_USED] += 1
                 _joseph(P, nu, S, k, PHt, L, Kg, AHt, y, dx, KT, HP)
                 K.apply_correction(lla, v_n, q_nb, dx, 1.0, lla, v_n, q_nb)
                 for e in range(def_aux.shape[0]):
@@ -796,3 +1023,27 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
             K.propagate_rows(imu, nav, filt, model, outs, ctl[C_KDONE], k_end + 1, flags, pwork)
         _begin_node(t_imu, imu[1], q_nb, P, aux, filt[3], want_store, propagated, k_end, ctl, en_k, en_var, store,
                     dyn, w_raw, C)
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _hold_rejection(m, tm, nu, rd, k, streak, first_rej, rej_t, rej_k, rej_nu, rej_rd, rej_n):
+    """One more rejection of measurement ``m``: its streak, the time of the
+    run's first, and the newest rejections held, oldest first, at the end of
+    the rows (the Python path's bounded list)."""
+    held = rej_n[m]
+    n_hold = rej_t.shape[1]
+    streak[m] += 1
+    if held == 0:
+        first_rej[m] = tm
+    for h in range(n_hold - 1):
+        rej_t[m, h] = rej_t[m, h + 1]
+        rej_k[m, h] = rej_k[m, h + 1]
+        for r in range(rej_nu.shape[2]):
+            rej_nu[m, h, r] = rej_nu[m, h + 1, r]
+            rej_rd[m, h, r] = rej_rd[m, h + 1, r]
+    rej_t[m, n_hold - 1] = tm
+    rej_k[m, n_hold - 1] = k
+    for r in range(k):
+        rej_nu[m, n_hold - 1, r] = nu[r]
+        rej_rd[m, n_hold - 1, r] = rd[r]
+    rej_n[m] = min(held + 1, n_hold)

@@ -1,4 +1,4 @@
-"""The integration filter loop: compiled propagation, plug-in updates.
+"""The integration filter loop: compiled propagation and updates, plug-ins.
 
 Schemes (SYSTEM.md §2 table 2-2 and §3, source 004 figures 1 and 2):
 
@@ -15,7 +15,14 @@ The uncoupled scheme ("GNSS resets the INS") has no filter: it is the plain
 function :func:`inskit.integration.uncoupled.run_uncoupled`.
 
 The loop knows the layout only through :class:`StateLayout` and the
-measurements only through the protocol of :mod:`.measurements`.
+measurements only through the protocol of :mod:`.measurements`.  In the
+closed loop, the measurements that have a compiled form (GNSS position and
+velocity, ZUPT, NHC, odometer, GNSS speed and course, pseudorange and range
+rate) are updated inside the compiled loop of :mod:`._updates`, which hands
+the items of every other plug-in back to :func:`run_filter`'s Python path on
+the same state; the open loop, blocks with their own feedback and
+``FilterSettings(compiled_updates=False)`` run every update in Python (the
+same results to rounding).
 """
 
 from __future__ import annotations
@@ -74,11 +81,11 @@ class FilterSettings:
         simulated MEMS car lost positiveness after 177 s without it.
     compiled_updates : bool
         Run the measurements that have a compiled form (``compiled()``: GNSS
-        position and velocity, ZUPT, NHC, odometer, speed and course) in the
-        compiled loop of :mod:`._updates` (closed loop; blocks with their own
-        feedback keep the Python path).  False: every update through the
-        measurement's ``linearize`` in Python (the same results to rounding,
-        3 to 10 times slower).
+        position and velocity, ZUPT, NHC, odometer, speed and course,
+        pseudorange and range rate) in the compiled loop of :mod:`._updates`
+        (closed loop; blocks with their own feedback keep the Python path).
+        False: every update through the measurement's ``linearize`` in
+        Python (the same results to rounding, ten times slower per update).
     """
 
     layout: StateLayout = field(default_factory=StateLayout)
@@ -245,7 +252,8 @@ def _compiled_specs(measurements, layout):
     for m in measurements:
         f = getattr(m, "compiled", None)
         sp = f(layout) if callable(f) else None
-        if sp is not None and not (isinstance(sp, U.CompiledSpec) and 1 <= sp.k <= U.KMAX):
+        if sp is not None and not (isinstance(sp, U.CompiledSpec) and sp.k >= 1
+                                   and (sp.k <= U.KMAX or sp.index is not None)):
             sp = None
         out.append(sp)
     return out
@@ -428,8 +436,12 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             if not keep.all():  # record the whole vector; update with the rows that pass
                 counts[meas.name]["rejected"] += 1
                 nu_all, s_all = nu, s_rows
-                if not keep.any():
+                if not keep.any():  # every row refused: a rejection of the measurement, as in the vector gate
                     rejected_streak[meas.name] = streak + 1
+                    if not rej:
+                        first_rejection[meas.name] = tm
+                    rej.append((tm, nu, R))
+                    del rej[:-n_held]
                     rec["t"].append(tm)
                     rec["nu"].append(nu)
                     rec["sigma"].append(np.sqrt(s_rows))
@@ -480,7 +492,8 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         kinds = np.array([-1 if sp is None else sp.kind for sp in specs], np.int64)
         mk = np.array([1 if sp is None else sp.k for sp in specs], np.int64)
         d_w = np.array([1 if sp is None else sp.data.shape[1] for sp in specs], np.int64)
-        blocks, offs, pblocks, poffs, o, po = [], [], [], [], 0, 0
+        per_row = np.array([sp is not None and sp.per_row for sp in specs], np.bool_)
+        blocks, offs, pblocks, poffs, iblocks, ioffs, o, po, io = [], [], [], [], [], [], 0, 0, 0
         for sp in specs:
             d = np.zeros(1) if sp is None or sp.data.size == 0 else sp.data.ravel()
             p = np.zeros(1) if sp is None or sp.par.size == 0 else sp.par
@@ -490,14 +503,25 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             pblocks.append(p)
             poffs.append(po)
             po += len(p)
+            if sp is not None and sp.index is not None:
+                iblocks.append(sp.index)
+                ioffs.append(io)
+                io += len(sp.index)
+            else:
+                ioffs.append(-1)
+        index = np.concatenate(iblocks) if iblocks else np.zeros(1, np.int64)
         meas = (kinds, mk, np.array(offs, np.int64), d_w, np.concatenate(blocks), np.array(poffs, np.int64),
-                np.concatenate(pblocks))
+                np.concatenate(pblocks), np.array(ioffs, np.int64), index, per_row)
         compiled_m = kinds >= 0
-        # own data row of each item (compiled measurements only)
+        # own data row of each item (compiled measurements only) and the rows of its update
         it_row = np.full(n_items, -1, np.int64)
+        rows_of = np.zeros(n_items, np.int64)
         for j in np.nonzero(compiled_m)[0]:
             sel = it_m == j
             it_row[sel] = np.asarray(kept_rows[j], np.int64)[it_pos[sel]]
+            ix = specs[j].index
+            rows_of[sel] = specs[j].k if ix is None else ix[it_row[sel] + 1] - ix[it_row[sel]]
+        k_most = max(U.KMAX, int(rows_of.max(initial=0)))
         en = extra_noise
         en_k = np.array(sorted(en), np.int64)
         en_var = np.array([en[k] for k in en_k.tolist()], float).reshape(len(en_k), n)
@@ -506,14 +530,15 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         gpar = np.array([0.0 if gate_p is None else 1.0, -1.0 if gmc is None else float(gmc),
                          float(settings.recovery_after_s)])
         thr = np.array([np.inf] + [0.0 if gate_p is None else chi2_threshold(k, gate_p)
-                                   for k in range(1, U.KMAX + 1)])
-        rstate = (np.zeros(M, np.int64), np.zeros(M), np.zeros((M, n_held)), np.zeros((M, n_held, U.KMAX)),
-                  np.zeros((M, n_held, U.KMAX)), np.zeros(M, np.int64))
+                                   for k in range(1, k_most + 1)])
+        rstate = (np.zeros(M, np.int64), np.zeros(M), np.zeros((M, n_held)), np.zeros((M, n_held), np.int64),
+                  np.zeros((M, n_held, k_most)), np.zeros((M, n_held, k_most)), np.zeros(M, np.int64))
         T = max(int(compiled_m[it_m[it_m >= 0]].sum()), 1)
-        recs = (np.zeros(T, np.int64), np.zeros(T, np.int64), np.zeros(T), np.zeros((T, U.KMAX)),
-                np.zeros((T, U.KMAX)), np.zeros(T), np.zeros(T, np.bool_))
+        T_flat = max(int(rows_of.sum()), 1)
+        recs = (np.zeros(T, np.int64), np.zeros(T, np.int64), np.zeros(T), np.zeros(T), np.zeros(T, np.bool_),
+                np.zeros(T, np.int64), np.zeros(T, np.int64), np.zeros(T_flat), np.zeros(T_flat))
         recov = (np.zeros(T, np.int64), np.zeros(T, np.int64), np.zeros(T), np.zeros(T, np.int64), np.zeros(T))
-        counts = np.zeros((M, 3), np.int64)
+        counts = np.zeros((M, U.N_COUNTS), np.int64)
         store = (st_k, st_Pm, st_Pp, st_Phi, st_dx)
         nodes = (node_rows, node_aux)
         dyn = (dyn_idx, dyn_F, t_aux)
@@ -551,17 +576,31 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
                 raise FilterDivergence("the innovation is not finite: the filter diverged")
             if code == U.NOT_PD:
                 raise FilterDivergence("innovation covariance is not positive definite: the filter diverged")
+            if code == U.BAD_ROWS:
+                raise FilterDivergence("the innovation or its variance is not finite and positive: the filter "
+                                       "diverged")
             check_covariance(P, f"at t = {t_imu[int(ctl[U.C_KCUR])]:.3f} s")
             raise FilterDivergence(f"covariance lost positiveness at t = {t_imu[int(ctl[U.C_KCUR])]:.3f} s")
         nr = int(ctl[U.C_NREC])
-        rec_m, rec_i, rec_t, rec_nu, rec_sig, rec_nis, rec_acc = (a[:nr] for a in recs)
+        rec_m, rec_i, rec_t, rec_nis, rec_acc, rec_k, rec_off = (a[:nr] for a in recs[:7])
+        rec_nu, rec_sig = recs[7], recs[8]
 
-        def records(mi, k):
-            sel = rec_m == mi
-            if not sel.any():
+        def records(mi):
+            sel = np.nonzero(rec_m == mi)[0]
+            if not len(sel):
                 return _innovation_arrays({"t": [], "nu": [], "sigma": [], "nis": [], "accepted": []})
-            return {"t": rec_t[sel], "nis": rec_nis[sel], "accepted": rec_acc[sel],
-                    "dof": np.full(int(sel.sum()), k, np.int64), "nu": rec_nu[sel, :k], "sigma": rec_sig[sel, :k]}
+            dof = rec_k[sel]
+            out = {"t": rec_t[sel], "nis": rec_nis[sel], "accepted": rec_acc[sel], "dof": dof}
+            if (dof == dof[0]).all():
+                at = rec_off[sel][:, None] + np.arange(dof[0])
+                out["nu"], out["sigma"] = rec_nu[at], rec_sig[at]
+            else:
+                for key, flat in (("nu", rec_nu), ("sigma", rec_sig)):
+                    a = np.empty(len(sel), dtype=object)
+                    for q, (o, k) in enumerate(zip(rec_off[sel].tolist(), dof.tolist())):
+                        a[q] = flat[o:o + k].copy()
+                    out[key] = a
+            return out
 
         nv = int(ctl[U.C_NRECOV])
         rv_m, rv_i, rv_t, rv_after, rv_for = (a[:nv] for a in recov)
@@ -642,10 +681,14 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         if specs[mi] is None:
             innovations[m.name] = _innovation_arrays(innov[m.name])
         else:
-            innovations[m.name] = rec_c["records"](mi, specs[mi].k)
-            c = counts[m.name]
-            for key, col in (("used", 0), ("rejected", 1), ("skipped", 2)):
-                c[key] += int(rec_c["counts"][mi, col])
+            innovations[m.name] = rec_c["records"](mi)
+            c, cc = counts[m.name], rec_c["counts"][mi]
+            c["used"] += int(cc[U.N_USED])
+            c["rejected"] += int(cc[U.N_REJECTED])
+            c["skipped"] += int(cc[U.N_SKIPPED])
+            if cc[U.N_ROW_GATED]:
+                c["rows"] = int(cc[U.N_ROWS])
+                c["rows_rejected"] = int(cc[U.N_ROWS_REJECTED])
     if rec_c is not None:
         recoveries = sorted(recoveries + rec_c["recoveries"], key=lambda r: r["_item"])
     for r in recoveries:

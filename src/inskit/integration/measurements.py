@@ -20,11 +20,20 @@ A measurement is any object with (:class:`Measurement`):
     where the loosely coupled ``z = P_INS - P_GPS`` with ``H = [I 0 0]`` in
     this sign).
 
+``compiled(layout) -> CompiledSpec`` or ``None`` (optional)
+    The same linearization in compiled form (:mod:`._updates`: a kind code
+    and the data packed per row).  The standard plug-ins here, in
+    :mod:`.aiding` and in :mod:`.tight` offer it, and the filter then runs
+    their updates inside its compiled loop; a plug-in without it (or a
+    subclass with its own ``linearize``) is called through ``linearize``, on
+    the same state.
+
 ``ctx`` is an :class:`UpdateContext`: the navigation state at the IMU sample
 just before the measurement time, how far to extrapolate, the raw and
 corrected body rate, the layout and the current estimates of every block that
 carries one (``ctx.estimate("lever")``).  The filter loop knows nothing about
-GNSS, ZUPT or odometers; new aiding sources plug in here.  Every H is checked
+GNSS, ZUPT or odometers (only the compiled forms of :mod:`._updates` do);
+new aiding sources plug in here.  Every H is checked
 against central finite differences of its own innovation over the fullest
 layout (``tests/test_integration_measurements.py``), using
 :func:`perturbed_context`; :func:`numerical_jacobian` does that check for any
@@ -165,12 +174,12 @@ def _template(layout, rows, block):
     return H.copy()
 
 
-def compiled_form_applies(meas, cls) -> bool:
-    """Whether ``meas`` updates by ``cls``'s own ``linearize``, vector-gated,
-    so that its compiled form (:mod:`._updates`) says the same: a subclass
-    with its own ``linearize``, or a measurement switched to per-row gating,
-    keeps the Python path."""
-    return type(meas).linearize is cls.linearize and getattr(meas, "gating", "vector") == "vector"
+def compiled_form_applies(meas, cls, gating="vector") -> bool:
+    """Whether ``meas`` updates by ``cls``'s own ``linearize``, gated as its
+    compiled form (:mod:`._updates`) is, so that this form says the same: a
+    subclass with its own ``linearize``, or a measurement switched to the
+    other gating, keeps the Python path."""
+    return type(meas).linearize is cls.linearize and getattr(meas, "gating", "vector") == gating
 
 
 def _sensor_rate_columns(H, ctx, M):
