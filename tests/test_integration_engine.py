@@ -169,6 +169,22 @@ def test_row_gating_drops_only_the_bad_row():
     assert out2.counts["rows"]["used"] == len(t) - 1 and out2.counts["rows"]["rejected"] == 1
 
 
+def test_a_row_gated_measurement_refused_whole_is_a_rejection_run():
+    """Every row refused at several epochs in a row (the fixes jump by 20 m
+    and stay) counts as consecutive rejections of the measurement, so the
+    lost-filter recovery applies to row-gated measurements too (it used to
+    fail on the missing time of the first rejection)."""
+    imu, truth, _ = _static_setup(3000)
+    t = imu.time[50::100]
+    z = np.zeros((len(t), 3))
+    z[5:] = 20.0
+    out = run_filter(imu, truth.state(0), [_RowFix(t, z, 0.5, truth.lla[0])], FilterSettings(recovery_after_s=3.0))
+    r = out.recoveries[0]
+    assert r["measurement"] == "rows" and r["after_rejections"] >= 3 and r["rejected_for_s"] >= 3.0
+    acc = out.innovations["rows"]["accepted"]
+    assert not acc[5:8].any() and acc[-10:].all()  # refused while the jump is new; followed at the end
+
+
 def test_measurements_must_follow_the_protocol():
     imu, truth, g = _static_setup()
 

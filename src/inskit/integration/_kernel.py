@@ -280,6 +280,21 @@ def correct_increments(sc, dth_raw, dv_raw, dt, dth, dv, w_b, f_b):
 
 
 @njit(cache=True)
+def propagation_work(model, n_active):
+    """Scratch of :func:`propagate_rows` for a layout: ``F`` with the blocks'
+    constant entries written, and the work arrays of the covariance step.
+    Every entry :func:`propagate_rows` reads is written first, so one work
+    tuple serves any number of calls (only F's constants carry over)."""
+    kidx, crow, ccol, cval = model[0], model[5], model[6], model[7]
+    n = kidx[N_STATES]
+    F = np.zeros((n, n))
+    for e in range(crow.shape[0]):
+        F[crow[e], ccol[e]] = cval[e]
+    return (F, np.empty((n, n)), np.zeros((n, n)), np.empty((n, n_active)), np.empty((n, n)),
+            np.empty((n, 1)), np.empty((n, 1)))
+
+
+@njit(cache=True)
 def propagate(imu, nav, filt, model, out, k0, k1, flags):
     """Integrate IMU rows ``k0 .. k1-1`` with covariance propagation.
 
@@ -303,22 +318,21 @@ def propagate(imu, nav, filt, model, out, k0, k1, flags):
     flags : tuple ``(coning, want_phi, open_loop, second_order, gravity)``
         ``gravity``: the code of the gravity model (:data:`inskit.earth.GRAVITY_MODELS`).
     """
+    propagate_rows(imu, nav, filt, model, out, k0, k1, flags, propagation_work(model, model[4].shape[0]))
+
+
+@njit(cache=True)
+def propagate_rows(imu, nav, filt, model, out, k0, k1, flags, work):
+    """:func:`propagate` with the scratch ``work`` of :func:`propagation_work`
+    (the compiled update loop keeps one for a whole run)."""
     t, dth_all, dv_all = imu
     lla, v_n, q_nb, carry = nav
     x, P, aux, Phi = filt
     kidx, q_psd, rows, cols, active, crow, ccol, cval = model
     out_lla, out_v, out_q, out_var = out
     coning, want_phi, open_loop, second_order, gravity = flags
+    F, A, B, T, tmp, xt, xtmp = work
     n = kidx[N_STATES]
-    F = np.zeros((n, n))
-    for e in range(crow.shape[0]):
-        F[crow[e], ccol[e]] = cval[e]
-    A = np.empty((n, n))
-    B = np.zeros((n, n))
-    T = np.empty((n, active.shape[0]))
-    tmp = np.empty((n, n))
-    xt = np.empty((n, 1))
-    xtmp = np.empty((n, 1))
     C = np.empty((3, 3))
     dth = np.empty(3)
     dv = np.empty(3)

@@ -34,7 +34,8 @@ from ..errors import InputError
 from ..rotations import skew
 from ..types import check_time
 from .blocks import StateBlock
-from .measurements import UpdateContext, _cross, _sensor_rate_columns, vehicle_axes
+from . import _updates as U
+from .measurements import UpdateContext, _cross, _sensor_rate_columns, compiled_form_applies, vehicle_axes
 
 
 class OdometerScale(StateBlock):
@@ -210,6 +211,14 @@ class Odometer:
         R = np.diag(np.r_[self.sigma[row] ** 2, np.full(k - 1, self.nhc_sigma**2)])
         return h - z, H, R
 
+    def compiled(self, layout):
+        """:meth:`linearize` in compiled form (:mod:`._updates`): per row the
+        speed and its sigma."""
+        if not compiled_form_applies(self, Odometer) or "mounting" in layout:
+            return None  # the compiled form works in the IMU's axes; the mounting block's: the Python path
+        par = np.r_[self.lever_arm_b, float(self.with_nhc), self.nhc_sigma]
+        return U.spec(U.KIND_ODOMETER, 3 if self.with_nhc else 1, np.column_stack([self.speed, self.sigma]), par)
+
 
 def course_speed_to_ne(speed, course, sigma_speed, sigma_course):
     """North/east velocity and its covariance from speed and course over ground.
@@ -333,6 +342,16 @@ class GnssSpeedCourse:
             H[:, lay.slice("lever")] = C @ skew(w)
         nu = (ctx.v_n + lever_v)[:2] - self.v_ne[row]
         return nu, H[:2].copy(), self.P_ne[row].copy()
+
+    def compiled(self, layout):
+        """:meth:`linearize` in compiled form (:mod:`._updates`): per row the
+        speed, the speed below which it is skipped, north/east velocity and
+        its covariance."""
+        if not compiled_form_applies(self, GnssSpeedCourse):
+            return None
+        n = len(self.time)
+        data = np.column_stack([self.speed, self.min_speed, self.v_ne, self.P_ne.reshape(n, 4)])
+        return U.spec(U.KIND_SPEED_COURSE, 2, data, self.lever_arm_b)
 
 
 class Height:

@@ -1,4 +1,4 @@
-"""The integration filter loop: compiled propagation, plug-in updates.
+"""The integration filter loop: compiled propagation and updates, plug-ins.
 
 Schemes (SYSTEM.md §2 table 2-2 and §3, source 004 figures 1 and 2):
 
@@ -15,7 +15,14 @@ The uncoupled scheme ("GNSS resets the INS") has no filter: it is the plain
 function :func:`inskit.integration.uncoupled.run_uncoupled`.
 
 The loop knows the layout only through :class:`StateLayout` and the
-measurements only through the protocol of :mod:`.measurements`.
+measurements only through the protocol of :mod:`.measurements`.  In the
+closed loop, the measurements that have a compiled form (GNSS position and
+velocity, ZUPT, NHC, odometer, GNSS speed and course, pseudorange and range
+rate) are updated inside the compiled loop of :mod:`._updates`, which hands
+the items of every other plug-in back to :func:`run_filter`'s Python path on
+the same state; the open loop, blocks with their own feedback and
+``FilterSettings(compiled_updates=False)`` run every update in Python (the
+same results to rounding).
 """
 
 from __future__ import annotations
@@ -27,10 +34,11 @@ import numpy as np
 
 from .. import earth
 from ..errors import InputError
-from ..filters.kalman import FilterDivergence, check_covariance, gate_rows, joseph_update
+from ..filters.kalman import FilterDivergence, check_covariance, chi2_threshold, gate_rows, joseph_update
 from ..rotations import dcm_from_quat
 from ..types import ImuData, NavSolution, NavState
 from . import _kernel as K
+from . import _updates as U
 from .blocks import InitialUncertainty, SensorNoise, StateBlock, ins_blocks
 from .layout import StateLayout
 from .measurements import UpdateContext
@@ -75,6 +83,13 @@ class FilterSettings:
         Keep the ``F P F^T dt^2`` term of ``Phi P Phi^T``.  Dropping it (Euler
         steps) is not positive semi-definite when uncertainties are large: a
         simulated MEMS car lost positiveness after 177 s without it.
+    compiled_updates : bool
+        Run the measurements that have a compiled form (``compiled()``: GNSS
+        position and velocity, ZUPT, NHC, odometer, speed and course,
+        pseudorange and range rate) in the compiled loop of :mod:`._updates`
+        (closed loop; blocks with their own feedback keep the Python path).
+        False: every update through the measurement's ``linearize`` in
+        Python (the same results to rounding, ten times slower per update).
     """
 
     layout: StateLayout = field(default_factory=StateLayout)
@@ -86,6 +101,7 @@ class FilterSettings:
     gravity: str = "normal"
     smoother_node_s: float = 0.25
     covariance_second_order: bool = True
+    compiled_updates: bool = True
 
     def __post_init__(self):
         if self.scheme == "uncoupled":
@@ -196,28 +212,57 @@ class FilterOutput(Track):
 
 
 def _nodes(imu, measurements, smoother_node_s, want_store, extra_rows=()):
-    """Update epochs grouped by the IMU row that precedes them."""
+    """Update items sorted by the IMU row that precedes them, then by time
+    (ties keep the order: gap rows, measurements in list order, smoother
+    grid).  Returns arrays ``k``, ``t``, ``m`` (index into ``measurements``;
+    -1 for a node without a measurement) and ``pos`` (index into that
+    measurement's kept rows), the kept rows per measurement and the skipped
+    count per measurement name."""
     t = imu.time
-    items = [(int(k), float(t[k]), None, -1) for k in extra_rows]
-    skipped = {}
+    extra = np.asarray(list(extra_rows), dtype=np.int64)
+    ks, ts, ms, ps = [extra], [t[extra].astype(float)], [np.full(len(extra), -1, np.int64)], \
+        [np.full(len(extra), -1, np.int64)]
+    skipped, kept = {}, []
     # a measurement inside a gap of the IMU log has no INS state near it: skipped, not extrapolated
     max_ahead = 2.0 * float(np.median(np.diff(t))) if len(t) > 1 else np.inf
-    for m in measurements:
+    for j, m in enumerate(measurements):
         tm = np.asarray(m.times(), float)
         rows = np.asarray(m.rows())
         k = np.searchsorted(t, tm, side="right") - 1
         ok = (k >= 1) & (tm <= t[-1])
         ok &= (tm - t[np.clip(k, 0, len(t) - 1)]) <= max_ahead
         skipped[m.name] = int((~ok).sum())
-        for kk, tt, r in zip(k[ok].tolist(), tm[ok].tolist(), rows[ok].tolist()):
-            items.append((kk, tt, m, r))
+        kept.append(rows[ok])
+        n_ok = int(ok.sum())
+        ks.append(k[ok].astype(np.int64))
+        ts.append(tm[ok])
+        ms.append(np.full(n_ok, j, np.int64))
+        ps.append(np.arange(n_ok, dtype=np.int64))
     if want_store and smoother_node_s > 0:
         grid = np.arange(t[0] + smoother_node_s, t[-1], smoother_node_s)
         kg = np.searchsorted(t, grid, side="right") - 1
-        for kk in np.unique(kg[kg >= 1]).tolist():
-            items.append((kk, float(t[kk]), None, -1))
-    items.sort(key=lambda it: (it[0], it[1]))
-    return items, skipped
+        kg = np.unique(kg[kg >= 1]).astype(np.int64)
+        ks.append(kg)
+        ts.append(t[kg].astype(float))
+        ms.append(np.full(len(kg), -1, np.int64))
+        ps.append(np.full(len(kg), -1, np.int64))
+    k, tt, m, pos = (np.concatenate(v) for v in (ks, ts, ms, ps))
+    order = np.lexsort((tt, k))  # stable: equal (k, t) keep their order
+    return k[order], tt[order], m[order], pos[order], kept, skipped
+
+
+def _compiled_specs(measurements, layout):
+    """Each measurement's :class:`._updates.CompiledSpec` (``compiled(layout)``),
+    or None for one without (a user's plug-in: the Python path)."""
+    out = []
+    for m in measurements:
+        f = getattr(m, "compiled", None)
+        sp = f(layout) if callable(f) else None
+        if sp is not None and not (isinstance(sp, U.CompiledSpec) and sp.k >= 1
+                                   and (sp.k <= U.KMAX or sp.index is not None)):
+            sp = None
+        out.append(sp)
+    return out
 
 
 def _check_measurements(measurements):
@@ -277,30 +322,23 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     crow, ccol, cval = lay.constant_entries()
     active = np.unique(rows_pat)
     model = (lay.kernel_index(), q_psd, rows_pat, cols_pat, active, crow, ccol, cval)
-    P = lay.initial_covariance()
+    P = lay.initial_covariance()  # updated in place throughout (the compiled loop shares it)
     x = np.zeros(n)
     aux = lay.initial_aux()
     aux_idx = lay.aux_state_index
     dyn_idx, dyn_F = lay.estimate_dynamics()
-    t_aux = [float(imu.time[0])]
+    t_aux = np.array([float(imu.time[0])])
 
     def predict_aux(t):
         """Carry the evolving estimates (clock bias by its drift, Gauss-Markov
-        decay) from their last time to ``t``: ``exp(F dt)`` to third order
-        (exact for a clock, whose F is nilpotent; error (dt/tau)^4/24 for a
-        decay)."""
-        h = t - t_aux[0]
-        if h > 0 and len(dyn_idx):
-            A = dyn_F * h
-            A2 = A @ A
-            aux[dyn_idx] = (np.eye(len(dyn_idx)) + A + A2 / 2.0 + A2 @ A / 6.0) @ aux[dyn_idx]
-        t_aux[0] = t
+        decay) from their last time to ``t`` (:func:`._updates.predict_aux`)."""
+        U.predict_aux(aux, dyn_idx, dyn_F, t_aux, t)
     custom_feedback = [(lay.slice(b.name), lay.aux_slice(b.name), b) for b in lay.blocks
                        if b.has_estimate and type(b).feedback is not _default_feedback]
     default_aux = np.ones(lay.aux_size, bool)
     for _, sa, _ in custom_feedback:
         default_aux[sa] = False
-    default_aux_idx = np.nonzero(default_aux)[0]
+    default_aux_idx = np.nonzero(default_aux)[0].astype(np.int64)
     default_x_idx = aux_idx[default_aux_idx]
     lla, v_n, q_nb = initial.lla.copy(), initial.v_n.copy(), initial.q_nb.copy()
     carry = np.zeros(11)
@@ -310,16 +348,33 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     out_v = np.empty((N, 3))
     out_q = np.empty((N, 4))
     out_var = np.empty((N, n))
-    node_rows, node_aux = [], []
     w_raw = np.zeros(3)
     open_loop = settings.scheme == "open"
     want_store = smoother
-    store = SmootherStore() if want_store else None
     Phi = np.eye(n)
     nav = (lla, v_n, q_nb, carry)
     outs = (out_lla, out_v, out_q, out_var)
     imu_arrays = (imu.time, imu.dtheta_b, imu.dv_b)
     eye_n = np.eye(n)
+    extra_noise = {int(k): np.asarray(v, float) for k, v in (extra_noise or {}).items()}
+    for k, v in extra_noise.items():
+        if v.shape != (n,) or not (np.isfinite(v).all() and (v >= 0).all()):
+            raise InputError(f"extra_noise at row {k} must be {n} finite variances >= 0")
+        if not 1 <= k < len(imu):
+            raise InputError(f"extra_noise row {k} is outside the IMU rows 1..{len(imu) - 1}")
+    it_k, it_t, it_m, it_pos, kept_rows, skipped = _nodes(imu, measurements, settings.smoother_node_s, want_store,
+                                                          sorted(extra_noise))
+    n_items = len(it_k)
+    n_nodes = len(np.unique(it_k))
+    # loop state shared with the compiled loop: item, rows done, node, rows written, ...
+    ctl = np.zeros(U.C_SIZE, np.int64)
+    ctl[U.C_KDONE] = 1
+    node_rows = np.empty(n_nodes + 2, np.int64)
+    node_aux = np.empty((n_nodes + 2, lay.aux_size))
+    m_store = n_nodes if want_store else 0
+    st_k = np.zeros(m_store, np.int64)
+    st_Pm, st_Pp, st_Phi = (np.empty((m_store, n, n)) for _ in range(3))
+    st_dx = np.zeros((m_store, n))
 
     def write_row(k):
         if open_loop:
@@ -327,8 +382,10 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         else:
             out_lla[k], out_v[k], out_q[k] = lla, v_n, q_nb
         out_var[k] = P.diagonal()  # variances until the end of the run
-        node_rows.append(k)
-        node_aux.append(aux - x[aux_idx] if open_loop else aux.copy())
+        r = ctl[U.C_NROW]
+        node_rows[r] = k
+        node_aux[r] = aux - x[aux_idx] if open_loop else aux
+        ctl[U.C_NROW] = r + 1
 
     def propagate(k0, k1, want_phi):
         filt = (x, P, aux, Phi)
@@ -337,127 +394,270 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
                      earth.gravity_model_code(settings.gravity)))
 
     write_row(0)
-    extra_noise = {int(k): np.asarray(v, float) for k, v in (extra_noise or {}).items()}
-    for k, v in extra_noise.items():
-        if v.shape != (n,) or not (np.isfinite(v).all() and (v >= 0).all()):
-            raise InputError(f"extra_noise at row {k} must be {n} finite variances >= 0")
-        if not 1 <= k < len(imu):
-            raise InputError(f"extra_noise row {k} is outside the IMU rows 1..{len(imu) - 1}")
-    items, skipped = _nodes(imu, measurements, settings.smoother_node_s, want_store, sorted(extra_noise))
     counts = {m.name: {"used": 0, "rejected": 0, "skipped": skipped[m.name]} for m in measurements}
     innov = {m.name: {"t": [], "nu": [], "sigma": [], "nis": [], "accepted": []} for m in measurements}
     rejected_streak = {}
     rejected_recent = {}  # per measurement: (t, innovation, R) of the current run of rejections
     first_rejection = {}
     recoveries = []
-    k_done = 1
-    i = 0
-    n_items = len(items)
+    n_held = max(8, (settings.gate_max_consecutive or 0) + 1)
     t_imu = imu.time
-    while i < n_items:
-        k_end = items[i][0]
-        j = i
-        while j < n_items and items[j][0] == k_end:
-            j += 1
-        if k_end + 1 > k_done:
-            propagate(k_done, k_end + 1, want_store)
-            if progress is not None:
-                progress(k_end + 1 - k_done)
-            k_done = k_end + 1
-            w_raw[:] = (imu.dtheta_b[k_end]) / (t_imu[k_end] - t_imu[k_end - 1])
-            predict_aux(float(t_imu[k_end]))
-        if k_end in extra_noise:
-            P[np.diag_indices(n)] += extra_noise[k_end]
-        if want_store:
-            store.k.append(k_end)
-            store.P_minus.append(P.copy())
-            store.Phi.append(Phi.copy())
-            Phi[:] = eye_n
-        dx_total = np.zeros(n) if want_store else None
-        C_nb = np.empty((3, 3))
-        K.dcm_into(q_nb, C_nb)
-        for _, tm, meas, row in items[i:j]:
-            if meas is None:
-                continue
-            if open_loop:
-                o_lla, o_v, o_q = np.empty(3), np.empty(3), np.empty(4)
-                K.apply_correction(lla, v_n, q_nb, x, 1.0, o_lla, o_v, o_q)
-                ctx = UpdateContext(tm, tm - t_imu[k_end], o_lla, o_v, dcm_from_quat(o_q), w_raw, lay,
-                                    aux - x[aux_idx])
-            else:
-                ctx = UpdateContext(tm, tm - t_imu[k_end], lla, v_n, C_nb, w_raw, lay, aux)
-            lin = meas.linearize(ctx, row)
-            if lin is None:
-                counts[meas.name]["skipped"] += 1
-                continue
-            nu, H, R = lin
-            gate = settings.gate_probability
-            streak = rejected_streak.get(meas.name, 0)
-            rej = rejected_recent.setdefault(meas.name, [])
-            if (gate is not None and settings.gate_max_consecutive is not None
-                    and streak >= settings.gate_max_consecutive
-                    and tm - first_rejection[meas.name] >= settings.recovery_after_s
-                    and _consistent(rej[-settings.gate_max_consecutive:] + [(tm, nu, R)], P)):
-                P = _inflate_to_pass(P, nu, H, R, gate)
-                recoveries.append({"measurement": meas.name, "t": float(tm), "after_rejections": streak,
-                                   "rejected_for_s": float(tm - first_rejection[meas.name])})
-            rec = innov[meas.name]
-            nu_all = s_all = None
-            if gate is not None and getattr(meas, "gating", "vector") == "row":
-                keep, s_rows = gate_rows(P, nu, H, R, gate)
-                c_m = counts[meas.name]
-                c_m["rows"] = c_m.get("rows", 0) + len(keep)
-                c_m["rows_rejected"] = c_m.get("rows_rejected", 0) + int((~keep).sum())
-                if not keep.all():  # record the whole vector; update with the rows that pass
-                    counts[meas.name]["rejected"] += 1
-                    nu_all, s_all = nu, s_rows
-                    if not keep.any():
-                        rejected_streak[meas.name] = streak + 1
-                        rec["t"].append(tm)
-                        rec["nu"].append(nu)
-                        rec["sigma"].append(np.sqrt(s_rows))
-                        rec["nis"].append(float(np.sum(nu * nu / s_rows)))
-                        rec["accepted"].append(False)
-                        continue
-                    nu, H, R = nu[keep], H[keep], R[np.ix_(keep, keep)]
-                gate = None
-            res = joseph_update(P, nu, H, R, gate_probability=gate)
-            rejected_streak[meas.name] = 0 if res.accepted else streak + 1
-            if res.accepted:
-                rej.clear()
-            else:
-                if not rej:
-                    first_rejection[meas.name] = tm
-                rej.append((tm, nu, R))
-                del rej[:-max(8, (settings.gate_max_consecutive or 0) + 1)]  # bounded memory
-            rec["t"].append(tm)
-            rec["nu"].append(res.innovation if nu_all is None else nu_all)
-            rec["sigma"].append(np.sqrt(np.diag(res.S)) if s_all is None else np.sqrt(s_all))
-            rec["nis"].append(res.nis)
-            rec["accepted"].append(res.accepted)
-            if not res.accepted:
+    k_list, t_list, m_list, pos_list = it_k.tolist(), it_t.tolist(), it_m.tolist(), it_pos.tolist()
+    kept_lists = [r.tolist() for r in kept_rows]
+
+    def python_item(idx, k_end, C_nb):
+        """One update on the Python path (the measurement's own ``linearize``);
+        returns the C_nb of the state after it."""
+        tm = t_list[idx]
+        meas = measurements[m_list[idx]]
+        row = kept_lists[m_list[idx]][pos_list[idx]]
+        if open_loop:
+            o_lla, o_v, o_q = np.empty(3), np.empty(3), np.empty(4)
+            K.apply_correction(lla, v_n, q_nb, x, 1.0, o_lla, o_v, o_q)
+            ctx = UpdateContext(tm, tm - t_imu[k_end], o_lla, o_v, dcm_from_quat(o_q), w_raw, lay,
+                                aux - x[aux_idx])
+        else:
+            ctx = UpdateContext(tm, tm - t_imu[k_end], lla, v_n, C_nb, w_raw, lay, aux)
+        lin = meas.linearize(ctx, row)
+        if lin is None:
+            counts[meas.name]["skipped"] += 1
+            return C_nb
+        nu, H, R = lin
+        gate = settings.gate_probability
+        streak = rejected_streak.get(meas.name, 0)
+        rej = rejected_recent.setdefault(meas.name, [])
+        if (gate is not None and settings.gate_max_consecutive is not None
+                and streak >= settings.gate_max_consecutive
+                and tm - first_rejection[meas.name] >= settings.recovery_after_s
+                and _consistent(rej[-settings.gate_max_consecutive:] + [(tm, nu, R)], P)):
+            P[...] = _inflate_to_pass(P, nu, H, R, gate)
+            recoveries.append({"measurement": meas.name, "t": float(tm), "after_rejections": streak,
+                               "rejected_for_s": float(tm - first_rejection[meas.name]), "_item": idx})
+        rec = innov[meas.name]
+        nu_all = s_all = None
+        if gate is not None and getattr(meas, "gating", "vector") == "row":
+            keep, s_rows = gate_rows(P, nu, H, R, gate)
+            c_m = counts[meas.name]
+            c_m["rows"] = c_m.get("rows", 0) + len(keep)
+            c_m["rows_rejected"] = c_m.get("rows_rejected", 0) + int((~keep).sum())
+            if not keep.all():  # record the whole vector; update with the rows that pass
                 counts[meas.name]["rejected"] += 1
-                continue
-            counts[meas.name]["used"] += 1
-            P = res.P
-            if open_loop:
-                x += res.dx
-            else:
-                dx = res.dx
-                K.apply_correction(lla, v_n, q_nb, dx, 1.0, lla, v_n, q_nb)
-                aux[default_aux_idx] -= dx[default_x_idx]
-                for sx, sa, b in custom_feedback:
-                    b.feedback(aux[sa], dx[sx])
-                if want_store:
-                    dx_total += dx
-                C_nb = np.empty((3, 3))  # a new array: an earlier context may still hold the old one
-                K.dcm_into(q_nb, C_nb)
-        check_covariance(P, f"at t = {t_imu[k_end]:.3f} s")
+                nu_all, s_all = nu, s_rows
+                if not keep.any():  # every row refused: a rejection of the measurement, as in the vector gate
+                    rejected_streak[meas.name] = streak + 1
+                    if not rej:
+                        first_rejection[meas.name] = tm
+                    rej.append((tm, nu, R))
+                    del rej[:-n_held]
+                    rec["t"].append(tm)
+                    rec["nu"].append(nu)
+                    rec["sigma"].append(np.sqrt(s_rows))
+                    rec["nis"].append(float(np.sum(nu * nu / s_rows)))
+                    rec["accepted"].append(False)
+                    return C_nb
+                nu, H, R = nu[keep], H[keep], R[np.ix_(keep, keep)]
+            gate = None
+        res = joseph_update(P, nu, H, R, gate_probability=gate)
+        rejected_streak[meas.name] = 0 if res.accepted else streak + 1
+        if res.accepted:
+            rej.clear()
+        else:
+            if not rej:
+                first_rejection[meas.name] = tm
+            rej.append((tm, nu, R))
+            del rej[:-n_held]  # bounded memory
+        rec["t"].append(tm)
+        rec["nu"].append(res.innovation if nu_all is None else nu_all)
+        rec["sigma"].append(np.sqrt(np.diag(res.S)) if s_all is None else np.sqrt(s_all))
+        rec["nis"].append(res.nis)
+        rec["accepted"].append(res.accepted)
+        if not res.accepted:
+            counts[meas.name]["rejected"] += 1
+            return C_nb
+        counts[meas.name]["used"] += 1
+        P[...] = res.P
+        if open_loop:
+            x[...] += res.dx
+            return C_nb
+        dx = res.dx
+        K.apply_correction(lla, v_n, q_nb, dx, 1.0, lla, v_n, q_nb)
+        aux[default_aux_idx] -= dx[default_x_idx]
+        for sx, sa, b in custom_feedback:
+            b.feedback(aux[sa], dx[sx])
         if want_store:
-            store.P_plus.append(P.copy())
-            store.dx.append(dx_total)
-        write_row(k_end)
-        i = j
+            st_dx[ctl[U.C_NODE]] += dx
+        C_nb = np.empty((3, 3))  # a new array: an earlier context may still hold the old one
+        K.dcm_into(q_nb, C_nb)
+        return C_nb
+
+    def run_compiled():
+        """The compiled loop (:func:`._updates.run_nodes`) over every node,
+        sharing this run's state, with the items of measurements without a
+        compiled form handed to :func:`python_item`.  Returns the compiled
+        measurements' records, counts and recoveries."""
+        M = len(measurements)
+        kinds = np.array([-1 if sp is None else sp.kind for sp in specs], np.int64)
+        mk = np.array([1 if sp is None else sp.k for sp in specs], np.int64)
+        d_w = np.array([1 if sp is None else sp.data.shape[1] for sp in specs], np.int64)
+        per_row = np.array([sp is not None and sp.per_row for sp in specs], np.bool_)
+        blocks, offs, pblocks, poffs, iblocks, ioffs, o, po, io = [], [], [], [], [], [], 0, 0, 0
+        for sp in specs:
+            d = np.zeros(1) if sp is None or sp.data.size == 0 else sp.data.ravel()
+            p = np.zeros(1) if sp is None or sp.par.size == 0 else sp.par
+            blocks.append(d)
+            offs.append(o)
+            o += len(d)
+            pblocks.append(p)
+            poffs.append(po)
+            po += len(p)
+            if sp is not None and sp.index is not None:
+                iblocks.append(sp.index)
+                ioffs.append(io)
+                io += len(sp.index)
+            else:
+                ioffs.append(-1)
+        index = np.concatenate(iblocks) if iblocks else np.zeros(1, np.int64)
+        meas = (kinds, mk, np.array(offs, np.int64), d_w, np.concatenate(blocks), np.array(poffs, np.int64),
+                np.concatenate(pblocks), np.array(ioffs, np.int64), index, per_row)
+        compiled_m = kinds >= 0
+        # own data row of each item (compiled measurements only) and the rows of its update
+        it_row = np.full(n_items, -1, np.int64)
+        rows_of = np.zeros(n_items, np.int64)
+        for j in np.nonzero(compiled_m)[0]:
+            sel = it_m == j
+            it_row[sel] = np.asarray(kept_rows[j], np.int64)[it_pos[sel]]
+            ix = specs[j].index
+            rows_of[sel] = specs[j].k if ix is None else ix[it_row[sel] + 1] - ix[it_row[sel]]
+        k_most = max(U.KMAX, int(rows_of.max(initial=0)))
+        en = extra_noise
+        en_k = np.array(sorted(en), np.int64)
+        en_var = np.array([en[k] for k in en_k.tolist()], float).reshape(len(en_k), n)
+        items = (it_k, it_t, it_m, it_row, en_k, en_var)
+        gate_p, gmc = settings.gate_probability, settings.gate_max_consecutive
+        gpar = np.array([0.0 if gate_p is None else 1.0, -1.0 if gmc is None else float(gmc),
+                         float(settings.recovery_after_s)])
+        thr = np.array([np.inf] + [0.0 if gate_p is None else chi2_threshold(k, gate_p)
+                                   for k in range(1, k_most + 1)])
+        rstate = (np.zeros(M, np.int64), np.zeros(M), np.zeros((M, n_held)), np.zeros((M, n_held), np.int64),
+                  np.zeros((M, n_held, k_most)), np.zeros((M, n_held, k_most)), np.zeros(M, np.int64))
+        T = max(int(compiled_m[it_m[it_m >= 0]].sum()), 1)
+        T_flat = max(int(rows_of.sum()), 1)
+        recs = (np.zeros(T, np.int64), np.zeros(T, np.int64), np.zeros(T), np.zeros(T), np.zeros(T, np.bool_),
+                np.zeros(T, np.int64), np.zeros(T, np.int64), np.zeros(T_flat), np.zeros(T_flat))
+        recov = (np.zeros(T, np.int64), np.zeros(T, np.int64), np.zeros(T), np.zeros(T, np.int64), np.zeros(T))
+        counts = np.zeros((M, U.N_COUNTS), np.int64)
+        store = (st_k, st_Pm, st_Pp, st_Phi, st_dx)
+        nodes = (node_rows, node_aux)
+        dyn = (dyn_idx, dyn_F, t_aux)
+        fb = (default_aux_idx, default_x_idx)
+        flags = (bool(settings.coning), bool(want_store), False, bool(settings.covariance_second_order),
+                 earth.gravity_model_code(settings.gravity))
+        filt = (x, P, aux, Phi)
+        lidx = U.layout_index(lay)
+        C = np.empty((3, 3))
+        chunk = max(N // 50, 1) if progress is not None else N + 1
+        reported = int(ctl[U.C_KDONE])
+        while True:
+            i = int(ctl[U.C_I])
+            ctl[U.C_KSTOP] = min((k_list[i] if i < n_items else N) + chunk, N + 1)
+            code = U.run_nodes(imu_arrays, nav, filt, model, outs, flags, items, meas, lidx,
+                               (gpar, thr), rstate, recs, recov, counts, store, nodes, dyn, fb, w_raw, C, ctl)
+            if progress is not None and ctl[U.C_KDONE] > reported:
+                progress(int(ctl[U.C_KDONE]) - reported)
+                reported = int(ctl[U.C_KDONE])
+            if code == U.DONE:
+                break
+            if code == U.CHUNK:
+                continue
+            i = int(ctl[U.C_I])
+            if code == U.HANDBACK:
+                k_cur = int(ctl[U.C_KCUR])
+                C_nb = np.empty((3, 3))
+                K.dcm_into(q_nb, C_nb)
+                while i < n_items and k_list[i] == k_cur and (m_list[i] < 0 or not compiled_m[m_list[i]]):
+                    if m_list[i] >= 0:
+                        C_nb = python_item(i, k_cur, C_nb)
+                    i += 1
+                ctl[U.C_I] = i
+                continue
+            if code == U.BAD_INNOVATION:
+                raise FilterDivergence("the innovation is not finite: the filter diverged")
+            if code == U.NOT_PD:
+                raise FilterDivergence("innovation covariance is not positive definite: the filter diverged")
+            if code == U.BAD_ROWS:
+                raise FilterDivergence("the innovation or its variance is not finite and positive: the filter "
+                                       "diverged")
+            check_covariance(P, f"at t = {t_imu[int(ctl[U.C_KCUR])]:.3f} s")
+            raise FilterDivergence(f"covariance lost positiveness at t = {t_imu[int(ctl[U.C_KCUR])]:.3f} s")
+        nr = int(ctl[U.C_NREC])
+        rec_m, rec_i, rec_t, rec_nis, rec_acc, rec_k, rec_off = (a[:nr] for a in recs[:7])
+        rec_nu, rec_sig = recs[7], recs[8]
+
+        def records(mi):
+            sel = np.nonzero(rec_m == mi)[0]
+            if not len(sel):
+                return _innovation_arrays({"t": [], "nu": [], "sigma": [], "nis": [], "accepted": []})
+            dof = rec_k[sel]
+            out = {"t": rec_t[sel], "nis": rec_nis[sel], "accepted": rec_acc[sel], "dof": dof}
+            if (dof == dof[0]).all():
+                at = rec_off[sel][:, None] + np.arange(dof[0])
+                out["nu"], out["sigma"] = rec_nu[at], rec_sig[at]
+            else:
+                for key, flat in (("nu", rec_nu), ("sigma", rec_sig)):
+                    a = np.empty(len(sel), dtype=object)
+                    for q, (o, k) in enumerate(zip(rec_off[sel].tolist(), dof.tolist())):
+                        a[q] = flat[o:o + k].copy()
+                    out[key] = a
+            return out
+
+        nv = int(ctl[U.C_NRECOV])
+        rv_m, rv_i, rv_t, rv_after, rv_for = (a[:nv] for a in recov)
+        found = [{"measurement": measurements[int(rv_m[j])].name, "t": float(rv_t[j]),
+                  "after_rejections": int(rv_after[j]), "rejected_for_s": float(rv_for[j]), "_item": int(rv_i[j])}
+                 for j in range(nv)]
+        return {"records": records, "counts": counts, "recoveries": found}
+
+    specs = _compiled_specs(measurements, lay) if settings.compiled_updates else [None] * len(measurements)
+    use_compiled = not open_loop and not custom_feedback and any(sp is not None for sp in specs)
+    if use_compiled:
+        rec_c = run_compiled()
+    else:
+        specs = [None] * len(measurements)
+        i = 0
+        while i < n_items:
+            k_end = k_list[i]
+            j = i
+            while j < n_items and k_list[j] == k_end:
+                j += 1
+            k_done = int(ctl[U.C_KDONE])
+            if k_end + 1 > k_done:
+                propagate(k_done, k_end + 1, want_store)
+                if progress is not None:
+                    progress(k_end + 1 - k_done)
+                ctl[U.C_KDONE] = k_end + 1
+                w_raw[:] = (imu.dtheta_b[k_end]) / (t_imu[k_end] - t_imu[k_end - 1])
+                predict_aux(float(t_imu[k_end]))
+            if k_end in extra_noise:
+                P[np.diag_indices(n)] += extra_noise[k_end]
+            node = int(ctl[U.C_NODE])
+            if want_store:
+                st_k[node] = k_end
+                st_Pm[node] = P
+                st_Phi[node] = Phi
+                Phi[:] = eye_n
+            C_nb = np.empty((3, 3))
+            K.dcm_into(q_nb, C_nb)
+            for idx in range(i, j):
+                if m_list[idx] >= 0:
+                    C_nb = python_item(idx, k_end, C_nb)
+            check_covariance(P, f"at t = {t_imu[k_end]:.3f} s")
+            if want_store:
+                st_Pp[node] = P
+            write_row(k_end)
+            ctl[U.C_NODE] = node + 1
+            i = j
+        rec_c = None
+    k_done = int(ctl[U.C_KDONE])
     if k_done < N:
         propagate(k_done, N, False)
         if progress is not None:
@@ -471,18 +671,40 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         raise InputError(f"the solution reaches latitude {np.degrees(out_lla[near[0], 0]):.4f} deg at t = "
                          f"{imu.time[near[0]]:.3f} s, within 0.1 deg of a pole, where the NED filter is singular")
     if open_loop or len(dyn_idx):  # estimates that drift between updates: record them at the end too
-        node_rows.append(N - 1)
-        node_aux.append(aux - x[aux_idx] if open_loop else aux.copy())
+        write_row_aux_only = int(ctl[U.C_NROW])
+        node_rows[write_row_aux_only] = N - 1
+        node_aux[write_row_aux_only] = aux - x[aux_idx] if open_loop else aux
+        ctl[U.C_NROW] += 1
+    n_rows = int(ctl[U.C_NROW])
 
     def spread_aux():  # every row holds the estimates of the last node at or before it (they change only at updates)
-        hold = np.searchsorted(np.asarray(node_rows), np.arange(N), side="right") - 1
-        return np.asarray(node_aux).reshape(-1, lay.aux_size)[hold]
+        hold = np.searchsorted(node_rows[:n_rows], np.arange(N), side="right") - 1
+        return node_aux[:n_rows][hold]
 
     def sigma():
         return np.sqrt(np.maximum(out_var, 0.0, out=out_var), out=out_var)
 
+    innovations = {}
+    for mi, m in enumerate(measurements):
+        if specs[mi] is None:
+            innovations[m.name] = _innovation_arrays(innov[m.name])
+        else:
+            innovations[m.name] = rec_c["records"](mi)
+            c, cc = counts[m.name], rec_c["counts"][mi]
+            c["used"] += int(cc[U.N_USED])
+            c["rejected"] += int(cc[U.N_REJECTED])
+            c["skipped"] += int(cc[U.N_SKIPPED])
+            if cc[U.N_ROW_GATED]:
+                c["rows"] = int(cc[U.N_ROWS])
+                c["rows_rejected"] = int(cc[U.N_ROWS_REJECTED])
+    if rec_c is not None:
+        recoveries = sorted(recoveries + rec_c["recoveries"], key=lambda r: r["_item"])
+    for r in recoveries:
+        del r["_item"]
+    store = None
+    if want_store:
+        store = SmootherStore(st_k.tolist(), list(st_Pm), list(st_Pp), list(st_Phi), list(st_dx))
     nav_sol = NavSolution._trusted(imu.time, out_lla, out_v, out_q)
-    innovations = {k: _innovation_arrays(v) for k, v in innov.items()}
     out = FilterOutput(nav_sol, spread_aux, sigma, lay, counts, innovations, settings, store)
     out.recoveries = recoveries
     return out

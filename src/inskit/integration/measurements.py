@@ -20,11 +20,20 @@ A measurement is any object with (:class:`Measurement`):
     where the loosely coupled ``z = P_INS - P_GPS`` with ``H = [I 0 0]`` in
     this sign).
 
+``compiled(layout) -> CompiledSpec`` or ``None`` (optional)
+    The same linearization in compiled form (:mod:`._updates`: a kind code
+    and the data packed per row).  The standard plug-ins here, in
+    :mod:`.aiding` and in :mod:`.tight` offer it, and the filter then runs
+    their updates inside its compiled loop; a plug-in without it (or a
+    subclass with its own ``linearize``) is called through ``linearize``, on
+    the same state.
+
 ``ctx`` is an :class:`UpdateContext`: the navigation state at the IMU sample
 just before the measurement time, how far to extrapolate, the raw and
 corrected body rate, the layout and the current estimates of every block that
 carries one (``ctx.estimate("lever")``).  The filter loop knows nothing about
-GNSS, ZUPT or odometers; new aiding sources plug in here.  Every H is checked
+GNSS, ZUPT or odometers (only the compiled forms of :mod:`._updates` do);
+new aiding sources plug in here.  Every H is checked
 against central finite differences of its own innovation over the fullest
 layout (``tests/test_integration_measurements.py``), using
 :func:`perturbed_context`; :func:`numerical_jacobian` does that check for any
@@ -42,6 +51,7 @@ from .. import earth
 from ..rotations import dcm_from_quat, quat_from_dcm, skew
 from ..types import GnssData
 from . import _kernel as K
+from . import _updates as U
 from .blocks import mounting_dcm
 from .layout import StateLayout
 
@@ -165,6 +175,14 @@ def _template(layout, rows, block):
     return H.copy()
 
 
+def compiled_form_applies(meas, cls, gating="vector") -> bool:
+    """Whether ``meas`` updates by ``cls``'s own ``linearize``, gated as its
+    compiled form (:mod:`._updates`) is, so that this form says the same: a
+    subclass with its own ``linearize``, or a measurement switched to the
+    other gating, keeps the Python path."""
+    return type(meas).linearize is cls.linearize and getattr(meas, "gating", "vector") == gating
+
+
 def _sensor_rate_columns(H, ctx, M):
     """Add ``M d(omega_ib_b)``'s columns: ``omega = (raw - b_g) / (1 + s_g)``,
     so ``d omega / d b_g = -I / (1 + s_g)`` and ``d omega / d s_g =
@@ -244,6 +262,13 @@ class GnssPosition:
             H[:, lay.slice("time_offset")] = v_ant[:, None]
         return nu, H, np.diag(self.sigma[row] ** 2)
 
+    def compiled(self, layout):
+        """:meth:`linearize` in compiled form (:mod:`._updates`): per row the
+        fix and its sigmas."""
+        if not compiled_form_applies(self, GnssPosition):
+            return None
+        return U.spec(U.KIND_GNSS_POS, 3, np.column_stack([self.gnss.lla, self.sigma]), self.lever_arm_b)
+
 
 class GnssVelocity:
     """GNSS velocity of the antenna, ``h = v_n + C_nb (omega_ib_b x l_b)``.
@@ -294,6 +319,12 @@ class GnssVelocity:
             H[:, lay.slice("lever")] = C @ skew(w)
         return nu, H, np.diag(self.sigma[row] ** 2)
 
+    def compiled(self, layout):
+        """:meth:`linearize` in compiled form (:mod:`._updates`)."""
+        if not compiled_form_applies(self, GnssVelocity):
+            return None
+        return U.spec(U.KIND_GNSS_VEL, 3, np.column_stack([self.gnss.v_n, self.sigma]), self.lever_arm_b)
+
 
 class _GridMeasurement:
     """A pseudo-measurement on a regular time grid inside given intervals."""
@@ -319,6 +350,12 @@ class ZeroVelocity(_GridMeasurement):
 
     def linearize(self, ctx: UpdateContext, row):
         return ctx.v_n.copy(), _template(ctx.layout, 3, "vel"), np.eye(3) * self.sigma**2
+
+    def compiled(self, layout):
+        """:meth:`linearize` in compiled form (:mod:`._updates`)."""
+        if not compiled_form_applies(self, ZeroVelocity):
+            return None
+        return U.spec(U.KIND_ZUPT, 3, np.empty((len(self._t), 0)), self.sigma)
 
 
 def vehicle_axes(ctx: UpdateContext):
@@ -360,6 +397,12 @@ class NonHolonomic(_GridMeasurement):
         H[:, s.start] = (d_p @ v_b)[1:3]
         H[:, s.start + 1] = (d_y @ v_b)[1:3]
         return (C_vb @ v_b)[1:3], H, np.eye(2) * self.sigma**2
+
+    def compiled(self, layout):
+        """:meth:`linearize` in compiled form (:mod:`._updates`)."""
+        if not compiled_form_applies(self, NonHolonomic):
+            return None
+        return U.spec(U.KIND_NHC, 2, np.empty((len(self._t), 0)), self.sigma)
 
 
 def numerical_jacobian(meas, ctx: UpdateContext, row=0, steps=None):

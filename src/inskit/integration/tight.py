@@ -48,7 +48,8 @@ from ..errors import InputError
 from ..gnss.constants import OMEGA_E_GPS as OMEGA_E_GNSS
 from ..gnss.ephemeris import sagnac_rotate
 from ..rotations import skew
-from .measurements import UpdateContext, _sensor_rate_columns
+from . import _updates as U
+from .measurements import UpdateContext, _sensor_rate_columns, compiled_form_applies
 
 
 def _frame_rotation(lla, C_en, w_n):
@@ -114,6 +115,25 @@ class _RangeRows:
     def satellites(self, row):
         """Names of the satellites of update ``row`` (in the order of its rows)."""
         return self._sats[self._start[row]:self._start[row + 1]].tolist()
+
+    def _compiled(self, layout, kind, cls):
+        """The compiled form (:mod:`._updates`): per table row the rotated
+        satellite state, value, sigma and the state and aux index of its
+        system's time offset (pseudoranges only), the epochs' row ranges."""
+        if not compiled_form_applies(self, cls, "row") or layout.aux_slice("clock") is None:
+            return None  # without a clock the Python path says what is missing
+        n = len(self._z)
+        data = np.empty((n, U.RANGE_WIDTH))
+        data[:, 0:3], data[:, 3:6], data[:, 6], data[:, 7] = self._rs, self._vs, self._z, self._s
+        data[:, 8:10] = -1.0
+        if kind == U.KIND_PSEUDORANGE:
+            for system in set(self._system.tolist()):
+                b = f"isb_{system}"
+                if b in layout and layout.aux_slice(b) is not None:
+                    m = self._system == system
+                    data[m, 8], data[m, 9] = layout.slice(b).start, layout.aux_slice(b).start
+        k = int(np.diff(self._start).max(initial=1))
+        return U.spec(kind, max(k, 1), data, self.lever_arm_b, index=self._start, per_row=True)
 
     def _antenna(self, ctx: UpdateContext, tau):
         """Antenna ECEF position, ECEF velocity, C_en and the lever-arm pieces."""
@@ -202,6 +222,10 @@ class Pseudorange(_RangeRows):
         nu = rng + clock - self._z[a:b]
         return nu, H, np.diag(self._s[a:b] ** 2)
 
+    def compiled(self, layout):
+        """:meth:`linearize` in compiled form (:mod:`._updates`)."""
+        return self._compiled(layout, U.KIND_PSEUDORANGE, Pseudorange)
+
 
 class PseudorangeRate(_RangeRows):
     """Pseudorange rate (Doppler) of each satellite, gated per row (see the
@@ -241,6 +265,10 @@ class PseudorangeRate(_RangeRows):
         clock = self._clock_columns(ctx, H, self._system[a:b], tau, rate=True)
         nu = rr + clock - self._z[a:b]
         return nu, H, np.diag(self._s[a:b] ** 2)
+
+    def compiled(self, layout):
+        """:meth:`linearize` in compiled form (:mod:`._updates`)."""
+        return self._compiled(layout, U.KIND_RANGE_RATE, PseudorangeRate)
 
 
 def clock_from_ranges(table, row_epoch, r_e, v_e=None, system=None):

@@ -1,0 +1,1083 @@
+"""Compiled updates of the standard measurements, driven from a compiled loop.
+
+The filter loop of :mod:`.engine` asks every measurement for the protocol's
+``linearize(ctx, row)`` and runs the update in Python: 30-45 us per update,
+three quarters of a drive's filter time at 10 Hz ZUPT and NHC.  The standard
+measurements (GNSS position and velocity, ZUPT, NHC, odometer, GNSS speed
+and course, pseudorange and range rate) also offer ``compiled(layout)``: a
+:class:`CompiledSpec` (a kind code, the number of innovation rows, their
+data packed per row, a few parameters).  :func:`run_nodes` then runs, for a
+whole stretch of update nodes, what the Python loop does per node (propagate
+to the node, carry the evolving estimates, the gap noise, the smoother's
+store; then per measurement: linearize by kind, the recovery from a lost
+state, the chi-square gate of the vector or of each row, the Joseph update,
+the closed-loop feedback, the innovation record; then the covariance check
+and the node's output row), and hands back to Python only
+
+* at an item of a measurement without a compiled form (a user's plug-in),
+  which Python then updates on the same state before the loop goes on;
+* every ``ctl[C_KSTOP]`` rows, for the progress callback;
+* on a divergence, which Python reports with the message of its own path.
+
+Each kind's linearization is the formula of its class's ``linearize`` (the
+class docstrings give H), written out element by element; the update is the
+Joseph form ``(I - K H) P (I - K H)^T + K R K^T`` of
+:func:`inskit.filters.kalman.joseph_update` (Bucy & Joseph 1968; Groves 2013
+eq. 3.58), expanded into one pass over the upper triangle (:func:`_joseph`)
+with ``H P H^T`` over the non-zero columns of H only: O(n^2 k) instead of
+O(n^3).  Both paths are the same mathematics in a different order of
+rounding; ``tests/test_integration_updates.py`` compares them kind by kind
+and over whole runs with rejections and recoveries.
+
+The open-loop scheme and blocks with their own feedback stay on the Python
+path (:func:`.engine.run_filter` decides).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+from numba import njit
+
+from .. import earth
+from . import _kernel as K
+
+KIND_ZUPT, KIND_NHC, KIND_GNSS_POS, KIND_GNSS_VEL, KIND_ODOMETER, KIND_SPEED_COURSE = 0, 1, 2, 3, 4, 5
+KIND_PSEUDORANGE, KIND_RANGE_RATE = 6, 7
+#: rows of the fixed-size kinds' updates, at most
+KMAX = 3
+#: columns of a range table row: satellite position (3) and velocity (3) in the ECEF frame of reception,
+#: measured value, sigma, state and aux index of the row's system time offset (-1: none)
+RANGE_WIDTH = 10
+# layout index array (layout_index): state and aux starts of the blocks found by name (-1 if absent)
+L_X_LEVER, L_A_LEVER, L_X_TOFF, L_A_TOFF, L_X_ODO, L_A_ODO, L_X_CLOCK, L_A_CLOCK = 0, 1, 2, 3, 4, 5, 6, 7
+L_X_MOUNT, L_A_MOUNT = 8, 9
+# loop state (ctl) of run_nodes
+C_I, C_KDONE, C_IN_NODE, C_KCUR, C_NODE, C_NROW, C_NREC, C_NRECOV, C_KSTOP, C_NFLAT = 0, 1, 2, 3, 4, 5, 6, 7, 8, 9
+C_SIZE = 10
+# per-measurement counts of run_nodes
+N_USED, N_REJECTED, N_SKIPPED, N_ROWS, N_ROWS_REJECTED, N_ROW_GATED = 0, 1, 2, 3, 4, 5
+N_COUNTS = 6
+# return codes of run_nodes
+DONE, HANDBACK, CHUNK, BAD_INNOVATION, NOT_PD, LOST_PD, BAD_ROWS = 0, 1, 2, 3, 4, 5, 6
+
+
+class CompiledSpec(NamedTuple):
+    """A measurement's compiled form.
+
+    Attributes
+    ----------
+    kind : int
+        One of the ``KIND_*`` codes.
+    k : int
+        Rows of every update; for a kind with ``index``, the most rows of one
+        update.
+    data : (rows, w) float ndarray
+        Per own data row (the protocol's ``row``): what the kind reads; with
+        ``index``, per row of the table instead.
+    par : (p,) float ndarray
+        Fixed parameters (lever arm, sigmas).
+    index : (rows + 1,) int64 ndarray or None
+        Update ``row`` reads the table rows ``index[row]:index[row + 1]``
+        (one per satellite; an empty range skips the update).
+    per_row : bool
+        Gate each row on its own (the protocol's ``gating = "row"``).
+    """
+
+    kind: int
+    k: int
+    data: np.ndarray
+    par: np.ndarray
+    index: np.ndarray | None = None
+    per_row: bool = False
+
+
+def spec(kind, k, data, par, index=None, per_row=False):
+    """A :class:`CompiledSpec` with its arrays made contiguous float64 (and
+    int64 for ``index``)."""
+    data = np.ascontiguousarray(data, dtype=float)
+    if data.ndim != 2:
+        data = data.reshape(len(data), -1)
+    if index is not None:
+        index = np.ascontiguousarray(index, dtype=np.int64)
+    return CompiledSpec(int(kind), int(k), data, np.ascontiguousarray(np.atleast_1d(par), dtype=float).ravel(),
+                        index, bool(per_row))
+
+
+def layout_index(layout):
+    """int64 ``[x_lever, a_lever, x_time_offset, a_time_offset, x_odo_scale,
+    a_odo_scale, x_clock, a_clock, x_mounting, a_mounting]``: state start
+    (when the layout holds the block) and aux start (when the block carries
+    an estimate) of the blocks the measurements find by name; -1 if absent."""
+    out = []
+    for name in ("lever", "time_offset", "odo_scale", "clock", "mounting"):
+        s, a = layout.slice(name), layout.aux_slice(name)
+        out += [-1 if s is None else s.start, -1 if a is None else a.start]
+    return np.array(out, dtype=np.int64)
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _nhc_mounted(v_n, C, pitch, yaw, Sk, xm, nu, H):
+    """The non-holonomic rows in the vehicle's axes, ``v_v = C_vb C_bn v_n``
+    with ``C_vb`` of :func:`.blocks.mounting_dcm` (written out: the same
+    matrix and derivatives), as :meth:`.measurements.NonHolonomic.linearize`
+    with a ``mounting`` block: ``H_vel = C_vn[1:3]``, ``H_att = -(C_vn [v_n
+    x])[1:3]``, ``H_mounting = [dC/dpitch v_b, dC/dyaw v_b][1:3]``."""
+    cp, sp, cy, sy = np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
+    Cv = np.array([[cp * cy, cp * sy, -sp], [-sy, cy, 0.0], [sp * cy, sp * sy, cp]])
+    Dp = np.array([[-sp * cy, -sp * sy, -cp], [0.0, 0.0, 0.0], [cp * cy, cp * sy, -sp]])
+    Dy = np.array([[-cp * sy, cp * cy, 0.0], [-cy, -sy, 0.0], [-sp * sy, sp * cy, 0.0]])
+    v_b = np.empty(3)
+    for i in range(3):
+        v_b[i] = C[0, i] * v_n[0] + C[1, i] * v_n[1] + C[2, i] * v_n[2]
+    for r in range(2):
+        b = r + 1
+        cvn = np.empty(3)
+        for j in range(3):  # C_vn[b, j] = sum_i C_vb[b, i] C_bn[i, j], C_bn[i, j] = C[j, i]
+            cvn[j] = Cv[b, 0] * C[j, 0] + Cv[b, 1] * C[j, 1] + Cv[b, 2] * C[j, 2]
+        nu[r] = Cv[b, 0] * v_b[0] + Cv[b, 1] * v_b[1] + Cv[b, 2] * v_b[2]
+        for j in range(3):
+            H[r, K.V0 + j] = cvn[j]
+            H[r, K.T0 + j] = -(cvn[0] * Sk[0, j] + cvn[1] * Sk[1, j] + cvn[2] * Sk[2, j])
+        H[r, xm] = Dp[b, 0] * v_b[0] + Dp[b, 1] * v_b[1] + Dp[b, 2] * v_b[2]
+        H[r, xm + 1] = Dy[b, 0] * v_b[0] + Dy[b, 1] * v_b[1] + Dy[b, 2] * v_b[2]
+
+
+# --- linearization by kind ------------------------------------------------------------
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _body_rate(w_raw, aux, kidx, w, sf):
+    """``sf = 1 + s_g`` and the corrected rate ``w = (raw - b_g) / sf``
+    (:attr:`.measurements.UpdateContext.omega_ib_b`)."""
+    abg, asg = kidx[K.A_BG], kidx[K.A_SG]
+    for i in range(3):
+        sf[i] = 1.0 + aux[asg + i] if asg >= 0 else 1.0
+        b = w_raw[i] - aux[abg + i] if abg >= 0 else w_raw[i]
+        w[i] = b / sf[i]
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _rate_columns(H, k, M, sf, w, kidx):
+    """``M d(omega)`` into the gyro bias and scale-factor columns
+    (:func:`.measurements._sensor_rate_columns`)."""
+    xbg, xsg = kidx[K.X_BG], kidx[K.X_SG]
+    for r in range(k):
+        for j in range(3):
+            if xbg >= 0:
+                H[r, xbg + j] += -M[r, j] / sf[j]
+            if xsg >= 0:
+                H[r, xsg + j] += -M[r, j] * (w[j] / sf[j])
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _skew_into(v, S):
+    S[0, 0], S[0, 1], S[0, 2] = 0.0, -v[2], v[1]
+    S[1, 0], S[1, 1], S[1, 2] = v[2], 0.0, -v[0]
+    S[2, 0], S[2, 1], S[2, 2] = -v[1], v[0], 0.0
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _mat3_vec(C, v, out):
+    for i in range(3):
+        out[i] = C[i, 0] * v[0] + C[i, 1] * v[1] + C[i, 2] * v[2]
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _cross_into(a, b, out):
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _lever_of(aux, lidx, par, lev):
+    a = lidx[L_A_LEVER]
+    for i in range(3):
+        lev[i] = aux[a + i] if a >= 0 else par[i]
+
+
+@njit(cache=True, error_model="numpy")
+def linearize(kind, d, par, dt, lla, v_n, C, w_raw, aux, kidx, lidx, nu, H, R, vw, mw):
+    """Innovation ``nu`` (k,), ``H`` (k, n) and ``R`` (k, k) of one update of
+    a compiled kind, written into the first k rows of the scratch arrays
+    (``H`` and ``R`` zeroed first).  ``d`` is the measurement's data row;
+    ``vw`` (8, 3) and ``mw`` (2, 3, 3) are scratch.  Returns False when the
+    update is skipped (the protocol's None)."""
+    n = H.shape[1]
+    for r in range(KMAX):
+        nu[r] = 0.0
+        for j in range(n):
+            H[r, j] = 0.0
+        for j in range(KMAX):
+            R[r, j] = 0.0
+    w, sf, lev, wl, tmp, v3, c3 = vw[0], vw[1], vw[2], vw[3], vw[4], vw[5], vw[6]
+    Sk, M = mw[0], mw[1]
+    if kind == KIND_ZUPT:
+        s2 = par[0] * par[0]
+        for i in range(3):
+            nu[i] = v_n[i]
+            H[i, K.V0 + i] = 1.0
+            R[i, i] = s2
+        return True
+    if kind == KIND_NHC:
+        # v_b = C^T v_n; rows 1, 2: H_vel = C_bn[1:3], H_att = -(C_bn [v_n x])[1:3]
+        _skew_into(v_n, Sk)
+        s2 = par[0] * par[0]
+        xm = lidx[L_X_MOUNT]
+        if xm >= 0:  # in the vehicle's axes (NonHolonomic.linearize with a mounting block)
+            _nhc_mounted(v_n, C, aux[lidx[L_A_MOUNT]], aux[lidx[L_A_MOUNT] + 1], Sk, xm, nu, H)
+            R[0, 0] = s2
+            R[1, 1] = s2
+            return True
+        for r in range(2):
+            b = r + 1
+            nu[r] = C[0, b] * v_n[0] + C[1, b] * v_n[1] + C[2, b] * v_n[2]
+            for j in range(3):
+                H[r, K.V0 + j] = C[j, b]
+                H[r, K.T0 + j] = -(C[0, b] * Sk[0, j] + C[1, b] * Sk[1, j] + C[2, b] * Sk[2, j])
+            R[r, r] = s2
+        return True
+    if kind == KIND_GNSS_POS:
+        # d: lla (3), sigma (3); par: lever arm (3)
+        _lever_of(aux, lidx, par, lev)
+        atoff = lidx[L_A_TOFF]
+        tau = dt + (aux[atoff] if atoff >= 0 else 0.0)
+        for i in range(3):
+            H[i, K.P0 + i] = 1.0
+            H[i, K.V0 + i] = tau
+        v_ant = v3
+        cl = c3
+        for i in range(3):
+            cl[i] = 0.0
+        xlev = lidx[L_X_LEVER]
+        if lev[0] != 0.0 or lev[1] != 0.0 or lev[2] != 0.0 or xlev >= 0:
+            _body_rate(w_raw, aux, kidx, w, sf)
+            _cross_into(w, lev, wl)
+            cwl = vw[7]
+            _mat3_vec(C, wl, cwl)
+            _mat3_vec(C, lev, cl)
+            for i in range(3):
+                v_ant[i] = v_n[i] + cwl[i]
+                tmp[i] = cl[i] + cwl[i] * tau
+            _skew_into(tmp, Sk)
+            for i in range(3):
+                for j in range(3):
+                    H[i, K.T0 + j] = Sk[i, j]
+            _skew_into(lev, Sk)
+            for i in range(3):
+                for j in range(3):
+                    M[i, j] = -(C[i, 0] * Sk[0, j] + C[i, 1] * Sk[1, j] + C[i, 2] * Sk[2, j]) * tau
+            _rate_columns(H, 3, M, sf, w, kidx)
+            if xlev >= 0:
+                _skew_into(w, Sk)
+                for i in range(3):
+                    for j in range(3):
+                        H[i, xlev + j] = C[i, j] + (C[i, 0] * Sk[0, j] + C[i, 1] * Sk[1, j]
+                                                    + C[i, 2] * Sk[2, j]) * tau
+        else:
+            for i in range(3):
+                v_ant[i] = v_n[i]
+        # ned_difference(lla, fix)
+        lat, h = d[0], d[2]
+        s = math.sin(lat)
+        wq = math.sqrt(1.0 - earth.E2 * s * s)
+        rn = earth.A * (1.0 - earth.E2) / (wq * wq * wq) + h
+        re = earth.A / wq + h
+        dlon = (lla[1] - d[1] + math.pi) % (2.0 * math.pi) - math.pi
+        tmp[0] = (lla[0] - lat) * rn
+        tmp[1] = dlon * re * math.cos(lat)
+        tmp[2] = -(lla[2] - h)
+        for i in range(3):
+            nu[i] = tmp[i] + cl[i] + v_ant[i] * tau
+            R[i, i] = d[3 + i] * d[3 + i]
+        if atoff >= 0:
+            xt = lidx[L_X_TOFF]
+            for i in range(3):
+                H[i, xt] = v_ant[i]
+        return True
+    if kind == KIND_GNSS_VEL or kind == KIND_SPEED_COURSE:
+        # GNSS velocity, d: v_n (3), sigma (3); speed and course, d: speed, min speed, v_ne (2), P_ne (4)
+        if kind == KIND_SPEED_COURSE and d[0] < d[1]:
+            return False
+        _lever_of(aux, lidx, par, lev)
+        _body_rate(w_raw, aux, kidx, w, sf)
+        _cross_into(w, lev, wl)
+        lever_v = v3
+        _mat3_vec(C, wl, lever_v)
+        kk = 3 if kind == KIND_GNSS_VEL else 2
+        _skew_into(lever_v, Sk)
+        for i in range(kk):
+            H[i, K.V0 + i] = 1.0
+            for j in range(3):
+                H[i, K.T0 + j] = Sk[i, j]
+        _skew_into(lev, Sk)
+        for i in range(3):
+            for j in range(3):
+                M[i, j] = -(C[i, 0] * Sk[0, j] + C[i, 1] * Sk[1, j] + C[i, 2] * Sk[2, j])
+        _rate_columns(H, kk, M, sf, w, kidx)
+        xlev = lidx[L_X_LEVER]
+        if xlev >= 0:
+            _skew_into(w, Sk)
+            for i in range(kk):
+                for j in range(3):
+                    H[i, xlev + j] = C[i, 0] * Sk[0, j] + C[i, 1] * Sk[1, j] + C[i, 2] * Sk[2, j]
+        if kind == KIND_GNSS_VEL:
+            for i in range(3):
+                nu[i] = v_n[i] + lever_v[i] - d[i]
+                R[i, i] = d[3 + i] * d[3 + i]
+        else:
+            for i in range(2):
+                nu[i] = (v_n[i] + lever_v[i]) - d[2 + i]
+                R[i, 0], R[i, 1] = d[4 + 2 * i], d[5 + 2 * i]
+        return True
+    if kind == KIND_ODOMETER:
+        # d: speed, sigma; par: lever arm (3), with_nhc, nhc sigma
+        kk = 3 if par[3] != 0.0 else 1
+        aodo = lidx[L_A_ODO]
+        g = 1.0 + aux[aodo] if aodo >= 0 else 1.0
+        for i in range(3):
+            lev[i] = par[i]
+        v_o = v3
+        for i in range(3):
+            v_o[i] = C[0, i] * v_n[0] + C[1, i] * v_n[1] + C[2, i] * v_n[2]
+        _skew_into(v_n, Sk)
+        for r in range(kk):
+            gr = g if r == 0 else 1.0
+            for j in range(3):
+                H[r, K.V0 + j] = gr * C[j, r]
+                H[r, K.T0 + j] = -gr * (C[0, r] * Sk[0, j] + C[1, r] * Sk[1, j] + C[2, r] * Sk[2, j])
+        if lev[0] != 0.0 or lev[1] != 0.0 or lev[2] != 0.0:
+            _body_rate(w_raw, aux, kidx, w, sf)
+            _cross_into(w, lev, wl)
+            for i in range(3):
+                v_o[i] = v_o[i] + wl[i]
+            _skew_into(lev, Sk)
+            for r in range(kk):
+                gr = g if r == 0 else 1.0
+                for j in range(3):
+                    M[r, j] = -gr * Sk[r, j]
+            _rate_columns(H, kk, M, sf, w, kidx)
+        if aodo >= 0:
+            H[0, lidx[L_X_ODO]] = v_o[0]
+        for r in range(kk):
+            gr = g if r == 0 else 1.0
+            nu[r] = gr * v_o[r] - (d[0] if r == 0 else 0.0)
+        R[0, 0] = d[1] * d[1]
+        for r in range(1, kk):
+            R[r, r] = par[4] * par[4]
+        return True
+    return False
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _frame_rotation_into(lat, lon, h, C_en, w_n, out):
+    """:func:`.tight._frame_rotation`: ``d (C_en w_n) / d p_n`` (3, 3)."""
+    rn, re = earth.principal_radii(lat, h)
+    s, cl = math.sin(lat), math.cos(lat)
+    so, co = math.sin(lon), math.cos(lon)
+    for i in range(3):
+        out[i, 0] = (C_en[i, 2] * w_n[0] - C_en[i, 0] * w_n[2]) / rn
+        out[i, 2] = 0.0
+    out[0, 1] = (s * so * w_n[0] - co * w_n[1] + cl * so * w_n[2]) / (re * cl)
+    out[1, 1] = (-s * co * w_n[0] - so * w_n[1] - cl * co * w_n[2]) / (re * cl)
+    out[2, 1] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def linearize_ranges(kind, D, par, dt, lla, v_n, C, w_raw, aux, kidx, lidx, nu, H, R, Mk, vw, mw):
+    """:meth:`.tight.Pseudorange.linearize` (``KIND_PSEUDORANGE``) or
+    :meth:`.tight.PseudorangeRate.linearize` (``KIND_RANGE_RATE``) of the
+    k satellites in the rows of ``D`` (k, :data:`RANGE_WIDTH`), into the
+    first k rows of the scratch arrays; ``Mk`` (>= k, 3), ``vw`` (14, 3)
+    and ``mw`` (6, 3, 3) are scratch."""
+    k = D.shape[0]
+    n = H.shape[1]
+    for r in range(k):
+        nu[r] = 0.0
+        for j in range(n):
+            H[r, j] = 0.0
+        for j in range(k):
+            R[r, j] = 0.0
+    w, sf, lev, wl, v_a, cl, c_wl, arm, r_a, v_ae, u_e, u_n = (vw[0], vw[1], vw[2], vw[3], vw[4], vw[5], vw[6],
+                                                              vw[7], vw[8], vw[9], vw[10], vw[11])
+    g_n, a_t = vw[12], vw[13]
+    C_en, dr_dp, dv_dp, Sk, B1, B2 = mw[0], mw[1], mw[2], mw[3], mw[4], mw[5]
+    tau = dt
+    lat, lon, h = lla[0], lla[1], lla[2]
+    sl, cla, so, co = math.sin(lat), math.cos(lat), math.sin(lon), math.cos(lon)
+    C_en[0, 0], C_en[0, 1], C_en[0, 2] = -sl * co, -so, -cla * co
+    C_en[1, 0], C_en[1, 1], C_en[1, 2] = -sl * so, co, -cla * so
+    C_en[2, 0], C_en[2, 1], C_en[2, 2] = cla, 0.0, -sl
+    _lever_of(aux, lidx, par, lev)
+    _body_rate(w_raw, aux, kidx, w, sf)
+    _cross_into(w, lev, wl)
+    _mat3_vec(C, wl, c_wl)
+    _mat3_vec(C, lev, cl)
+    for i in range(3):
+        v_a[i] = v_n[i] + c_wl[i]
+        arm[i] = cl[i] + v_a[i] * tau
+    _, re0 = earth.principal_radii(lat, 0.0)
+    r_a[0] = (re0 + h) * cla * co
+    r_a[1] = (re0 + h) * cla * so
+    r_a[2] = (re0 * (1.0 - earth.E2) + h) * sl
+    for i in range(3):
+        r_a[i] += C_en[i, 0] * arm[0] + C_en[i, 1] * arm[1] + C_en[i, 2] * arm[2]
+    _mat3_vec(C_en, v_a, v_ae)
+    _frame_rotation_into(lat, lon, h, C_en, arm, dr_dp)
+    for i in range(3):
+        for j in range(3):
+            dr_dp[i, j] += C_en[i, j]
+    _frame_rotation_into(lat, lon, h, C_en, v_a, dv_dp)
+    xlev = lidx[L_X_LEVER]
+    lever_terms = lev[0] != 0.0 or lev[1] != 0.0 or lev[2] != 0.0 or xlev >= 0
+    # B1 = -C [l x] (the rate's lever term), B2 = C (I + [w x] tau); the range rate's C [w x] is B2's
+    _skew_into(lev, Sk)
+    for i in range(3):
+        for j in range(3):
+            B1[i, j] = -(C[i, 0] * Sk[0, j] + C[i, 1] * Sk[1, j] + C[i, 2] * Sk[2, j])
+    _skew_into(w, Sk)
+    for i in range(3):
+        for j in range(3):
+            B2[i, j] = C[i, 0] * Sk[0, j] + C[i, 1] * Sk[1, j] + C[i, 2] * Sk[2, j]
+    xc, ac = lidx[L_X_CLOCK], lidx[L_A_CLOCK]
+    rate = kind == KIND_RANGE_RATE
+    for i in range(3):
+        a_t[i] = cl[i] + c_wl[i] * tau
+    for r in range(k):
+        d0, d1, d2 = r_a[0] - D[r, 0], r_a[1] - D[r, 1], r_a[2] - D[r, 2]
+        rng = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+        u_e[0], u_e[1], u_e[2] = d0 / rng, d1 / rng, d2 / rng
+        for j in range(3):
+            u_n[j] = u_e[0] * C_en[0, j] + u_e[1] * C_en[1, j] + u_e[2] * C_en[2, j]
+        if not rate:
+            for j in range(3):
+                H[r, K.P0 + j] = u_e[0] * dr_dp[0, j] + u_e[1] * dr_dp[1, j] + u_e[2] * dr_dp[2, j]
+                H[r, K.V0 + j] = u_n[j] * tau
+            _skew_into(a_t, Sk)
+            for j in range(3):
+                H[r, K.T0 + j] = u_n[0] * Sk[0, j] + u_n[1] * Sk[1, j] + u_n[2] * Sk[2, j]
+            if lever_terms:
+                for j in range(3):
+                    Mk[r, j] = (u_n[0] * B1[0, j] + u_n[1] * B1[1, j] + u_n[2] * B1[2, j]) * tau
+                if xlev >= 0:
+                    for j in range(3):
+                        H[r, xlev + j] = (u_n[0] * C[0, j] + u_n[1] * C[1, j] + u_n[2] * C[2, j]) + (
+                            u_n[0] * B2[0, j] + u_n[1] * B2[1, j] + u_n[2] * B2[2, j]) * tau
+            extra = aux[ac] + aux[ac + 1] * tau
+            H[r, xc] = 1.0
+            H[r, xc + 1] = tau
+            isb_x, isb_a = int(D[r, 8]), int(D[r, 9])
+            if isb_x >= 0:
+                extra += aux[isb_a]
+                H[r, isb_x] = 1.0
+            nu[r] = rng + extra - D[r, 6]
+        else:
+            dv0, dv1, dv2 = v_ae[0] - D[r, 3], v_ae[1] - D[r, 4], v_ae[2] - D[r, 5]
+            rr = u_e[0] * dv0 + u_e[1] * dv1 + u_e[2] * dv2
+            G0, G1, G2 = (dv0 - u_e[0] * rr) / rng, (dv1 - u_e[1] * rr) / rng, (dv2 - u_e[2] * rr) / rng
+            for j in range(3):
+                g_n[j] = G0 * C_en[0, j] + G1 * C_en[1, j] + G2 * C_en[2, j]
+                H[r, K.P0 + j] = (G0 * dr_dp[0, j] + G1 * dr_dp[1, j] + G2 * dr_dp[2, j]) + (
+                    u_e[0] * dv_dp[0, j] + u_e[1] * dv_dp[1, j] + u_e[2] * dv_dp[2, j])
+                H[r, K.V0 + j] = u_n[j] + g_n[j] * tau
+            _skew_into(c_wl, Sk)
+            for j in range(3):
+                H[r, K.T0 + j] = u_n[0] * Sk[0, j] + u_n[1] * Sk[1, j] + u_n[2] * Sk[2, j]
+            _skew_into(a_t, Sk)
+            for j in range(3):
+                H[r, K.T0 + j] += g_n[0] * Sk[0, j] + g_n[1] * Sk[1, j] + g_n[2] * Sk[2, j]
+            if lever_terms:
+                for j in range(3):
+                    acc = 0.0
+                    for i in range(3):
+                        acc += (u_n[i] + g_n[i] * tau) * B1[i, j]
+                    Mk[r, j] = acc
+                if xlev >= 0:
+                    for j in range(3):
+                        H[r, xlev + j] = (u_n[0] * B2[0, j] + u_n[1] * B2[1, j] + u_n[2] * B2[2, j]) + (
+                            (g_n[0] * C[0, j] + g_n[1] * C[1, j] + g_n[2] * C[2, j])
+                            + (g_n[0] * B2[0, j] + g_n[1] * B2[1, j] + g_n[2] * B2[2, j]) * tau)
+            H[r, xc + 1] = 1.0
+            nu[r] = rr + aux[ac + 1] - D[r, 6]
+        R[r, r] = D[r, 7] * D[r, 7]
+    if lever_terms:
+        _rate_columns(H, k, Mk, sf, w, kidx)
+    return True
+
+
+# --- update ---------------------------------------------------------------------------
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _innovation_stats(P, nu, H, R, k, cols, nc, PHt, S, L, w):
+    """``P H^T``, ``S = H P H^T + R``, its Cholesky factor and the NIS, over
+    the ``nc`` non-zero columns of H.  Returns ``(ok, nis)``; ``ok`` False
+    when S is not positive definite."""
+    n = P.shape[0]
+    for i in range(n):
+        for r in range(k):
+            acc = 0.0
+            for c in range(nc):
+                j = cols[c]
+                acc += P[i, j] * H[r, j]
+            PHt[i, r] = acc
+    for r in range(k):
+        for s in range(k):
+            acc = 0.0
+            for c in range(nc):
+                j = cols[c]
+                acc += H[r, j] * PHt[j, s]
+            S[r, s] = acc + R[r, s]
+    for r in range(k):
+        for s in range(r + 1):
+            acc = S[r, s]
+            for m in range(s):
+                acc -= L[r, m] * L[s, m]
+            if r == s:
+                if not acc > 0.0 or not math.isfinite(acc):
+                    return False, 0.0
+                L[r, r] = math.sqrt(acc)
+            else:
+                L[r, s] = acc / L[s, s]
+    nis = 0.0
+    for r in range(k):
+        acc = nu[r]
+        for m in range(r):
+            acc -= L[r, m] * w[m]
+        w[r] = acc / L[r, r]
+        nis += w[r] * w[r]
+    return True, nis
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True, fastmath={"contract"})
+def _joseph(P, nu, S, k, PHt, L, Kg, M, y, dx, KT, HP):
+    """Gain ``K = P H^T S^-1``, correction ``dx = K nu`` and the Joseph-form
+    posterior in place.
+
+    ``(I - K H) P (I - K H)^T + K R K^T = P - K (H P) - (P H^T - K S) K^T``
+    for any K (expand and use ``S = H P H^T + R``), so the Joseph form costs
+    one pass over the upper triangle with 2k terms (``H P = (P H^T)^T``, P
+    being symmetric), mirrored; ``M = P H^T - K S`` is the rounding-level
+    term that keeps the result second order in an error of K.  ``KT`` and
+    ``HP`` (k, n) hold K and H P by rows for the inner loops."""
+    n = P.shape[0]
+    for i in range(n):
+        for r in range(k):
+            acc = PHt[i, r]
+            for m in range(r):
+                acc -= L[r, m] * y[m]
+            y[r] = acc / L[r, r]
+        for r in range(k - 1, -1, -1):
+            acc = y[r]
+            for m in range(r + 1, k):
+                acc -= L[m, r] * Kg[i, m]
+            Kg[i, r] = acc / L[r, r]
+        acc = 0.0
+        for r in range(k):
+            acc += Kg[i, r] * nu[r]
+            KT[r, i] = Kg[i, r]
+            HP[r, i] = PHt[i, r]
+        dx[i] = acc
+        for r in range(k):
+            acc = PHt[i, r]
+            for s in range(k):
+                acc -= Kg[i, s] * S[s, r]
+            M[i, r] = acc
+    for i in range(n):
+        for r in range(k):
+            a, b = Kg[i, r], M[i, r]
+            for j in range(i, n):
+                P[i, j] -= a * HP[r, j] + b * KT[r, j]
+    for i in range(n):
+        for j in range(i + 1, n):
+            P[j, i] = P[i, j]
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _nis_inflated(P, nu, H, R, k, alpha, Pa, S, L, w):
+    """NIS of ``nu`` with the navigation rows and columns (0..8) of P scaled
+    by ``sqrt(alpha)`` each (written into ``Pa``)."""
+    n = P.shape[0]
+    sa = math.sqrt(alpha)
+    for i in range(n):
+        di = sa if i < 9 else 1.0
+        for j in range(n):
+            dj = sa if j < 9 else 1.0
+            Pa[i, j] = P[i, j] * di * dj
+    for r in range(k):
+        for s in range(k):
+            acc = 0.0
+            for i in range(n):
+                hi = H[r, i]
+                if hi != 0.0:
+                    for j in range(n):
+                        acc += hi * Pa[i, j] * H[s, j]
+            S[r, s] = acc + R[r, s]
+    # nu^T S^-1 nu by Cholesky (S is positive definite: P and R are)
+    for r in range(k):
+        for s in range(r + 1):
+            acc = S[r, s]
+            for m in range(s):
+                acc -= L[r, m] * L[s, m]
+            if r == s:
+                L[r, r] = math.sqrt(acc) if acc > 0.0 else math.nan
+            else:
+                L[r, s] = acc / L[s, s]
+    v = 0.0
+    for r in range(k):
+        acc = nu[r]
+        for m in range(r):
+            acc -= L[r, m] * w[m]
+        w[r] = acc / L[r, r]
+        v += w[r] * w[r]
+    return v
+
+
+@njit(cache=True, error_model="numpy")
+def inflate_to_pass(P, nu, H, R, k, thr, Pa, S, L, w):
+    """:func:`.engine._inflate_to_pass`: scale the navigation blocks of P by
+    the smallest ``alpha`` of 2, 8, 32, ... for which ``nu`` passes the gate
+    ``thr``; P is replaced in place."""
+    alpha = 2.0
+    v = _nis_inflated(P, nu, H, R, k, alpha, Pa, S, L, w)
+    while v > thr and alpha < 1e16:
+        alpha *= 4.0
+        v = _nis_inflated(P, nu, H, R, k, alpha, Pa, S, L, w)
+    n = P.shape[0]
+    for i in range(n):
+        for j in range(n):
+            P[i, j] = Pa[i, j]
+
+
+@njit(cache=True, error_model="numpy")
+def consistent(rej_t, rej_k, rej_nu, rej_rd, count, t, nu, rd, k, P):
+    """:func:`.engine._consistent` over the last ``count`` rejections held
+    (times ``rej_t``, rows ``rej_k``, innovations ``rej_nu``, noise
+    variances ``rej_rd``) and the current innovation ``(t, nu, rd)`` of k
+    rows: innovations of different lengths never agree."""
+    nh = rej_t.shape[0]
+    total = count + 1
+    if total < 2:
+        return False
+    first = nh - count
+    for a in range(count):
+        if rej_k[first + a] != k:
+            return False
+    sv2 = max(P[3, 3], max(P[4, 4], P[5, 5]))
+    for a in range(total):
+        ia = first + a
+        ta = rej_t[ia] if a < count else t
+        for b in range(a + 1, total):
+            ib = first + b
+            tb = rej_t[ib] if b < count else t
+            for r in range(k):
+                na = rej_nu[ia, r] if a < count else nu[r]
+                nb = rej_nu[ib, r] if b < count else nu[r]
+                ra = rej_rd[ia, r] if a < count else rd[r]
+                rb = rej_rd[ib, r] if b < count else rd[r]
+                tol2 = 16.0 * (ra + rb + (tb - ta) ** 2 * sv2)
+                if (na - nb) ** 2 > tol2:
+                    return False
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def predict_aux(aux, idx, F, t_aux, t):
+    """Carry the evolving estimates from ``t_aux[0]`` to ``t`` with
+    ``exp(F h)`` to third order (``I + A + A^2 / 2 + A^3 / 6``, ``A = F h``;
+    exact for a clock, whose F is nilpotent), in place."""
+    h = t - t_aux[0]
+    m = idx.shape[0]
+    if h > 0 and m > 0:
+        A = F * h
+        A2 = np.zeros((m, m))
+        for i in range(m):
+            for j in range(m):
+                acc = 0.0
+                for r in range(m):
+                    acc += A[i, r] * A[r, j]
+                A2[i, j] = acc
+        G = np.empty((m, m))
+        for i in range(m):
+            for j in range(m):
+                acc = 0.0
+                for r in range(m):
+                    acc += A2[i, r] * A[r, j]
+                G[i, j] = (1.0 if i == j else 0.0) + A[i, j] + A2[i, j] / 2.0 + acc / 6.0
+        old = np.empty(m)
+        for i in range(m):
+            old[i] = aux[idx[i]]
+        for i in range(m):
+            acc = 0.0
+            for j in range(m):
+                acc += G[i, j] * old[j]
+            aux[idx[i]] = acc
+    t_aux[0] = t
+
+
+# --- the loop over update nodes ---------------------------------------------------------
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _covariance_ok(P):
+    for i in range(P.shape[0]):
+        d = P[i, i]
+        if not (d > 0.0) or not math.isfinite(d):
+            return False
+    return True
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _begin_node(t_imu, dth_all, q_nb, P, aux, Phi, want_store, propagated, k_end, ctl, en_k, en_var, store, dyn,
+                w_raw, C):
+    """At a node just propagated to IMU row ``k_end``: the rate of its
+    interval, the evolving estimates, the gap noise and the smoother's
+    prior."""
+    if propagated:
+        ctl[C_KDONE] = k_end + 1
+        h = t_imu[k_end] - t_imu[k_end - 1]
+        for i in range(3):
+            w_raw[i] = dth_all[k_end, i] / h
+        predict_aux(aux, dyn[0], dyn[1], dyn[2], t_imu[k_end])
+    n = P.shape[0]
+    lo, hi = 0, en_k.shape[0]  # binary search of the sorted gap rows
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if en_k[mid] < k_end:
+            lo = mid + 1
+        else:
+            hi = mid
+    if lo < en_k.shape[0] and en_k[lo] == k_end:
+        for i in range(n):
+            P[i, i] += en_var[lo, i]
+    node = ctl[C_NODE]
+    if want_store:
+        st_k, st_Pm, st_Phi, st_dx = store[0], store[1], store[3], store[4]
+        st_k[node] = k_end
+        for i in range(n):
+            for j in range(n):
+                st_Pm[node, i, j] = P[i, j]
+                st_Phi[node, i, j] = Phi[i, j]
+                Phi[i, j] = 1.0 if i == j else 0.0
+            st_dx[node, i] = 0.0
+    K.dcm_into(q_nb, C)
+    ctl[C_KCUR] = k_end
+    ctl[C_IN_NODE] = 1
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _end_node(nav, filt, outs, flags, ctl, store, nodes):
+    """The smoother's posterior and the node's output row (``write_row``)."""
+    lla, v_n, q_nb = nav[0], nav[1], nav[2]
+    P, aux = filt[1], filt[2]
+    out_lla, out_v, out_q, out_var = outs
+    n = P.shape[0]
+    node = ctl[C_NODE]
+    k = ctl[C_KCUR]
+    if flags[1]:
+        st_Pp = store[2]
+        for i in range(n):
+            for j in range(n):
+                st_Pp[node, i, j] = P[i, j]
+    for i in range(3):
+        out_lla[k, i] = lla[i]
+        out_v[k, i] = v_n[i]
+    for i in range(4):
+        out_q[k, i] = q_nb[i]
+    for i in range(n):
+        out_var[k, i] = P[i, i]
+    node_rows, node_aux = nodes
+    r = ctl[C_NROW]
+    node_rows[r] = k
+    for i in range(aux.shape[0]):
+        node_aux[r, i] = aux[i]
+    ctl[C_NROW] = r + 1
+    ctl[C_NODE] = node + 1
+    ctl[C_IN_NODE] = 0
+
+
+@njit(cache=True, error_model="numpy")
+def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstate, recs, recov, counts, store,
+              nodes, dyn, fb, w_raw, C, ctl):
+    """Run the filter over update nodes from item ``ctl[C_I]`` (see the
+    module text).
+
+    Parameters
+    ----------
+    imu, nav, filt, model, outs, flags
+        As :func:`._kernel.propagate` (closed loop: ``flags[2]`` False;
+        ``flags[1]`` keeps the smoother's store).
+    items : tuple ``(k, t, m, row, en_k, en_var)``
+        Per update item (sorted by IMU row, then time): its IMU row, time,
+        measurement (-1: a node without one) and own data row; the rows that
+        get gap noise (sorted) and their (n,) variances.
+    meas : tuple ``(kind, k, d_off, d_w, data, p_off, par, i_off, index, per_row)``
+        Per measurement: kind code (-1: no compiled form, handed back), rows
+        of its updates, offset and width of its data rows in ``data`` (flat),
+        offset of its parameters in ``par``, offset of its table index in
+        ``index`` (-1: one data row per update) and whether it is gated row
+        by row.
+    lidx : (8,) int64
+        :func:`layout_index`.
+    gate : tuple ``(gpar, thr)``
+        ``gpar = [gate on, max consecutive (-1: no recovery), recovery after
+        s]``; ``thr[k]`` the chi-square gate of k rows, up to the most rows
+        of any update (which sizes the scratch).
+    rstate : tuple ``(streak, first, rej_t, rej_k, rej_nu, rej_rd, rej_n)``
+        Per measurement: its run of rejections (count, time of the first)
+        and the newest ones held (times, rows, innovations, noise variances).
+    recs : tuple ``(m, item, t, nis, accepted, k, off, nu, sigma)``
+        Innovation records from ``ctl[C_NREC]`` on; record j's ``k`` rows of
+        innovation and sigma start at ``off[j]`` of the flat ``nu`` and
+        ``sigma`` (filled from ``ctl[C_NFLAT]`` on).
+    recov : tuple ``(m, item, t, after, rejected_for)``
+        Recoveries, from ``ctl[C_NRECOV]`` on.
+    counts : (M, N_COUNTS) int64
+        used, rejected, skipped, rows, rows rejected, row-gated updates.
+    store : tuple ``(k, P_minus, P_plus, Phi, dx)`` per node.
+    nodes : tuple ``(rows, aux)``
+        The output rows written and the estimates held from each.
+    dyn : tuple ``(idx, F, t_aux)``
+        :meth:`StateLayout.estimate_dynamics` and the estimates' time.
+    fb : tuple ``(aux_idx, x_idx)``
+        The default feedback ``aux[aux_idx] -= dx[x_idx]``.
+    w_raw : (3,) ndarray
+        Raw rate of the node's interval (shared with Python's contexts).
+    C : (3, 3) ndarray
+        ``C_nb`` scratch.
+    ctl : (C_SIZE,) int64
+        Loop state (item, rows done, in a node, the node's row, node count,
+        rows written, records, recoveries, row to stop at, flat records).
+
+    Returns
+    -------
+    int
+        ``DONE``, ``HANDBACK`` (at item ``ctl[C_I]``, inside its node),
+        ``CHUNK`` (``ctl[C_KSTOP]`` reached, between nodes), or a divergence:
+        ``BAD_INNOVATION``, ``NOT_PD``, ``BAD_ROWS`` (at item ``ctl[C_I]``),
+        ``LOST_PD`` (at the node of row ``ctl[C_KCUR]``).
+    """
+    lla, v_n, q_nb = nav[0], nav[1], nav[2]
+    P, aux = filt[1], filt[2]
+    it_k, it_t, it_m, it_row, en_k, en_var = items
+    kinds, mk, d_off, d_w, data, p_off, par, i_off, index, per_row = meas
+    gpar, thr = gate
+    streak, first_rej, rej_t, rej_k, rej_nu, rej_rd, rej_n = rstate
+    rec_m, rec_i, rec_t, rec_nis, rec_acc, rec_k, rec_off, rec_nu, rec_sig = recs
+    rv_m, rv_i, rv_t, rv_after, rv_for = recov
+    st_dx = store[4]
+    def_aux, def_x = fb
+    t_imu = imu[0]
+    kidx = model[0]
+    n = P.shape[0]
+    want_store = flags[1]
+    gate_on = gpar[0] != 0.0
+    gmc = int(gpar[1])
+    recovery_after = gpar[2]
+    km = thr.shape[0] - 1
+    pwork = K.propagation_work(model, model[4].shape[0])
+    nu = np.empty(km)
+    H = np.empty((km, n))
+    R = np.empty((km, km))
+    cols = np.empty(n, np.int64)
+    PHt = np.empty((n, km))
+    S = np.empty((km, km))
+    L = np.zeros((km, km))
+    wv = np.empty(km)
+    rd = np.empty(km)
+    s_rows = np.empty(km)
+    keep = np.empty(km, np.bool_)
+    Kg = np.empty((n, km))
+    Aw = np.empty((n, n))
+    AHt = np.empty((n, km))
+    y = np.empty(km)
+    dx = np.empty(n)
+    KT = np.empty((km, n))
+    HP = np.empty((km, n))
+    Mk = np.empty((km, 3))
+    vw = np.empty((14, 3))
+    mw = np.empty((6, 3, 3))
+    n_items = it_k.shape[0]
+    i = ctl[C_I]
+    if ctl[C_IN_NODE]:
+        K.dcm_into(q_nb, C)  # Python may have fed an update back since
+    while True:
+        if ctl[C_IN_NODE]:
+            k_cur = ctl[C_KCUR]
+            while i < n_items and it_k[i] == k_cur:
+                m = it_m[i]
+                if m < 0:
+                    i += 1
+                    continue
+                kind = kinds[m]
+                if kind < 0:
+                    ctl[C_I] = i
+                    return HANDBACK
+                tm = it_t[i]
+                row = it_row[i]
+                pm = par[p_off[m]:]
+                if i_off[m] >= 0:  # a table: the rows of this update
+                    ra, rb = index[i_off[m] + row], index[i_off[m] + row + 1]
+                    k = rb - ra
+                    ok = k > 0
+                    if ok:
+                        w_m = d_w[m]
+                        D = data[d_off[m] + ra * w_m:d_off[m] + rb * w_m].reshape(k, w_m)
+                        ok = linearize_ranges(kind, D, pm, tm - t_imu[k_cur], lla, v_n, C, w_raw, aux, kidx, lidx,
+                                              nu, H, R, Mk, vw, mw)
+                else:
+                    k = mk[m]
+                    d = data[d_off[m] + row * d_w[m]:d_off[m] + (row + 1) * d_w[m]]
+                    ok = linearize(kind, d, pm, tm - t_imu[k_cur], lla, v_n, C, w_raw, aux, kidx, lidx, nu, H, R,
+                                   vw, mw)
+                if not ok:
+                    counts[m, N_SKIPPED] += 1
+                    i += 1
+                    continue
+                for r in range(k):
+                    rd[r] = R[r, r]
+                nc = 0
+                for j in range(n):
+                    nz = False
+                    for r in range(k):
+                        if H[r, j] != 0.0:
+                            nz = True
+                    if nz:
+                        cols[nc] = j
+                        nc += 1
+                st = streak[m]
+                held = rej_n[m]
+                if (gate_on and gmc >= 0 and st >= gmc and tm - first_rej[m] >= recovery_after
+                        and consistent(rej_t[m], rej_k[m], rej_nu[m], rej_rd[m], held if gmc == 0 else
+                                       min(gmc, held), tm, nu, rd, k, P)):
+                    inflate_to_pass(P, nu, H, R, k, thr[k], Aw, S, L, wv)
+                    j = ctl[C_NRECOV]
+                    rv_m[j], rv_i[j], rv_t[j], rv_after[j], rv_for[j] = m, i, tm, st, tm - first_rej[m]
+                    ctl[C_NRECOV] = j + 1
+                # the record: the whole innovation, with the sigmas of the rows' own gate when rows were refused
+                jr = ctl[C_NREC]
+                o = ctl[C_NFLAT]
+                rec_m[jr], rec_i[jr], rec_t[jr], rec_k[jr], rec_off[jr] = m, i, tm, k, o
+                for r in range(k):
+                    rec_nu[o + r] = nu[r]
+                ctl[C_NREC] = jr + 1
+                ctl[C_NFLAT] = o + k
+                gate_vec = gate_on
+                refused = 0
+                if gate_on and per_row[m]:  # inskit.filters.kalman.gate_rows, then the rows that pass
+                    gate_vec = False
+                    for r in range(k):
+                        acc = 0.0
+                        for c in range(nc):
+                            j = cols[c]
+                            hp = 0.0
+                            for c2 in range(nc):
+                                hp += P[j, cols[c2]] * H[r, cols[c2]]
+                            acc += H[r, j] * hp
+                        s_rows[r] = acc + R[r, r]
+                        if not (math.isfinite(nu[r]) and math.isfinite(s_rows[r]) and s_rows[r] > 0.0):
+                            ctl[C_I] = i
+                            return BAD_ROWS
+                        keep[r] = nu[r] * nu[r] / s_rows[r] <= thr[1]
+                        if not keep[r]:
+                            refused += 1
+                    counts[m, N_ROWS] += k
+                    counts[m, N_ROWS_REJECTED] += refused
+                    counts[m, N_ROW_GATED] += 1
+                    if refused:
+                        counts[m, N_REJECTED] += 1
+                        for r in range(k):
+                            rec_sig[o + r] = math.sqrt(s_rows[r])
+                        if refused == k:
+                            nis = 0.0
+                            for r in range(k):
+                                nis += nu[r] * nu[r] / s_rows[r]
+                            rec_nis[jr], rec_acc[jr] = nis, False
+                            _hold_rejection(m, tm, nu, rd, k, streak, first_rej, rej_t, rej_k, rej_nu, rej_rd,
+                                            rej_n)
+                            i += 1
+                            continue
+                        # keep the rows that pass, in order
+                        kk = 0
+                        for r in range(k):
+                            if keep[r]:
+                                nu[kk] = nu[r]
+                                for j in range(n):
+                                    H[kk, j] = H[r, j]
+                                kk2 = 0
+                                for r2 in range(k):
+                                    if keep[r2]:
+                                        S[kk, kk2] = R[r, r2]
+                                        kk2 += 1
+                                kk += 1
+                        for r in range(kk):
+                            for r2 in range(kk):
+                                R[r, r2] = S[r, r2]
+                        k = kk
+                for r in range(k):
+                    if not math.isfinite(nu[r]):
+                        ctl[C_I] = i
+                        return BAD_INNOVATION
+                ok, nis = _innovation_stats(P, nu, H, R, k, cols, nc, PHt, S, L, wv)
+                if not ok:
+                    ctl[C_I] = i
+                    return NOT_PD
+                accepted = not (gate_vec and nis > thr[k])
+                rec_nis[jr], rec_acc[jr] = nis, accepted
+                if not refused:
+                    for r in range(k):
+                        rec_sig[o + r] = math.sqrt(S[r, r])
+                if not accepted:
+                    _hold_rejection(m, tm, nu, rd, k, streak, first_rej, rej_t, rej_k, rej_nu, rej_rd, rej_n)
+                    counts[m, N_REJECTED] += 1
+                    i += 1
+                    continue
+                streak[m] = 0
+                rej_n[m] = 0
+                counts[m, N_USED] += 1
+                _joseph(P, nu, S, k, PHt, L, Kg, AHt, y, dx, KT, HP)
+                K.apply_correction(lla, v_n, q_nb, dx, 1.0, lla, v_n, q_nb)
+                for e in range(def_aux.shape[0]):
+                    aux[def_aux[e]] -= dx[def_x[e]]
+                if want_store:
+                    node = ctl[C_NODE]
+                    for e in range(n):
+                        st_dx[node, e] += dx[e]
+                K.dcm_into(q_nb, C)
+                i += 1
+            if not _covariance_ok(P):
+                ctl[C_I] = i
+                return LOST_PD
+            _end_node(nav, filt, outs, flags, ctl, store, nodes)
+        ctl[C_I] = i
+        if i >= n_items:
+            return DONE
+        k_end = it_k[i]
+        if k_end >= ctl[C_KSTOP]:
+            return CHUNK
+        propagated = k_end + 1 > ctl[C_KDONE]
+        if propagated:
+            K.propagate_rows(imu, nav, filt, model, outs, ctl[C_KDONE], k_end + 1, flags, pwork)
+        _begin_node(t_imu, imu[1], q_nb, P, aux, filt[3], want_store, propagated, k_end, ctl, en_k, en_var, store,
+                    dyn, w_raw, C)
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _hold_rejection(m, tm, nu, rd, k, streak, first_rej, rej_t, rej_k, rej_nu, rej_rd, rej_n):
+    """One more rejection of measurement ``m``: its streak, the time of the
+    run's first, and the newest rejections held, oldest first, at the end of
+    the rows (the Python path's bounded list)."""
+    held = rej_n[m]
+    n_hold = rej_t.shape[1]
+    streak[m] += 1
+    if held == 0:
+        first_rej[m] = tm
+    for h in range(n_hold - 1):
+        rej_t[m, h] = rej_t[m, h + 1]
+        rej_k[m, h] = rej_k[m, h + 1]
+        for r in range(rej_nu.shape[2]):
+            rej_nu[m, h, r] = rej_nu[m, h + 1, r]
+            rej_rd[m, h, r] = rej_rd[m, h + 1, r]
+    rej_t[m, n_hold - 1] = tm
+    rej_k[m, n_hold - 1] = k
+    for r in range(k):
+        rej_nu[m, n_hold - 1, r] = nu[r]
+        rej_rd[m, n_hold - 1, r] = rd[r]
+    rej_n[m] = min(held + 1, n_hold)
