@@ -113,3 +113,20 @@ def test_interrupted_figure_leaves_nothing(tmp_path, monkeypatch):
     with pytest.raises(KeyboardInterrupt):
         save_figure(fig, tmp_path / "f.png")
     assert list(tmp_path.iterdir()) == []
+
+
+def test_write_csv_fast_path_keeps_text_columns_and_quotes_when_needed(tmp_path):
+    """Numeric and text columns go through the vectorised writer; a text
+    value that would need quoting sends the table to pandas, which quotes."""
+    import numpy as np
+    import pandas as pd
+
+    from inskit.files import write_csv
+
+    p = tmp_path / "a.csv"
+    write_csv(p, {"m": np.array(["nhc", "gnss_pos"], dtype=object), "t": np.array([1.5, 2.0]),
+                  "k": np.array([1, 0])}, "%.10g")
+    assert p.read_text() == "m,t,k\nnhc,1.5,1\ngnss_pos,2,0\n"
+    write_csv(p, {"m": np.array(["a,b", "c"], dtype=object), "t": np.array([1.0, 2.0])}, "%.10g")
+    back = pd.read_csv(p)
+    assert back["m"].tolist() == ["a,b", "c"] and back["t"].tolist() == [1.0, 2.0]

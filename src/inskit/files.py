@@ -59,7 +59,7 @@ def same_file(a, b) -> bool:
 def write_csv(path, columns, float_format="%.15g"):
     """Write a table (a dict of columns or a DataFrame) as CSV, atomically.
 
-    A table of numeric columns only, with a ``%.Ng`` format, goes through
+    A table of numeric (and text) columns, with a ``%.Ng`` format, goes through
     :func:`write_csv_fast` (pyarrow's vectorised writer, ``N`` significant
     digits; pandas' ``to_csv`` with a float format calls Python per value,
     10 s for a 30-minute 100 Hz IMU log); anything else through pandas.
@@ -71,9 +71,12 @@ def write_csv(path, columns, float_format="%.15g"):
     m = re.fullmatch(r"%\.(\d+)g", float_format or "")
     if m and isinstance(columns, dict):
         cols = {k: np.asarray(v) for k, v in columns.items()}
-        if cols and all(v.ndim == 1 and v.dtype.kind in "fiu" for v in cols.values()) \
+        plain_text = all(not any(c in x for x in np.unique(v.astype(str)) for c in ',"\n\r')
+                         for v in cols.values() if v.dtype.kind in "OU")  # the writer does not quote
+        if cols and plain_text and all(v.ndim == 1 and v.dtype.kind in "fiubOU" for v in cols.values()) \
                 and len({len(v) for v in cols.values()}) == 1:
-            return write_csv_fast(path, {k: v.astype(np.float64) for k, v in cols.items()}, int(m.group(1)))
+            return write_csv_fast(path, {k: v if v.dtype.kind in "OU" else v.astype(np.float64)
+                                         for k, v in cols.items()}, int(m.group(1)))
     df = columns if isinstance(columns, pd.DataFrame) else pd.DataFrame(columns)
     with atomic_write(path) as tmp:
         df.to_csv(tmp, index=False, float_format=float_format)
@@ -144,7 +147,8 @@ def write_csv_fast(path, cols: dict, digits=CSV_DIGITS) -> Path:
 
     path = Path(path)
     header = (",".join(cols) + "\n").encode()
-    table = pa.Table.from_arrays([format_column(v, digits) for v in cols.values()], names=list(cols))
+    table = pa.Table.from_arrays([pa.array(np.asarray(v).astype(str)) if np.asarray(v).dtype.kind in "OU"
+                                  else format_column(v, digits) for v in cols.values()], names=list(cols))
     opts = pcsv.WriteOptions(include_header=False, batch_size=8192, quoting_style="none")
     with atomic_write(path) as tmp:
         if path.name.endswith(".gz"):
