@@ -130,12 +130,21 @@ def _scenario_text(duration_s):
     return text.replace('name = "car"', f'name = "car"\nduration_limit_s = {duration_s}', 1) + ("\n" + seg) * reps
 
 
-def _median(key, n, runs, out):
+def _measure(name, args, n, repeats, out):
+    """Time ``inskit ARGS`` ``repeats`` times after a warm-up run (compile and
+    page caches); put ``<name>_cli_epochs_per_s`` (median, with its spread),
+    ``<name>_cli_wall_s`` and ``<name>_peak_rss_mb`` into ``out``; return the
+    last run's stdout."""
+    _run_timed(args)
+    runs = [_run_timed(args) for _ in range(repeats)]
     walls = [r[0] for r in runs]
     rates = [n / w for w in walls]
+    key = f"{name}_cli_epochs_per_s"
     out[key] = round(float(np.median(rates)))
     out[f"{key}_spread"] = [round(min(rates)), round(max(rates))]
-    out[f"{key.replace('_epochs_per_s', '')}_wall_s"] = round(float(np.median(walls)), 3)
+    out[f"{name}_cli_wall_s"] = round(float(np.median(walls)), 3)
+    out[f"{name}_peak_rss_mb"] = round(max(r[1] for r in runs), 1)
+    return runs[-1][2]
 
 
 def cli_benchmarks(quick=False, repeats=3, progress=None, root=None) -> dict:
@@ -152,33 +161,20 @@ def cli_benchmarks(quick=False, repeats=3, progress=None, root=None) -> dict:
     n100 = int(round(duration * 100.0))
     with tempfile.TemporaryDirectory(prefix="inskit-bench-") as tmp:
         nav = ["navigate", d200 / "navigate.toml", "--out", Path(tmp) / "nav", "--force", "--no-plots", "--json"]
-        _run_timed(nav)  # warm-up (compile cache, page cache)
-        runs = [_run_timed(nav) for _ in range(repeats)]
-        _median("navigate_cli_epochs_per_s", n200, runs, out)
-        out["navigate_peak_rss_mb"] = round(max(r[1] for r in runs), 1)
-        s = json.loads(runs[-1][2])
+        s = json.loads(_measure("navigate", nav, n200, repeats, out))
         out["navigate_cli_imu_rate_hz"] = 200.0
         out["navigate_cli_fixes_used"] = s["measurements"]["gnss_pos"]["used"]
         if progress:
             progress("navigate")
-        sim = ["simulate", _EXAMPLES / "car.toml", "--out", Path(tmp) / "sim", "--force", "--no-plot",
-               "--format", "parquet", "--seed", "1"]
         cut = Path(tmp) / "car_1h.toml"
         cut.write_text(_scenario_text(duration))
-        sim[1] = cut
-        n_sim = n100
-        _run_timed(sim)
-        runs = [_run_timed(sim) for _ in range(repeats)]
-        _median("simulate_cli_epochs_per_s", n_sim, runs, out)
-        out["simulate_peak_rss_mb"] = round(max(r[1] for r in runs), 1)
+        sim = ["simulate", cut, "--out", Path(tmp) / "sim", "--force", "--no-plot", "--format", "parquet", "--seed", "1"]
+        _measure("simulate", sim, n100, repeats, out)
         if progress:
             progress("simulate")
         mech = ["mechanize", d100 / "imu.csv", "--init-from", d100 / "truth.csv", "--out", Path(tmp) / "mech.csv",
                 "--force", "--json"]
-        _run_timed(mech)
-        runs = [_run_timed(mech) for _ in range(repeats)]
-        _median("mechanize_cli_epochs_per_s", n100, runs, out)
-        out["mechanize_peak_rss_mb"] = round(max(r[1] for r in runs), 1)
+        _measure("mechanize", mech, n100, repeats, out)
         if progress:
             progress("mechanize")
     return out
