@@ -334,6 +334,8 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
     s = N.summary(res)
     s.update(extra)
     text_extra = N.truth_errors_text(s["truth_errors"]) if "truth_errors" in s else ""
+    if not as_json:  # the result first: the files and plots (a second or two) follow
+        _emit(s, False, N.outage_table_text(s) + text_extra)
     if force:
         N.clear_previous_run(target)
     files = N.write_outputs(res, target, s)
@@ -350,7 +352,8 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
         _log(f"  unhealthy: {line}")
     for line in h["warnings"]:
         _log(f"  warning: {line}")
-    _emit(s, as_json, N.outage_table_text(s) + text_extra)
+    if as_json:
+        _emit(s, True)
     if strict and h["verdict"] != "healthy":
         sys.exit(3)
 
