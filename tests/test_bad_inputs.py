@@ -566,3 +566,14 @@ def test_rates_near_the_float_limit_do_not_slip_past_the_unit_check(capsys, sim,
     refused(navigate(capsys, sim, tmp_path, imu=bad), str(bad), "column 'gyro_x_rad_s': angular rates reach 1e+300 "
             "rad/s")
     assert empty_or_absent(tmp_path / "nav")
+
+
+def test_an_outage_window_with_no_fix_in_it_is_reported(capsys, sim, tmp_path):
+    """A window past the end of the GNSS file withholds nothing: the run says
+    which outage was not scored and why, in its warnings and its JSON."""
+    code, out, err = navigate(capsys, sim, tmp_path, None, None, "--outages", "windows:20-30,9000-9010", "--json")
+    assert code == 0, err
+    s = json.loads(out)
+    assert [u["k"] for u in s["outages_unscored"]] == [1] and s["outages"] == 1
+    assert any(w.startswith("outage 1 (9000.00 .. 9010.00 s after the first fix) not scored: the GNSS file holds "
+                            "no fix") for w in s["health"]["warnings"]), s["health"]["warnings"]

@@ -185,3 +185,17 @@ def test_summary_carries_both_references_and_the_truth_file(drive):
     assert set(s["truth_errors"]) == {"forward", "smoothed"}
     text = outage_table_text(s)
     assert "against the truth" in text and "not an accuracy" in text and "withheld fixes" in text
+
+
+def test_a_window_without_fixes_is_named_not_silently_dropped(constructed):
+    """A window over a stretch the GNSS file itself lacks withholds nothing:
+    it is listed in outages_unscored with the reason, and the figures are
+    those of the windows that were scored."""
+    sol, truth, gnss, windows, noise, drift = constructed
+    keep = ~((gnss.time > 40.5) & (gnss.time < 45.5))  # the file has no fix 41..45 s
+    g = GnssData(gnss.time[keep], gnss.lla[keep], gnss.sigma_ned[keep])
+    s = score_outages(sol, g, windows + [(41.0, 45.0), (100.0, 110.0)], LEVER_B).summary
+    assert s["outages"] == 1
+    assert [(u["k"], u["reason"]) for u in s["outages_unscored"]] == [
+        (1, "the GNSS file holds no fix inside the window"), (2, "the GNSS file holds no fix inside the window")]
+    assert score_outages(sol, gnss, windows, LEVER_B).summary["outages_unscored"] == []

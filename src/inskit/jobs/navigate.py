@@ -589,6 +589,9 @@ def summary(res: NavigateResult) -> dict:
         constrained=res.config.filter.scheme != "uncoupled" and (c.nhc or (odo is not None and odo.with_nhc)))
     if warn:
         out["health"]["warnings"].append(warn)
+    for u in out.get("outages_unscored") or ():
+        out["health"]["warnings"].append(f"outage {u['k']} ({u['start_s']:.2f} .. {u['end_s']:.2f} s after the first "
+                                         f"fix) not scored: {u['reason']}")
     out["imu_rate_changes"] = [{"row": c.row, "t_s": c.t_s, "rate_before_hz": c.rate_before_hz,
                                 "rate_after_hz": c.rate_after_hz} for c in (res.rate_changes or ())]
     out["imu_gaps"] = [{"row": g.row, "start_s": g.start_s, "length_s": g.length_s} for g in (res.gaps or ())]

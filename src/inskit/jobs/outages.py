@@ -223,12 +223,16 @@ def score_outages(sol: NavSolution, gnss: GnssData, windows, lever_arm_b, t0=Non
         The true IMU trajectory on the same time base.
     """
     t0 = gnss.time[0] if t0 is None else t0
-    rows = []
+    rows, unscored = [], []
     for k, (a, b) in enumerate(windows):
         inside = np.nonzero((gnss.time >= a - 1e-6) & (gnss.time <= b + 1e-6))[0]
-        inside = inside[(gnss.time[inside] >= sol.time[0]) & (gnss.time[inside] <= sol.time[-1])]
-        if len(inside) == 0:
+        in_span = inside[(gnss.time[inside] >= sol.time[0]) & (gnss.time[inside] <= sol.time[-1])]
+        if len(in_span) == 0:  # nothing withheld there: said, not silently left out of the figures
+            unscored.append({"k": k, "start_s": a - t0, "end_s": b - t0,
+                             "reason": ("the GNSS file holds no fix inside the window" if len(inside) == 0 else
+                                        "the window's fixes lie outside the solution's time span")})
             continue
+        inside = in_span
         i = inside[-1]
         ant = antenna_positions(sol, gnss.time[inside], lever_arm_b)
         d_all = earth.lla_to_ned(ant, gnss.lla[inside])
@@ -256,6 +260,7 @@ def score_outages(sol: NavSolution, gnss: GnssData, windows, lever_arm_b, t0=Non
     fit_v = float(np.sqrt(np.mean(d[:, 2] ** 2)))
     summary = {
         "outages": len(rows),
+        "outages_unscored": unscored,
         "outage_end_horizontal_rms_m": _rms(hs),
         "outage_end_horizontal_median_m": float(np.median(hs)) if len(hs) else None,
         "outage_end_horizontal_max_m": float(hs.max()) if len(hs) else None,
