@@ -253,3 +253,28 @@ def test_filter_mechanizes_with_the_settings_gravity_model():
     assert abs(d[2]) > 1.0
     with pytest.raises(InputError, match="gravity model 'wgs72'"):
         FilterSettings(gravity="wgs72")
+
+
+def test_measurements_after_a_change_of_rate_are_used_not_skipped():
+    """200 Hz then 50 Hz: an update 12 ms after its 50 Hz sample is within
+    two local intervals (40 ms), not a gap; judged against the log's median
+    interval (5 ms) every update of the 50 Hz half used to be skipped."""
+    from inskit.integration import GnssPosition, NonHolonomic
+    from inskit.simulation import StationaryTrajectory, ideal_imu, truth_solution
+    from inskit.types import GnssData
+
+    t = np.r_[np.arange(0, 20, 0.005), np.arange(20, 40.0001, 0.02)]
+    traj = StationaryTrajectory((np.radians(45.0), 0.1, 100.0))
+    imu = ideal_imu(traj, t, nodes=1)
+    init = truth_solution(traj, t[:1]).state(0)
+    tg = np.arange(1.0, 40, 1.0) + 0.012
+    g = GnssData(tg, np.tile(init.lla, (len(tg), 1)), np.full((len(tg), 3), 0.5))
+    out = run_filter(imu, init, [GnssPosition(g), NonHolonomic([(0.5, 39.9)], 10.0, 0.1)], FilterSettings.standard())
+    assert out.counts["gnss_pos"]["skipped"] == 0 and out.counts["gnss_pos"]["used"] == 39
+    assert out.counts["nhc"]["skipped"] == 0
+
+
+@pytest.mark.parametrize("bad", [0, -1, 2.5])
+def test_gate_max_consecutive_must_be_none_or_a_positive_integer(bad):
+    with pytest.raises(InputError, match="gate_max_consecutive"):
+        FilterSettings(gate_max_consecutive=bad)

@@ -110,6 +110,10 @@ class FilterSettings:
             raise InputError(f"filter scheme must be one of {SCHEMES}, got {self.scheme!r}")
         if not self.recovery_after_s >= 0:
             raise InputError(f"recovery_after_s must be >= 0 s, got {self.recovery_after_s}")
+        if self.gate_max_consecutive is not None and not (isinstance(self.gate_max_consecutive, (int, np.integer))
+                                                          and self.gate_max_consecutive >= 1):
+            raise InputError(f"gate_max_consecutive must be None (no recovery) or an integer >= 1, got "
+                             f"{self.gate_max_consecutive!r}")
         earth.gravity_model_code(self.gravity)  # an unknown model: InputError naming the choices
         if not isinstance(self.layout, StateLayout):
             raise InputError(f"FilterSettings.layout must be a StateLayout, got {type(self.layout).__name__}")
@@ -223,14 +227,17 @@ def _nodes(imu, measurements, smoother_node_s, want_store, extra_rows=()):
     ks, ts, ms, ps = [extra], [t[extra].astype(float)], [np.full(len(extra), -1, np.int64)], \
         [np.full(len(extra), -1, np.int64)]
     skipped, kept = {}, []
-    # a measurement inside a gap of the IMU log has no INS state near it: skipped, not extrapolated
-    max_ahead = 2.0 * float(np.median(np.diff(t))) if len(t) > 1 else np.inf
+    # a measurement inside a gap of the IMU log has no INS state near it: skipped, not extrapolated;
+    # judged against the local sampling interval, so a change of rate is not taken for a gap
+    from .gaps import local_interval
+
+    loc = local_interval(np.diff(t)) if len(t) > 1 else np.full(1, np.inf)
     for j, m in enumerate(measurements):
         tm = np.asarray(m.times(), float)
         rows = np.asarray(m.rows())
         k = np.searchsorted(t, tm, side="right") - 1
         ok = (k >= 1) & (tm <= t[-1])
-        ok &= (tm - t[np.clip(k, 0, len(t) - 1)]) <= max_ahead
+        ok &= (tm - t[np.clip(k, 0, len(t) - 1)]) <= 2.0 * loc[np.clip(k, 0, len(loc) - 1)]
         skipped[m.name] = int((~ok).sum())
         kept.append(rows[ok])
         n_ok = int(ok.sum())
