@@ -577,3 +577,13 @@ def test_an_outage_window_with_no_fix_in_it_is_reported(capsys, sim, tmp_path):
     assert [u["k"] for u in s["outages_unscored"]] == [1] and s["outages"] == 1
     assert any(w.startswith("outage 1 (9000.00 .. 9010.00 s after the first fix) not scored: the GNSS file holds "
                             "no fix") for w in s["health"]["warnings"]), s["health"]["warnings"]
+
+
+def test_an_outage_protocol_that_scores_nothing_is_unhealthy(capsys, sim, tmp_path):
+    """Every window past the fixes: no outage figure at all, so the verdict is
+    unhealthy (and --strict exits 3), not a healthy run with null figures."""
+    code, out, err = navigate(capsys, sim, tmp_path, None, None, "--outages", "windows:9000-9010", "--json",
+                              "--strict")
+    s = json.loads(out)
+    assert code == 3 and s["outages"] == 0 and s["health"]["verdict"] == "unhealthy"
+    assert any("scored no outage" in r for r in s["health"]["reasons"]), s["health"]

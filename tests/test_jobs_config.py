@@ -404,3 +404,12 @@ def test_cli_gravity_overrides_the_config(tmp_path, captured, flag, expected):
     r = CliRunner().invoke(cli, args)
     assert isinstance(r.exception, _Stop), r.output
     assert captured[0].earth.gravity == expected
+
+
+def test_contradictions_between_sections_are_refused_when_the_config_is_read():
+    """Refused by the config model, naming the key, not at run time after the start-up."""
+    with pytest.raises(ConfigError, match=r"field 'odometer\.with_nhc': .*turn constraints\.nhc off"):
+        _cfg(LOOSE, odometer={"file": "odo.csv", "with_nhc": True})
+    assert _cfg(LOOSE, odometer={"file": "odo.csv", "with_nhc": True}, constraints={"nhc": False}).odometer.with_nhc
+    with pytest.raises(ConfigError, match=r"field 'filter\.scheme': the uncoupled scheme .* no tight form"):
+        _cfg(TIGHT, filter={"scheme": "uncoupled"})

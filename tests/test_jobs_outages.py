@@ -199,3 +199,20 @@ def test_a_window_without_fixes_is_named_not_silently_dropped(constructed):
     assert [(u["k"], u["reason"]) for u in s["outages_unscored"]] == [
         (1, "the GNSS file holds no fix inside the window"), (2, "the GNSS file holds no fix inside the window")]
     assert score_outages(sol, gnss, windows, LEVER_B).summary["outages_unscored"] == []
+
+
+def test_the_python_api_scores_the_outages_against_a_truth_it_is_given(drive):
+    """inskit.navigate(..., truth=PATH) takes the place of [truth] file: the
+    same outage figures against the truth as the config route."""
+    import inskit
+
+    res, d = drive
+    cfg = {"imu": {"file": str(d / "imu.csv")}, "gnss": {"file": str(d / "gnss.csv"), "lever_arm_b_m": [0, 0, -1]},
+           "outages": {"protocol": "windows", "windows_s": [[50, 65], [90, 105]]}, "output": {"plots": False}}
+    run = inskit.navigate(cfg, smooth=True, truth=d / "truth.csv")
+    from inskit.jobs.navigate import summary
+
+    want = summary(res)
+    assert run.summary["truth_file"] == "(given to navigate() in Python)"
+    assert run.summary["outage_worst_h_vs_truth_rms_m"] == pytest.approx(want["outage_worst_h_vs_truth_rms_m"])
+    assert run.summary["truth_errors"].keys() == want["truth_errors"].keys()

@@ -111,8 +111,10 @@ def navigate(config, *, smooth=False, truth=None, out_dir=None, overwrite=False,
         Add the RTS smoother; ``solution`` and the top-level summary keys
         then describe the smoothed solution.
     truth : str, Path or NavSolution, optional
-        A truth trajectory: its errors are added to the summary
-        (``truth_errors``).
+        A truth trajectory (instead of the config's ``[truth] file``): its
+        errors are added to the summary (``truth_errors``) and the outages
+        are scored against it too (``..._vs_truth_...`` keys), as with
+        ``inskit navigate --truth``.
     out_dir : str, Path or True, optional
         Where to write what ``inskit navigate`` writes (solution Parquet and
         CSV, ``innovations.csv``, ``config_used.json``, plots unless
@@ -157,10 +159,8 @@ def navigate(config, *, smooth=False, truth=None, out_dir=None, overwrite=False,
         check_folder_writable(target)  # before the computation, not after it
     if truth is not None and not isinstance(truth, NavSolution):
         truth = io.read_solution(truth)
-    res = N.navigate(cfg, smooth=smooth, progress=progress, log=log)
-    s = N.summary(res)
-    if truth is not None:
-        s["truth_errors"] = N.truth_errors(res, truth)
+    res = N.navigate(cfg, smooth=smooth, progress=progress, log=log, truth=truth)
+    s = N.summary(res)  # truth_errors and the outages scored against the truth, as with --truth
     files = []
     if target is not None:
         if overwrite:

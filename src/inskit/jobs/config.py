@@ -686,6 +686,12 @@ class NavigateConfig(_Strict):
         if c.mounting and self.filter.scheme == "uncoupled":
             raise _key_error("constraints.mounting", "mounting = true needs a filter: the uncoupled scheme has "
                              "none")
+        if self.odometer is not None and self.odometer.with_nhc and c.nhc:
+            raise _key_error("odometer.with_nhc", "odometer.with_nhc applies the non-holonomic constraint at the "
+                             "wheel: turn constraints.nhc off (it would be applied twice)")
+        if self.gnss.coupling == "tight" and self.filter.scheme == "uncoupled":
+            raise _key_error("filter.scheme", "the uncoupled scheme resets the INS to position fixes: it has no "
+                             "tight form (use filter.scheme = \"closed\" or \"open\")")
         return self
 
     @model_validator(mode="after")

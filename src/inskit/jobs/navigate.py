@@ -326,7 +326,7 @@ def _uncoupled_track(imu, initial, gnss, used, lever, settings):
 
 
 def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=None, log=None,
-             inputs=None) -> NavigateResult:
+             inputs=None, truth: NavSolution | None = None) -> NavigateResult:
     """Run the whole job described by ``cfg``.
 
     ``inputs`` is ``(imu, gnss)`` already read (by :func:`load_inputs`, with
@@ -337,9 +337,6 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
 
     t_start = time.perf_counter()
     tight = cfg.gnss.coupling == "tight"
-    if tight and cfg.filter.scheme == "uncoupled":
-        raise InputError("the uncoupled scheme resets the INS to position fixes: it has no tight form "
-                         "(use filter.scheme = \"closed\" or \"open\")")
     raw = None
     if inputs is None:
         raw = load_raw_gnss(cfg, log) if (tight or cfg.gnss.file is None) else None
@@ -363,7 +360,8 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
             log(f"warning: the IMU log has a gap of {g.length_s:.3f} s at t = {g.start_s:.3f} s (row {g.row}): "
                 "bridged on the last rates, covariance inflated")
     imu, gaps = bridge_gaps(imu, gaps)
-    truth = io.read_solution(cfg.resolve(cfg.truth.file)) if cfg.truth is not None else None
+    if truth is None and cfg.truth is not None:  # a truth given in Python takes the place of [truth] file
+        truth = io.read_solution(cfg.resolve(cfg.truth.file))
     windows = outage_windows(cfg, gnss)
     used = ~withheld_mask(gnss.time, windows)
     if used.sum() < 2:
@@ -403,9 +401,6 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     extra_blocks, odo = [], None
     if cfg.odometer is not None:
         odo = odometer_measurement(cfg, imu)
-        if cfg.odometer.with_nhc and cfg.constraints.nhc:
-            raise InputError("odometer.with_nhc applies the non-holonomic constraint at the wheel: turn "
-                             "constraints.nhc off (it would be applied twice)")
         if cfg.odometer.estimate_scale:
             from ..integration import OdometerScale
 
@@ -577,7 +572,8 @@ def summary(res: NavigateResult) -> dict:
             "reference": "gnss.file" if res.config.gnss.file is not None else "single-point solution",
         }
     if res.truth is not None:
-        out["truth_file"] = str(res.config.resolve(res.config.truth.file))
+        out["truth_file"] = (str(res.config.resolve(res.config.truth.file)) if res.config.truth is not None
+                             else "(given to navigate() in Python)")
         out["truth_errors"] = truth_errors(res, res.truth)
     out["health"] = health(fw, res.gaps or (), res.rate_changes or ())
     from ..integration.mounting import mounting_check, mounting_summary
@@ -592,6 +588,11 @@ def summary(res: NavigateResult) -> dict:
     for u in out.get("outages_unscored") or ():
         out["health"]["warnings"].append(f"outage {u['k']} ({u['start_s']:.2f} .. {u['end_s']:.2f} s after the first "
                                          f"fix) not scored: {u['reason']}")
+    if res.config.outages.protocol != "none" and out.get("outages_unscored") and not out.get("outages"):
+        out["health"]["reasons"].append(f"the outage protocol \"{res.config.outages.protocol}\" scored no outage: "
+                                        "none of its windows withholds a fix of this run, so there is no outage "
+                                        "figure to trust")
+        out["health"]["verdict"] = "unhealthy"
     out["imu_rate_changes"] = [{"row": c.row, "t_s": c.t_s, "rate_before_hz": c.rate_before_hz,
                                 "rate_after_hz": c.rate_after_hz} for c in (res.rate_changes or ())]
     out["imu_gaps"] = [{"row": g.row, "start_s": g.start_s, "length_s": g.length_s} for g in (res.gaps or ())]
