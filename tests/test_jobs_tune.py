@@ -62,8 +62,23 @@ def test_default_spacing_mimics_the_protocol():
     from inskit.jobs.outages import rtklibexplorer_outages
 
     w = rtklibexplorer_outages(0.0)
-    hold, reaid = T.default_spacing(w, 540.0)
+    hold, reaid = T.default_spacing(w)
     assert hold == pytest.approx(14.75) and reaid == pytest.approx(7.75, abs=1e-5)
     val = T.validation_windows(w, 0.0, 540.0, hold, reaid)
     assert len(val) == 11 and all(b - a == pytest.approx(14.75) for a, b in val)
-    assert T.default_spacing([], 100.0) == (10.0, 10.0)
+    assert T.default_spacing([]) == (10.0, 10.0)
+
+
+def test_a_candidate_the_config_refuses_is_named_before_the_search(tmp_path):
+    """A grid value the config model refuses is a ConfigError naming the
+    candidate (not the config file halfway through the runs)."""
+    from pathlib import Path
+
+    ex = Path(__file__).resolve().parents[1] / "examples"
+    for spec, msg in (("constraints.nhc_sigma_m_s=abc,0.1", r"--grid candidate .*nhc_sigma_m_s.*abc"),
+                      ("noise.nosuch=1", r"--grid candidate \{'noise.nosuch': 1\}"),
+                      ("noise.gyro_arw_deg_sqrt_h=0.1,1.0", r"from_static = true")):
+        with pytest.raises(ConfigError, match=msg):
+            T.tune(ex / "drive_0708.toml", T.parse_grid([spec]), workers=1)
+    with pytest.raises(ConfigError, match="repeated"):
+        T.parse_grid(["gnss.sigma_floor_m=0,0.0"])

@@ -51,12 +51,15 @@ def parse_grid(specs) -> dict:
         if key.count(".") != 1 or key.split(".")[0] not in _SECTIONS:
             raise ConfigError(f"--grid {spec!r}: the key must be SECTION.KEY with a section of the navigate config "
                               f"({', '.join(_SECTIONS)})")
-        if key.split(".")[0] == "outages" or key in grid:
-            raise ConfigError(f"--grid {spec!r}: the outages are the job's, and a key may be given once")
+        if key in grid:
+            raise ConfigError(f"--grid {spec!r}: the key {key} is given twice; give its values in one --grid")
         items = [v.strip() for v in vals.split(",") if v.strip()]
         if not items:
             raise ConfigError(f"--grid {spec!r}: no values")
-        grid[key] = [_value(v) for v in items]
+        vals = [_value(v) for v in items]
+        if len(set(vals)) != len(vals):
+            raise ConfigError(f"--grid {spec!r}: a value is repeated")
+        grid[key] = vals
     if not grid:
         raise ConfigError("give at least one --grid SECTION.KEY=V1,V2,...")
     return grid
@@ -131,11 +134,12 @@ def _run_one(args):
 
     over = overrides_of(params)
     over["outages"] = {"protocol": "windows", "windows_s": [list(w) for w in windows_rel], "keep_satellites": 0}
-    over.setdefault("output", {})["plots"] = False
     cfg = C.load_config(config_path, over)
+    from ..errors import InskitError
+
     try:
         s = summary(navigate(cfg))
-    except Exception as exc:  # a candidate that diverges or is refused scores as such, the search goes on
+    except (InskitError, np.linalg.LinAlgError, FloatingPointError) as exc:  # diverged or refused: scored as
         return {"params": params, "cv_rms_m": math.inf, "error": str(exc).splitlines()[0][:300]}
     val = [o for o in s["outage_table"] if any(abs(o["start_s"] - v[0]) < 1e-6 for v in val_rel)]
     errs = np.array([o["horizontal_m"] for o in val], float)
@@ -144,7 +148,7 @@ def _run_one(args):
             "health": s["health"]["verdict"], "health_reasons": list(s["health"].get("reasons", []))}
 
 
-def default_spacing(protocol_rel, t_last_rel):
+def default_spacing(protocol_rel):
     """Validation outages like the protocol's: ``hold_s`` the median length of
     its windows (10 s without any), ``reaid_s`` 10 s, or less (not under 2 s)
     so that one validation outage fits the median aided stretch between two
@@ -169,7 +173,9 @@ def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60
     Returns a dict: ``windows_protocol_s`` and ``windows_validation_s`` (s
     after the first fix), ``candidates`` (each with ``params``,
     ``cv_rms_m``, ``cv_max_m``, ``cv_outages``, ``health``; ranked best
-    first), ``best`` (the params) and ``best_toml`` (a snippet).
+    first, healthy runs before unhealthy ones), ``best`` (the params) and
+    ``best_toml`` (a snippet).  A candidate the config refuses, or a grid in
+    which no candidate runs healthy, is a :class:`ConfigError`.
     """
     from . import config as C
     from .navigate import load_inputs, outage_windows
@@ -180,7 +186,7 @@ def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60
     _, gnss = load_inputs(cfg)[:2]
     t0 = float(gnss.time[0])
     protocol = [(a - t0, b - t0) for a, b in outage_windows(cfg, gnss)]
-    d_hold, d_reaid = default_spacing(protocol, float(gnss.time[-1]) - t0)
+    d_hold, d_reaid = default_spacing(protocol)
     hold_s = d_hold if hold_s is None else float(hold_s)
     reaid_s = d_reaid if reaid_s is None else float(reaid_s)
     val = validation_windows(protocol, 0.0, float(gnss.time[-1]) - t0, hold_s, reaid_s, start_after_s)
@@ -188,6 +194,16 @@ def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60
         raise ConfigError(f"{config_path}: no room for a validation outage of {hold_s:g} s with {reaid_s:g} s of "
                           "aiding on each side between the protocol's outages; shorten --hold or --reaid")
     cands = candidates(grid)
+    for p in cands:  # a candidate the config refuses: said now, naming --grid, not halfway through the search
+        try:
+            c = C.load_config(config_path, overrides_of(p))
+        except ConfigError as exc:
+            raise ConfigError(f"--grid candidate {p}: {exc}") from None
+        if c.noise.from_static and ({"noise.gyro_arw_deg_sqrt_h", "noise.accel_vrw_m_s_sqrt_h"} & set(p)):
+            raise ConfigError(f"--grid candidate {p}: with noise.from_static = true the white noise is raised to "
+                              "what the static start measures, so a grid of gyro_arw_deg_sqrt_h or "
+                              "accel_vrw_m_s_sqrt_h would not run the values it names; add "
+                              "--grid noise.from_static=false")
     jobs = [(str(config_path), p, sorted(protocol + val), val) for p in cands]
     workers = workers or min(len(jobs), os.cpu_count() or 1)
     results = []
@@ -202,10 +218,15 @@ def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60
                 results.append(r)
                 if progress:
                     progress(1)
-    ranked = sorted(results, key=lambda r: (r["cv_rms_m"], cands.index(r["params"])))
+    # healthy candidates first: a setting whose own run is unhealthy is not recommended on its score
+    ranked = sorted(results, key=lambda r: (r.get("health") != "healthy", r["cv_rms_m"], cands.index(r["params"])))
     best = ranked[0]["params"]
     if not math.isfinite(ranked[0]["cv_rms_m"]):
         raise ConfigError(f"{config_path}: every candidate failed; first error: {ranked[0].get('error')}")
+    if ranked[0].get("health") != "healthy":
+        raise ConfigError(f"{config_path}: no candidate gave a healthy run (the best score, "
+                          f"{ranked[0]['cv_rms_m']:.3f} m, came with {ranked[0].get('health_reasons')}); "
+                          "widen the grid or mend the config first")
     for r in ranked:  # JSON has no infinity: a failed candidate has no score
         for k in ("cv_rms_m", "cv_max_m"):
             if k in r and not math.isfinite(r[k]):
