@@ -354,3 +354,18 @@ def test_write_imu_writes_the_initial_epoch(tmp_path):
     back = io.read_imu(tmp_path / "r.csv")
     assert not back.dv_b[0].any()
     np.testing.assert_allclose(back.dv_b[1:], imu.dv_b[1:], rtol=1e-13)
+
+
+def test_a_parquet_column_that_is_not_a_number_is_refused(tmp_path):
+    """A timestamp time column would otherwise be read as microseconds."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    n = 5
+    cols = {"time_s": pa.array(np.arange(n) * 10_000, pa.timestamp("us"))}
+    for c in ("dtheta_x_rad", "dtheta_y_rad", "dtheta_z_rad", "dv_x_m_s", "dv_y_m_s", "dv_z_m_s"):
+        cols[c] = pa.array(np.zeros(n))
+    p = tmp_path / "imu.parquet"
+    pq.write_table(pa.table(cols), p)
+    with pytest.raises(InputError, match=r"imu\.parquet: column 'time_s' is of type timestamp\[us\]; expected numbers"):
+        io.read_imu(p)

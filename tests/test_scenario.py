@@ -314,3 +314,22 @@ def test_mount_must_be_angles(tmp_path):
                  '[[segment]]\ntype = "static"\nduration_s = 1.0\n')
     with pytest.raises(ConfigError, match="mount_rpy_deg"):
         load_scenario(p)
+
+
+def test_simulate_in_one_format_does_not_leave_the_other_formats_files(tmp_path):
+    """A Parquet run into a folder of an earlier CSV run: refused without
+    --force, and with it the CSV files go (a config naming them would
+    otherwise read the old run)."""
+    from inskit.errors import InputError
+    from inskit.jobs.simulate import write_simulation
+
+    p = tmp_path / "s.toml"
+    p.write_text('name = "still"\n[start]\nlat_deg = 45\nlon_deg = 7\n[imu]\nrate_hz = 20\n'
+                 '[[segment]]\ntype = "static"\nduration_s = 3\n')
+    sim = simulate(load_scenario(p))
+    out = tmp_path / "o"
+    write_simulation(sim, out, plot=False)
+    with pytest.raises(InputError, match=r"imu\.csv: already exists"):
+        write_simulation(sim, out, plot=False, file_format="parquet")
+    write_simulation(sim, out, overwrite=True, plot=False, file_format="parquet")
+    assert sorted(f.name for f in out.iterdir()) == ["gnss.parquet", "imu.parquet", "truth.parquet"]

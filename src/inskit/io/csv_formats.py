@@ -53,9 +53,16 @@ def read_table(path) -> tuple[Path, pd.DataFrame]:
         import pyarrow.parquet as pq
 
         try:
-            df = pq.read_table(path).to_pandas()
+            table = pq.read_table(path)
         except Exception as exc:  # pyarrow raises several kinds for a damaged file
             raise InputError(f"{path}: not a readable Parquet file ({str(exc).splitlines()[0]})") from None
+        import pyarrow as pa
+
+        for name, col in zip(table.column_names, table.columns):  # a timestamp or text column is no number
+            if not (pa.types.is_floating(col.type) or pa.types.is_integer(col.type)):
+                raise InputError(f"{path}: column '{name}' is of type {col.type}; expected numbers "
+                                 "(float or integer columns, times in seconds)")
+        df = table.to_pandas()
         if len(df) == 0:
             raise InputError(f"{path}: has columns but no data rows")
         return path, df

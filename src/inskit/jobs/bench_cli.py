@@ -77,8 +77,16 @@ def bench_drive(duration_s: float, rate_hz: float, root: Path | None = None) -> 
     from ..simulation.scenario import load_scenario, simulate
     from .simulate import write_simulation
 
+    import hashlib
+
     root = cache_dir() if root is None else Path(root)
-    d = root / f"car_{duration_s:g}s_{rate_hz:g}hz_v{__version__}"
+    # keyed on what makes the files (the scenario, the navigate config, the simulator's and writers' code), so a
+    # change of any of them makes new files rather than reusing stale ones
+    src = Path(__file__).resolve().parents[1]
+    h = hashlib.sha256((_EXAMPLES / "car.toml").read_bytes() + NAV_CONFIG.encode())
+    for f in sorted((src / "simulation").glob("*.py")) + [src / "io" / "csv_formats.py", src / "files.py"]:
+        h.update(f.read_bytes())
+    d = root / f"car_{duration_s:g}s_{rate_hz:g}hz_v{__version__}_{h.hexdigest()[:12]}"
     if (d / "done").is_file():
         return d
     sc = load_scenario(_EXAMPLES / "car.toml")

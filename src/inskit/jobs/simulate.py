@@ -31,11 +31,15 @@ def write_simulation(sim: Simulation, out_dir, *, overwrite=False, plot=True, fi
     files = [out / f"{n}.{file_format}" for n in ("imu", "gnss", "truth")]
     if sim.raw is not None:
         files += [out / "obs.rnx", out / "nav.rnx", out / "raw_truth.csv"]
+    other = [out / f"{n}.{'csv' if file_format == 'parquet' else 'parquet'}" for n in ("imu", "gnss", "truth")]
+    stale = [f for f in other if f.exists()]  # left beside the new files they would pass for this run's
     if not overwrite:
-        for f in files:
+        for f in files + stale:
             if f.exists():
                 raise InputError(f"{f}: already exists; refusing to overwrite it (use --force)")
     out.mkdir(parents=True, exist_ok=True)
+    for f in stale:  # --force: an earlier run in the other format goes, not only the files of this one
+        f.unlink()
     imu, gnss, truth = sim.imu, sim.gnss, sim.truth
     if sim.raw is not None:
         sow0 = raw_start_sow(sim)
