@@ -130,3 +130,13 @@ def test_write_csv_fast_path_keeps_text_columns_and_quotes_when_needed(tmp_path)
     write_csv(p, {"m": np.array(["a,b", "c"], dtype=object), "t": np.array([1.0, 2.0])}, "%.10g")
     back = pd.read_csv(p)
     assert back["m"].tolist() == ["a,b", "c"] and back["t"].tolist() == [1.0, 2.0]
+
+
+def test_write_csv_fast_path_writes_integers_exactly(tmp_path):
+    import numpy as np
+
+    from inskit.files import write_csv
+
+    p = tmp_path / "i.csv"
+    write_csv(p, {"n": np.array([1234567, 2**53 + 1]), "t": np.array([1.5, 2.0])}, "%.6g")
+    assert p.read_text() == "n,t\n1234567,1.5\n9007199254740993,2\n"

@@ -242,3 +242,15 @@ def test_navigate_writes_parquet_and_decimated_csv_and_evaluate_reads_both(tmp_p
                   "--out", str(tmp_path / "pq"), "--no-plots", "--output-format", "parquet", "--output-rate", "5"])
     assert isinstance(r.exception, ConfigError) and "rate_hz = 5 sets the rate of the CSV files" in str(r.exception)
     assert not (tmp_path / "pq" / "summary.json").exists()
+
+
+def test_damaged_inskit_metadata_is_an_input_error(tmp_path):
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from inskit.errors import InputError
+
+    t = pa.table({"time_s": [0.0, 1.0]}).replace_schema_metadata({b"inskit": b"{not json"})
+    pq.write_table(t, tmp_path / "m.parquet")
+    with pytest.raises(InputError, match=r"m\.parquet: its inskit metadata is not readable JSON"):
+        P.read_metadata(tmp_path / "m.parquet")

@@ -413,3 +413,10 @@ def test_contradictions_between_sections_are_refused_when_the_config_is_read():
     assert _cfg(LOOSE, odometer={"file": "odo.csv", "with_nhc": True}, constraints={"nhc": False}).odometer.with_nhc
     with pytest.raises(ConfigError, match=r"field 'filter\.scheme': the uncoupled scheme .* no tight form"):
         _cfg(TIGHT, filter={"scheme": "uncoupled"})
+
+
+@pytest.mark.parametrize("windows, msg", [([[-5.0, 2.0]], "starts before the first GNSS epoch"),
+                                          ([[1.0, 2.0], [1.5, 3.0]], "overlap")])
+def test_outage_windows_in_the_file_follow_the_cli_rules(windows, msg):
+    with pytest.raises(ConfigError, match=rf"field 'outages\.windows_s'.*{msg}"):
+        _cfg(LOOSE, outages={"protocol": "windows", "windows_s": windows})

@@ -75,7 +75,7 @@ def write_csv(path, columns, float_format="%.15g"):
                          for v in cols.values() if v.dtype.kind in "OU")  # the writer does not quote
         if cols and plain_text and all(v.ndim == 1 and v.dtype.kind in "fiubOU" for v in cols.values()) \
                 and len({len(v) for v in cols.values()}) == 1:
-            return write_csv_fast(path, {k: v if v.dtype.kind in "OU" else v.astype(np.float64)
+            return write_csv_fast(path, {k: v if v.dtype.kind in "OUiub" else v.astype(np.float64)
                                          for k, v in cols.items()}, int(m.group(1)))
     df = columns if isinstance(columns, pd.DataFrame) else pd.DataFrame(columns)
     with atomic_write(path) as tmp:
@@ -147,8 +147,15 @@ def write_csv_fast(path, cols: dict, digits=CSV_DIGITS) -> Path:
 
     path = Path(path)
     header = (",".join(cols) + "\n").encode()
-    table = pa.Table.from_arrays([pa.array(np.asarray(v).astype(str)) if np.asarray(v).dtype.kind in "OU"
-                                  else format_column(v, digits) for v in cols.values()], names=list(cols))
+    def column(v):  # text and integers as they are (an integer is exact: no rounding to digits), floats formatted
+        v = np.asarray(v)
+        if v.dtype.kind in "OU":
+            return pa.array(v.astype(str))
+        if v.dtype.kind in "iub":
+            return pa.array(v)
+        return format_column(v, digits)
+
+    table = pa.Table.from_arrays([column(v) for v in cols.values()], names=list(cols))
     opts = pcsv.WriteOptions(include_header=False, batch_size=8192, quoting_style="none")
     with atomic_write(path) as tmp:
         if path.name.endswith(".gz"):

@@ -271,6 +271,9 @@ def read_metadata(path) -> dict:
     except (pa.ArrowException, OSError) as exc:
         raise InputError(f"{path}: not a readable Parquet file ({str(exc).splitlines()[0]})") from None
     raw = (schema.metadata or {}).get(b"inskit")
-    meta = json.loads(raw) if raw else {}
+    try:
+        meta = json.loads(raw) if raw else {}
+    except (ValueError, UnicodeDecodeError):
+        raise InputError(f"{path}: its inskit metadata is not readable JSON (a damaged or foreign file)") from None
     meta.setdefault("units", {n: column_unit(n) for n in schema.names})
     return meta

@@ -481,6 +481,14 @@ class OutagesSection(_Strict):
         for a, b in v:
             if not b > a:
                 raise ValueError(f"outage window [{a}, {b}] must end after it starts")
+            if a < 0:
+                raise ValueError(f"outage window [{a}, {b}] starts before the first GNSS epoch (times are seconds "
+                                 "after it, >= 0)")
+        w = sorted(v)
+        for (a0, b0), (a1, b1) in zip(w, w[1:]):
+            if a1 < b0:
+                raise ValueError(f"outage windows [{a0}, {b0}] and [{a1}, {b1}] overlap (their fixes would be "
+                                 "scored twice); merge them")
         return v
 
     @model_validator(mode="after")
