@@ -278,3 +278,41 @@ def test_measurements_after_a_change_of_rate_are_used_not_skipped():
 def test_gate_max_consecutive_must_be_none_or_a_positive_integer(bad):
     with pytest.raises(InputError, match="gate_max_consecutive"):
         FilterSettings(gate_max_consecutive=bad)
+
+
+@pytest.mark.parametrize("settings", [FilterSettings(scheme="closed"), FilterSettings(scheme="open"),
+                                      FilterSettings(scheme="closed", compiled_updates=False)],
+                         ids=["closed-compiled", "open", "closed-python"])
+def test_a_streamed_run_hands_every_row_once_and_matches_the_whole_run(settings):
+    """Segments of 37 rows (a node ends each): the sink sees rows 0 .. N-1
+    once each, in order, with the same states, estimates and sigmas as the
+    run that keeps every row; the kept rows are those rows."""
+    from inskit.integration import NonHolonomic, ZeroVelocity
+
+    imu, truth, g = _static_setup(700)
+    s0 = truth.state(0)
+    init = type(s0).from_euler(s0.time, s0.lla + [5e-8, -5e-8, 0.5], s0.v_n + 0.05, s0.euler + [0.002, -0.002, 0.01])
+    meas = [GnssPosition(g), ZeroVelocity([(0.0, 7.0)], 10.0, 0.02), NonHolonomic([(0.0, 7.0)], 10.0, 0.1)]
+    whole = run_filter(imu, init, meas, settings, segment_rows=37)
+    segs = []
+
+    def sink(sg):
+        segs.append((sg.start, sg.time.copy(), sg.lla.copy(), sg.v_n.copy(), sg.q_nb.copy(), sg.aux.copy(),
+                     sg.sigma.copy()))
+
+    keep = np.array([5, 36, 37, 38, 400])
+    st = run_filter(imu, init, meas, settings, sink=sink, keep_rows=keep, segment_rows=37)
+    starts = [s[0] for s in segs]
+    assert starts[0] == 0 and all(len(s[1]) <= 38 for s in segs)
+    assert np.array_equal(np.concatenate([s[1] for s in segs]), imu.time)  # every row once, in order
+    lla, v, q, aux, sig = (np.concatenate([s[i] for s in segs]) for i in range(2, 7))
+    assert np.array_equal(lla, whole.nav.lla) and np.array_equal(v, whole.nav.v_n)
+    assert np.array_equal(q, whole.nav.q_nb)
+    assert np.array_equal(aux, whole.aux) and np.array_equal(sig, whole.sigma)
+    rows = np.concatenate([[0], keep, [len(imu) - 1]])
+    assert np.array_equal(st.rows, rows) and st.n_rows == len(imu)
+    assert np.array_equal(st.nav.lla, whole.nav.lla[rows]) and np.array_equal(st.aux, whole.aux[rows])
+    assert st.counts == whole.counts
+    assert whole.counts["gnss_pos"]["used"] > 20 and whole.counts["zupt"]["used"] > 50
+    with pytest.raises(InputError, match="smoother"):
+        run_filter(imu, init, meas, FilterSettings(), sink=sink, smoother=True)

@@ -254,3 +254,36 @@ def test_damaged_inskit_metadata_is_an_input_error(tmp_path):
     pq.write_table(t, tmp_path / "m.parquet")
     with pytest.raises(InputError, match=r"m\.parquet: its inskit metadata is not readable JSON"):
         P.read_metadata(tmp_path / "m.parquet")
+
+
+@pytest.mark.parametrize("name", ["s.parquet", "s.csv", "s.csv.gz"])
+def test_a_solution_streamed_in_segments_is_the_file_written_whole(tmp_path, name):
+    """SolutionStream: segments of any size (one of a single row) make the
+    same file as write_solution of the whole, decimated on the whole run's
+    grid; nothing under the final name before commit; abort leaves nothing."""
+    sol = solution()
+    whole = tmp_path / "whole" / name
+    whole.parent.mkdir()
+    rate = None if name.endswith("parquet") else 10.0
+    io.write_solution(whole, sol, rate_hz=rate, columns=["navigation", "sg_x"], metadata={"solution": "forward"})
+    path = tmp_path / name
+    rows = None if rate is None else P.decimation_index(sol.time, rate)
+    w = P.SolutionStream(path, rows=rows, columns=["navigation", "sg_x"], metadata={"solution": "forward"})
+    for a, b in [(0, 1), (1, 700), (700, 701), (701, 2001)]:
+        part = NavSolution._trusted(sol.time[a:b], sol.lla[a:b], sol.v_n[a:b], sol.q_nb[a:b],
+                                    {k: v[a:b] for k, v in sol.extra.items()})
+        w.write(part, a)
+        assert not path.exists()
+    w.commit()
+    if name.endswith("parquet"):
+        assert pq.read_table(whole).equals(pq.read_table(path))
+        assert pq.read_table(whole).schema.metadata == pq.read_table(path).schema.metadata
+    else:
+        import gzip
+
+        opener = gzip.open if name.endswith(".gz") else open
+        assert opener(whole, "rb").read() == opener(path, "rb").read()
+    w2 = P.SolutionStream(tmp_path / ("x" + name))
+    w2.write(sol, 0)
+    w2.abort()
+    assert not list(tmp_path.glob("*x" + name + "*"))

@@ -256,6 +256,9 @@ def bench(quick, no_cli, as_json):
 @click.option("--output-rate", type=click.FloatRange(min=0, min_open=True), metavar="HZ",
               help="Rows per second of the CSV solution files (default: [output] rate_hz, else 10 Hz); a rate at "
               "or above the IMU rate writes every epoch.")
+@click.option("--stream", type=click.Choice(["auto", "on", "off"]),
+              help="Write the forward solution files while the filter runs, memory bounded whatever the log's "
+              "length (default: [output] stream, else auto: above 1,000,000 IMU epochs).")
 @click.option("--truth", "truth_file", type=click.Path(dir_okay=False),
               help="A truth file (e.g. from inskit simulate; sets [truth] file): the outages are also scored "
               "against it (keys ..._vs_truth_...) and its errors added to the summary.")
@@ -266,8 +269,8 @@ def bench(quick, no_cli, as_json):
               "the run (as `inskit report`).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_arm, imu_time_offset, scheme, outages,
-             smooth, calibrate_time_offset, out_dir, force, no_plots, output_format, output_rate, truth_file, gravity,
-             strict, with_report, as_json):
+             smooth, calibrate_time_offset, out_dir, force, no_plots, output_format, output_rate, stream, truth_file,
+             gravity, strict, with_report, as_json):
     """INS/GNSS integration from a TOML config file or flags."""
     from .jobs import config as C
     from .jobs import navigate as N
@@ -301,6 +304,8 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
         over.setdefault("output", {})["format"] = output_format
     if output_rate is not None:
         over.setdefault("output", {})["rate_hz"] = output_rate
+    if stream:
+        over.setdefault("output", {})["stream"] = stream
     if truth_file:
         over["truth"] = {"file": str(Path(truth_file).resolve())}
     if gravity:
@@ -330,15 +335,20 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
         cfg = cfg.model_copy(update={"imu": cfg.imu.model_copy(update={"time_offset_s": best})})
         extra["time_offset_calibration"] = {"best_s": best, "evaluations": [list(e) for e in evals]}
     with _progress(None, "navigate") as bar:
-        res = N.navigate(cfg, smooth=smooth, progress=bar.update, log=_log)
-    s = N.summary(res)
-    s.update(extra)
-    text_extra = N.truth_errors_text(s["truth_errors"]) if "truth_errors" in s else ""
-    if not as_json:  # the result first: the files and plots (a second or two) follow
-        _emit(s, False, N.outage_table_text(s) + text_extra)
-    if force:
-        N.clear_previous_run(target)
-    files = N.write_outputs(res, target, s)
+        res = N.navigate(cfg, smooth=smooth, progress=bar.update, log=_log, stream_dir=target)
+    try:
+        s = N.summary(res)
+        s.update(extra)
+        text_extra = N.truth_errors_text(s["truth_errors"]) if "truth_errors" in s else ""
+        if not as_json:  # the result first: the files and plots (a second or two) follow
+            _emit(s, False, N.outage_table_text(s) + text_extra)
+        if force:
+            N.clear_previous_run(target)
+        files = N.write_outputs(res, target, s)
+    except BaseException:  # the streamed solution files (temporary names) go with the run
+        for w in res.streams or ():
+            w.abort()
+        raise
     if with_report:
         from .jobs.report import build_report
 

@@ -85,6 +85,8 @@ def write_csv(path, columns, float_format="%.15g"):
 
 #: significant digits of the CSV values (those of the earlier ``%.15g`` files)
 CSV_DIGITS = 15
+#: rows formatted at a time by :func:`write_csv_fast`
+CSV_BLOCK_ROWS = 1 << 17
 
 
 def round_significant(x, digits=CSV_DIGITS) -> np.ndarray:
@@ -155,17 +157,23 @@ def write_csv_fast(path, cols: dict, digits=CSV_DIGITS) -> Path:
             return pa.array(v)
         return format_column(v, digits)
 
-    table = pa.Table.from_arrays([column(v) for v in cols.values()], names=list(cols))
     opts = pcsv.WriteOptions(include_header=False, batch_size=8192, quoting_style="none")
+    n = len(next(iter(cols.values()))) if cols else 0
+    step = CSV_BLOCK_ROWS  # formatted text in blocks: the memory of one block, whatever the table's length
+
+    def write(out):
+        out.write(header)
+        for a in range(0, n, step):
+            pcsv.write_csv(pa.Table.from_arrays([column(np.asarray(v)[a:a + step]) for v in cols.values()],
+                                                names=list(cols)), out, opts)
+
     with atomic_write(path) as tmp:
         if path.name.endswith(".gz"):
             with pa.CompressedOutputStream(str(tmp), "gzip") as out:
-                out.write(header)
-                pcsv.write_csv(table, out, opts)
+                write(out)
         else:
             with open(tmp, "wb") as fh:
-                fh.write(header)
-                pcsv.write_csv(table, fh, opts)
+                write(fh)
     return path
 
 

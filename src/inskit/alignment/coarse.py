@@ -171,8 +171,10 @@ def startup_state(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), *, 
     """
     t_move = detect_motion_start(gnss, motion_threshold_m_s)
     static_end = t_move - 1.0
-    w, f = imu.rates()
-    static = (imu.time > imu.time[0]) & (imu.time <= static_end)
+    k_static = int(np.searchsorted(imu.time, static_end, side="right"))
+    head = imu.slice(0, max(k_static, 2))  # the rates of the static start only, not of the whole log
+    w, f = head.rates()
+    static = (head.time > head.time[0]) & (head.time <= static_end)
     if imu.time[0] < gnss.time[0] - 1.0 or static_end - imu.time[0] < min_static_s:
         raise InputError(
             f"start-up needs the IMU at rest for {min_static_s:.0f} s at its start with GNSS from the start; "

@@ -311,10 +311,12 @@ def propagate(imu, nav, filt, model, out, k0, k1, flags):
     model : tuple ``(kidx, q_psd, rows, cols, active, crow, ccol, cval)``
         Layout index, process noise, F pattern and active rows, constant
         entries of F.
-    out : tuple ``(lla, v_n, q_nb, var)``
-        Per-row outputs; ``var`` (N, n) receives the variances of every
-        state (the estimates in ``aux`` change only at updates: the caller
-        records them there).
+    out : tuple ``(lla, v_n, q_nb, var, base)``
+        Per-row outputs; ``var`` receives the variances of every state (the
+        estimates in ``aux`` change only at updates: the caller records them
+        there).  Row ``k`` goes to index ``k - base[0]`` (``base``: (1,)
+        int64), so the arrays may hold the whole run (base 0) or one segment
+        of it (a streamed run, :func:`inskit.integration.engine.run_filter`).
     flags : tuple ``(coning, want_phi, open_loop, second_order, gravity)``
         ``gravity``: the code of the gravity model (:data:`inskit.earth.GRAVITY_MODELS`).
     """
@@ -329,8 +331,9 @@ def propagate_rows(imu, nav, filt, model, out, k0, k1, flags, work):
     lla, v_n, q_nb, carry = nav
     x, P, aux, Phi = filt
     kidx, q_psd, rows, cols, active, crow, ccol, cval = model
-    out_lla, out_v, out_q, out_var = out
+    out_lla, out_v, out_q, out_var, obase = out
     coning, want_phi, open_loop, second_order, gravity = flags
+    b = obase[0]
     F, A, B, T, tmp, xt, xtmp = work
     n = kidx[N_STATES]
     C = np.empty((3, 3))
@@ -362,15 +365,15 @@ def propagate_rows(imu, nav, filt, model, out, k0, k1, flags, work):
         if open_loop:
             apply_correction(lla, v_n, q_nb, x, 1.0, o_lla, o_v, o_q)
             for i in range(3):
-                out_lla[k, i] = o_lla[i]
-                out_v[k, i] = o_v[i]
+                out_lla[k - b, i] = o_lla[i]
+                out_v[k - b, i] = o_v[i]
             for i in range(4):
-                out_q[k, i] = o_q[i]
+                out_q[k - b, i] = o_q[i]
         else:
             for i in range(3):
-                out_lla[k, i] = lla[i]
-                out_v[k, i] = v_n[i]
+                out_lla[k - b, i] = lla[i]
+                out_v[k - b, i] = v_n[i]
             for i in range(4):
-                out_q[k, i] = q_nb[i]
+                out_q[k - b, i] = q_nb[i]
         for i in range(n):
-            out_var[k, i] = P[i, i]  # variances; the caller takes the square roots in one pass
+            out_var[k - b, i] = P[i, i]  # variances; the caller takes the square roots in one pass

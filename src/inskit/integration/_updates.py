@@ -767,22 +767,23 @@ def _end_node(nav, filt, outs, flags, ctl, store, nodes):
     """The smoother's posterior and the node's output row (``write_row``)."""
     lla, v_n, q_nb = nav[0], nav[1], nav[2]
     P, aux = filt[1], filt[2]
-    out_lla, out_v, out_q, out_var = outs
+    out_lla, out_v, out_q, out_var, obase = outs
     n = P.shape[0]
     node = ctl[C_NODE]
     k = ctl[C_KCUR]
+    ko = k - obase[0]  # the output arrays may hold a segment of the run only (streaming)
     if flags[1]:
         st_Pp = store[2]
         for i in range(n):
             for j in range(n):
                 st_Pp[node, i, j] = P[i, j]
     for i in range(3):
-        out_lla[k, i] = lla[i]
-        out_v[k, i] = v_n[i]
+        out_lla[ko, i] = lla[i]
+        out_v[ko, i] = v_n[i]
     for i in range(4):
-        out_q[k, i] = q_nb[i]
+        out_q[ko, i] = q_nb[i]
     for i in range(n):
-        out_var[k, i] = P[i, i]
+        out_var[ko, i] = P[i, i]
     node_rows, node_aux = nodes
     r = ctl[C_NROW]
     node_rows[r] = k

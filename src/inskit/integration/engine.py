@@ -23,6 +23,13 @@ the items of every other plug-in back to :func:`run_filter`'s Python path on
 the same state; the open loop, blocks with their own feedback and
 ``FilterSettings(compiled_updates=False)`` run every update in Python (the
 same results to rounding).
+
+Streaming: the run goes in segments of :data:`SEGMENT_ROWS` IMU rows (a node
+without a measurement ends each).  Given a ``sink``, :func:`run_filter` hands
+each finished segment (every row's state, estimates and sigmas) to it and
+keeps only the rows asked for, so its memory does not grow with the log;
+without one it keeps every row.  Both make the same nodes, so both give the
+same numbers.
 """
 
 from __future__ import annotations
@@ -47,6 +54,36 @@ SCHEMES = ("closed", "open")
 _default_feedback = StateBlock.feedback
 #: blocks whose sigmas go into the named solution columns by default
 NAV_SIGMA_BLOCKS = ("pos", "vel", "att")
+#: IMU rows per segment of a run (see the module text): 5.5 min at 200 Hz
+SEGMENT_ROWS = 65536
+
+
+@dataclass(frozen=True)
+class Segment:
+    """IMU rows ``start .. start + len(time) - 1`` of a filter run, as
+    handed to a streaming run's sink (views valid only during the call:
+    copy what you keep).
+
+    Attributes
+    ----------
+    start : int
+        Absolute IMU row of the first row.
+    time : (m,) ndarray
+    lla, v_n, q_nb : (m, 3), (m, 3), (m, 4) ndarray
+        Navigation state (radians, metres, NED, quaternion of ``C_nb``).
+    aux : (m, layout.aux_size) ndarray
+        Estimates held at each row.
+    sigma : (m, layout.size) ndarray
+        1-sigma of every state.
+    """
+
+    start: int
+    time: np.ndarray
+    lla: np.ndarray
+    v_n: np.ndarray
+    q_nb: np.ndarray
+    aux: np.ndarray
+    sigma: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -289,7 +326,8 @@ def _check_measurements(measurements):
 
 
 def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSettings, *,
-               smoother=False, progress=None, extra_noise=None) -> FilterOutput:
+               smoother=False, progress=None, extra_noise=None, sink=None, keep_rows=None,
+               segment_rows=SEGMENT_ROWS) -> FilterOutput:
     """Run the integration filter forward over the IMU data.
 
     Parameters
@@ -308,6 +346,15 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         ``{row: (layout.size,) variances}`` added to the covariance's
         diagonal right after propagating through that IMU row (a gap bridged
         in the IMU log, say: see :mod:`.gaps`).
+    sink : callable, optional
+        Stream the run: called with each finished :class:`Segment`, in order,
+        rows ``0 .. N-1`` once each.  The returned output then holds only
+        ``keep_rows`` (and its ``rows`` attribute says which).
+    keep_rows : (m,) int array, optional
+        With ``sink``: the IMU rows the returned output keeps (sorted, unique;
+        row 0 and the last row are always kept).  Default: every node row.
+    segment_rows : int
+        Rows per segment (tests use small ones).
 
     Returns
     -------
@@ -321,6 +368,12 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
                          "where the filter's NED error model is singular")
     if smoother and settings.scheme != "closed":
         raise InputError("the RTS smoother works on the closed-loop filter only")
+    stream = sink is not None
+    if stream and smoother:
+        raise InputError("the RTS smoother needs the whole forward run: it cannot be streamed")
+    S = int(segment_rows)
+    if S < 2:
+        raise InputError(f"segment_rows must be at least 2, got {segment_rows!r}")
     _check_measurements(measurements)
     lay = settings.layout
     n = lay.size
@@ -351,16 +404,18 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     carry = np.zeros(11)
     carry[0] = imu.time[0]
     N = len(imu)
-    out_lla = np.empty((N, 3))
-    out_v = np.empty((N, 3))
-    out_q = np.empty((N, 4))
-    out_var = np.empty((N, n))
+    cap = min(N, S + 1) if stream else N  # a segment holds at most S + 1 rows (the first one: rows 0 .. S)
+    out_lla = np.empty((cap, 3))
+    out_v = np.empty((cap, 3))
+    out_q = np.empty((cap, 4))
+    out_var = np.empty((cap, n))
+    obase = np.zeros(1, np.int64)  # absolute row of the output arrays' first row
     w_raw = np.zeros(3)
     open_loop = settings.scheme == "open"
     want_store = smoother
     Phi = np.eye(n)
     nav = (lla, v_n, q_nb, carry)
-    outs = (out_lla, out_v, out_q, out_var)
+    outs = (out_lla, out_v, out_q, out_var, obase)
     imu_arrays = (imu.time, imu.dtheta_b, imu.dv_b)
     eye_n = np.eye(n)
     extra_noise = {int(k): np.asarray(v, float) for k, v in (extra_noise or {}).items()}
@@ -369,8 +424,9 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             raise InputError(f"extra_noise at row {k} must be {n} finite variances >= 0")
         if not 1 <= k < len(imu):
             raise InputError(f"extra_noise row {k} is outside the IMU rows 1..{len(imu) - 1}")
+    bounds = np.arange(S, N, S, dtype=np.int64)  # each segment ends at a node (without a measurement)
     it_k, it_t, it_m, it_pos, kept_rows, skipped = _nodes(imu, measurements, settings.smoother_node_s, want_store,
-                                                          sorted(extra_noise))
+                                                          sorted(extra_noise) + bounds.tolist())
     n_items = len(it_k)
     n_nodes = len(np.unique(it_k))
     # loop state shared with the compiled loop: item, rows done, node, rows written, ...
@@ -384,11 +440,12 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     st_dx = np.zeros((m_store, n))
 
     def write_row(k):
+        ko = k - int(obase[0])
         if open_loop:
-            K.apply_correction(lla, v_n, q_nb, x, 1.0, out_lla[k], out_v[k], out_q[k])
+            K.apply_correction(lla, v_n, q_nb, x, 1.0, out_lla[ko], out_v[ko], out_q[ko])
         else:
-            out_lla[k], out_v[k], out_q[k] = lla, v_n, q_nb
-        out_var[k] = P.diagonal()  # variances until the end of the run
+            out_lla[ko], out_v[ko], out_q[ko] = lla, v_n, q_nb
+        out_var[ko] = P.diagonal()  # variances until the end of the run
         r = ctl[U.C_NROW]
         node_rows[r] = k
         node_aux[r] = aux - x[aux_idx] if open_loop else aux
@@ -399,6 +456,39 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         K.propagate(imu_arrays, nav, filt, model, outs, k0, k1,
                     (settings.coning, want_phi, open_loop, settings.covariance_second_order,
                      earth.gravity_model_code(settings.gravity)))
+
+    if stream:
+        keep = (np.unique(np.concatenate([[0, N - 1], it_k])) if keep_rows is None
+                else np.unique(np.concatenate([[0, N - 1], np.asarray(keep_rows, np.int64)])))
+        if keep[0] < 0 or keep[-1] >= N:
+            raise InputError(f"keep_rows must lie in 0 .. {N - 1}")
+        nk = len(keep)  # filled segment by segment (no lists to concatenate: the peak stays the arrays)
+        kept = {"lla": np.empty((nk, 3)), "v": np.empty((nk, 3)), "q": np.empty((nk, 4)),
+                "aux": np.empty((nk, lay.aux_size)), "sigma": np.empty((nk, n))}
+
+    def flush(k1):
+        """Hand rows ``obase .. k1-1`` (final) to the sink, keep the rows
+        asked for, and start the next segment at ``k1``."""
+        a = int(obase[0])
+        if k1 <= a:
+            return
+        m = k1 - a
+        seg_lla, seg_v, seg_q = out_lla[:m], out_v[:m], out_q[:m]
+        _check_rows(imu.time, a, seg_lla, seg_v, seg_q)
+        nr = int(ctl[U.C_NROW])
+        hold = np.searchsorted(node_rows[:nr], np.arange(a, k1), side="right") - 1
+        seg_aux = node_aux[:nr][hold]
+        seg_sig = np.sqrt(np.maximum(out_var[:m], 0.0))
+        sink(Segment(a, imu.time[a:k1], seg_lla, seg_v, seg_q, seg_aux, seg_sig))
+        lo, hi = np.searchsorted(keep, a), np.searchsorted(keep, k1)
+        sel = keep[lo:hi] - a
+        for key, arr in (("lla", seg_lla), ("v", seg_v), ("q", seg_q), ("aux", seg_aux), ("sigma", seg_sig)):
+            kept[key][lo:hi] = arr[sel]
+        obase[0] = k1
+
+    def segment_stop(k_done):
+        """The last row + 1 a node of the current segment may end at."""
+        return ((k_done - 1) // S + 1) * S + 1
 
     write_row(0)
     counts = {m.name: {"used": 0, "rejected": 0, "skipped": skipped[m.name]} for m in measurements}
@@ -566,7 +656,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         reported = int(ctl[U.C_KDONE])
         while True:
             i = int(ctl[U.C_I])
-            ctl[U.C_KSTOP] = min((k_list[i] if i < n_items else N) + chunk, N + 1)
+            ctl[U.C_KSTOP] = min((k_list[i] if i < n_items else N) + chunk, N + 1, segment_stop(int(ctl[U.C_KDONE])))
             code = U.run_nodes(imu_arrays, nav, filt, model, outs, flags, items, meas, lidx,
                                (gpar, thr), rstate, recs, recov, counts, store, nodes, dyn, fb, w_raw, C, ctl)
             if progress is not None and ctl[U.C_KDONE] > reported:
@@ -575,6 +665,8 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             if code == U.DONE:
                 break
             if code == U.CHUNK:
+                if stream:
+                    flush(int(ctl[U.C_KDONE]))
                 continue
             i = int(ctl[U.C_I])
             if code == U.HANDBACK:
@@ -662,27 +754,29 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
                 st_Pp[node] = P
             write_row(k_end)
             ctl[U.C_NODE] = node + 1
+            if stream and k_end % S == 0:
+                flush(k_end + 1)
             i = j
         rec_c = None
     k_done = int(ctl[U.C_KDONE])
+    if stream:
+        flush(k_done)  # the tail below then fits in the segment
     if k_done < N:
         propagate(k_done, N, False)
         if progress is not None:
             progress(N - k_done)
     predict_aux(float(t_imu[-1]))
     check_covariance(P, "at the end of the run")
-    if not (np.isfinite(out_lla).all() and np.isfinite(out_v).all() and np.isfinite(out_q).all()):
-        raise FilterDivergence("the navigation solution became NaN: the filter diverged")
-    near = np.nonzero(~(np.abs(out_lla[:, 0]) < np.radians(89.9)))[0]
-    if len(near):
-        raise InputError(f"the solution reaches latitude {np.degrees(out_lla[near[0], 0]):.4f} deg at t = "
-                         f"{imu.time[near[0]]:.3f} s, within 0.1 deg of a pole, where the NED filter is singular")
+    if not stream:
+        _check_rows(imu.time, 0, out_lla, out_v, out_q)
     if open_loop or len(dyn_idx):  # estimates that drift between updates: record them at the end too
         write_row_aux_only = int(ctl[U.C_NROW])
         node_rows[write_row_aux_only] = N - 1
         node_aux[write_row_aux_only] = aux - x[aux_idx] if open_loop else aux
         ctl[U.C_NROW] += 1
     n_rows = int(ctl[U.C_NROW])
+    if stream:
+        flush(N)
 
     def spread_aux():  # every row holds the estimates of the last node at or before it (they change only at updates)
         hold = np.searchsorted(node_rows[:n_rows], np.arange(N), side="right") - 1
@@ -711,10 +805,28 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     store = None
     if want_store:
         store = SmootherStore(st_k.tolist(), list(st_Pm), list(st_Pp), list(st_Phi), list(st_dx))
-    nav_sol = NavSolution._trusted(imu.time, out_lla, out_v, out_q)
-    out = FilterOutput(nav_sol, spread_aux, sigma, lay, counts, innovations, settings, store)
+    if stream:
+        nav_sol = NavSolution._trusted(imu.time[keep], kept["lla"], kept["v"], kept["q"])
+        out = FilterOutput(nav_sol, kept["aux"], kept["sigma"], lay, counts, innovations, settings, store)
+        out.rows = keep
+    else:
+        nav_sol = NavSolution._trusted(imu.time, out_lla, out_v, out_q)
+        out = FilterOutput(nav_sol, spread_aux, sigma, lay, counts, innovations, settings, store)
+        out.rows = None
+    out.n_rows = N
     out.recoveries = recoveries
     return out
+
+
+def _check_rows(t, a, lla, v, q):
+    """Refuse a solution that became NaN or came within 0.1 deg of a pole
+    (rows ``a ..`` of the run)."""
+    if not (np.isfinite(lla).all() and np.isfinite(v).all() and np.isfinite(q).all()):
+        raise FilterDivergence("the navigation solution became NaN: the filter diverged")
+    near = np.nonzero(~(np.abs(lla[:, 0]) < np.radians(89.9)))[0]
+    if len(near):
+        raise InputError(f"the solution reaches latitude {np.degrees(lla[near[0], 0]):.4f} deg at t = "
+                         f"{t[a + near[0]]:.3f} s, within 0.1 deg of a pole, where the NED filter is singular")
 
 
 def _innovation_arrays(rec):
