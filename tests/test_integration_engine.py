@@ -314,5 +314,37 @@ def test_a_streamed_run_hands_every_row_once_and_matches_the_whole_run(settings)
     assert np.array_equal(st.nav.lla, whole.nav.lla[rows]) and np.array_equal(st.aux, whole.aux[rows])
     assert st.counts == whole.counts
     assert whole.counts["gnss_pos"]["used"] > 20 and whole.counts["zupt"]["used"] > 50
-    with pytest.raises(InputError, match="smoother"):
+    with pytest.raises(InputError, match="store_sink"):
         run_filter(imu, init, meas, FilterSettings(), sink=sink, smoother=True)
+
+
+def test_a_streamed_smoother_store_holds_the_nodes_of_the_whole_run(tmp_path):
+    """The node data a streamed run hands to a DiskStore, read back in
+    blocks, is the in-memory store's, node for node; smoothing from it gives
+    the same rows."""
+    from inskit.integration import NonHolonomic
+    from inskit.integration.smoother import DiskStore, backward_pass, smooth_rows
+
+    imu, truth, g = _static_setup(700)
+    s0 = truth.state(0)
+    init = type(s0).from_euler(s0.time, s0.lla + [5e-8, -5e-8, 0.5], s0.v_n + 0.05, s0.euler + [0.002, -0.002, 0.01])
+    meas = [GnssPosition(g), NonHolonomic([(0.0, 7.0)], 10.0, 0.1)]
+    whole = run_filter(imu, init, meas, FilterSettings(), smoother=True, segment_rows=37)
+    store = DiskStore(tmp_path / "st", whole.layout.size)
+    st = run_filter(imu, init, meas, FilterSettings(), smoother=True, segment_rows=37, sink=lambda sg: None,
+                    store_sink=store, keep_rows=np.arange(len(imu)))
+    store.close()
+    assert st.store is None and store.m == len(whole.store.k)
+    k, Pm, Pp, Phi, dx = store.block(0, store.m)
+    assert np.array_equal(k, whole.store.k) and np.array_equal(Pm, np.array(whole.store.P_minus))
+    assert np.array_equal(Pp, np.array(whole.store.P_plus)) and np.array_equal(Phi, np.array(whole.store.Phi))
+    assert np.array_equal(dx, np.array(whole.store.dx))
+    from inskit.integration import rts_smooth
+
+    ref = rts_smooth(whole)
+    nodes = backward_pass(store.block, store.m, whole.layout.initial_covariance(), block_nodes=5)
+    nodes.t = imu.time[nodes.k]
+    got = smooth_rows(nodes, st.layout, st.nav, st.aux, np.arange(len(imu)))
+    assert np.array_equal(got.nav.lla, ref.nav.lla) and np.array_equal(got.sigma, ref.sigma)
+    store.remove()
+    assert not (tmp_path / "st").exists()

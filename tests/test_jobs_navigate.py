@@ -360,12 +360,14 @@ def test_imu_first_row_reaches_the_reader(tmp_path):
     assert len(got) == len(t) and got.time[0] == pytest.approx(0.0, abs=1e-12)
 
 
-def test_a_streamed_run_writes_the_same_files_and_summary(tmp_path):
+@pytest.mark.parametrize("smooth", [False, True], ids=["forward", "smoothed"])
+def test_a_streamed_run_writes_the_same_files_and_summary(tmp_path, smooth):
     """[output] stream = "on" on the real drive (55 k epochs in segments of
-    4096): the solution files are those of the run that keeps every row, byte
-    for byte in the CSV and value for value in the Parquet, and every summary
-    figure is the same; the summary says the run was streamed and how many
-    rows it kept; nothing is left under a temporary name."""
+    4096; smoothed: the node data on disk, the rows smoothed segment by
+    segment): the solution files are those of the run that keeps every row,
+    byte for byte in the CSV and value for value in the Parquet, and every
+    summary figure is the same; the summary says the run was streamed and
+    how many rows it kept; nothing is left under a temporary name."""
     import json
 
     import pyarrow.parquet as pq
@@ -380,7 +382,7 @@ def test_a_streamed_run_writes_the_same_files_and_summary(tmp_path):
         try:
             E.SEGMENT_ROWS = 4096  # many segments on a short log (both runs: the same nodes)
             E.run_filter.__kwdefaults__["segment_rows"] = 4096
-            res = navigate(cfg, stream_dir=tmp_path / mode)
+            res = navigate(cfg, stream_dir=tmp_path / mode, smooth=smooth)
         finally:
             E.SEGMENT_ROWS = seg
             E.run_filter.__kwdefaults__["segment_rows"] = seg
@@ -393,7 +395,11 @@ def test_a_streamed_run_writes_the_same_files_and_summary(tmp_path):
     for k in ("elapsed_s", "files", "streamed", "rows_kept", "rows_kept_note"):
         s0.pop(k, None), s1.pop(k, None)
     assert s0 == s1
-    assert (tmp_path / "off" / "solution_forward.csv").read_bytes() == (tmp_path / "on" / "solution_forward.csv").read_bytes()
-    a, b = (pq.read_table(tmp_path / m / "solution_forward.parquet") for m in ("off", "on"))
-    assert a.equals(b) and a.schema.metadata == b.schema.metadata
-    assert not list((tmp_path / "on").glob(".part-*"))
+    for label in ("forward", "smoothed") if smooth else ("forward",):
+        off, on = tmp_path / "off" / f"solution_{label}", tmp_path / "on" / f"solution_{label}"
+        assert off.with_suffix(".csv").read_bytes() == on.with_suffix(".csv").read_bytes()
+        a, b = (pq.read_table(p.with_suffix(".parquet")) for p in (off, on))
+        assert a.equals(b) and a.schema.metadata == b.schema.metadata
+    if smooth:
+        assert s0["solution"] == "smoothed" and s0["outage_end_horizontal_rms_m"] < s0["forward"]["outage_end_horizontal_rms_m"]
+    assert not list((tmp_path / "on").glob(".*"))  # no temporary file or scratch folder left

@@ -747,7 +747,7 @@ def _begin_node(t_imu, dth_all, q_nb, P, aux, Phi, want_store, propagated, k_end
     if lo < en_k.shape[0] and en_k[lo] == k_end:
         for i in range(n):
             P[i, i] += en_var[lo, i]
-    node = ctl[C_NODE]
+    node = ctl[C_NODE] - store[5][0]  # the store may hold the nodes of one segment only (streaming)
     if want_store:
         st_k, st_Pm, st_Phi, st_dx = store[0], store[1], store[3], store[4]
         st_k[node] = k_end
@@ -774,9 +774,10 @@ def _end_node(nav, filt, outs, flags, ctl, store, nodes):
     ko = k - obase[0]  # the output arrays may hold a segment of the run only (streaming)
     if flags[1]:
         st_Pp = store[2]
+        js = node - store[5][0]
         for i in range(n):
             for j in range(n):
-                st_Pp[node, i, j] = P[i, j]
+                st_Pp[js, i, j] = P[i, j]
     for i in range(3):
         out_lla[ko, i] = lla[i]
         out_v[ko, i] = v_n[i]
@@ -832,7 +833,9 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
         Recoveries, from ``ctl[C_NRECOV]`` on.
     counts : (M, N_COUNTS) int64
         used, rejected, skipped, rows, rows rejected, row-gated updates.
-    store : tuple ``(k, P_minus, P_plus, Phi, dx)`` per node.
+    store : tuple ``(k, P_minus, P_plus, Phi, dx, base)``
+        Per node; node ``j`` at index ``j - base[0]`` (``base``: (1,)
+        int64; a streamed run holds one segment's nodes).
     nodes : tuple ``(rows, aux)``
         The output rows written and the estimates held from each.
     dyn : tuple ``(idx, F, t_aux)``
@@ -1038,7 +1041,7 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
                 for e in range(def_aux.shape[0]):
                     aux[def_aux[e]] -= dx[def_x[e]]
                 if want_store:
-                    node = ctl[C_NODE]
+                    node = ctl[C_NODE] - store[5][0]
                     for e in range(n):
                         st_dx[node, e] += dx[e]
                 K.dcm_into(q_nb, C)

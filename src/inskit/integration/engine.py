@@ -327,7 +327,7 @@ def _check_measurements(measurements):
 
 def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSettings, *,
                smoother=False, progress=None, extra_noise=None, sink=None, keep_rows=None,
-               segment_rows=SEGMENT_ROWS) -> FilterOutput:
+               segment_rows=SEGMENT_ROWS, store_sink=None) -> FilterOutput:
     """Run the integration filter forward over the IMU data.
 
     Parameters
@@ -355,6 +355,11 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         row 0 and the last row are always kept).  Default: every node row.
     segment_rows : int
         Rows per segment (tests use small ones).
+    store_sink : callable, optional
+        With ``sink`` and ``smoother``: called with each segment's smoother
+        data ``(k, P_minus, P_plus, Phi, dx)`` (arrays over its nodes, views
+        valid during the call), which the returned output then does not keep
+        (``store`` None): :class:`inskit.integration.smoother.DiskStore`.
 
     Returns
     -------
@@ -369,8 +374,8 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     if smoother and settings.scheme != "closed":
         raise InputError("the RTS smoother works on the closed-loop filter only")
     stream = sink is not None
-    if stream and smoother:
-        raise InputError("the RTS smoother needs the whole forward run: it cannot be streamed")
+    if stream and smoother and store_sink is None:
+        raise InputError("a streamed run keeps no smoother data: give store_sink (a DiskStore) to smooth it")
     S = int(segment_rows)
     if S < 2:
         raise InputError(f"segment_rows must be at least 2, got {segment_rows!r}")
@@ -435,6 +440,11 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     node_rows = np.empty(n_nodes + 2, np.int64)
     node_aux = np.empty((n_nodes + 2, lay.aux_size))
     m_store = n_nodes if want_store else 0
+    if want_store and stream:  # the nodes of one segment at a time (between two flushes)
+        uk = np.unique(it_k)
+        edges = np.concatenate([[0], bounds, [N]])
+        m_store = int(np.diff(np.searchsorted(uk, edges, side="right")).max(initial=0)) + 1
+    nbase = np.zeros(1, np.int64)  # absolute node of the store's first entry
     st_k = np.zeros(m_store, np.int64)
     st_Pm, st_Pp, st_Phi = (np.empty((m_store, n, n)) for _ in range(3))
     st_dx = np.zeros((m_store, n))
@@ -480,6 +490,10 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         seg_aux = node_aux[:nr][hold]
         seg_sig = np.sqrt(np.maximum(out_var[:m], 0.0))
         sink(Segment(a, imu.time[a:k1], seg_lla, seg_v, seg_q, seg_aux, seg_sig))
+        if want_store:
+            c = int(ctl[U.C_NODE] - nbase[0])
+            store_sink(st_k[:c], st_Pm[:c], st_Pp[:c], st_Phi[:c], st_dx[:c])
+            nbase[0] = ctl[U.C_NODE]
         lo, hi = np.searchsorted(keep, a), np.searchsorted(keep, k1)
         sel = keep[lo:hi] - a
         for key, arr in (("lla", seg_lla), ("v", seg_v), ("q", seg_q), ("aux", seg_aux), ("sigma", seg_sig)):
@@ -582,7 +596,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         for sx, sa, b in custom_feedback:
             b.feedback(aux[sa], dx[sx])
         if want_store:
-            st_dx[ctl[U.C_NODE]] += dx
+            st_dx[ctl[U.C_NODE] - nbase[0]] += dx
         C_nb = np.empty((3, 3))  # a new array: an earlier context may still hold the old one
         K.dcm_into(q_nb, C_nb)
         return C_nb
@@ -643,7 +657,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
                 np.zeros(T, np.int64), np.zeros(T, np.int64), np.zeros(T_flat), np.zeros(T_flat))
         recov = (np.zeros(T, np.int64), np.zeros(T, np.int64), np.zeros(T), np.zeros(T, np.int64), np.zeros(T))
         counts = np.zeros((M, U.N_COUNTS), np.int64)
-        store = (st_k, st_Pm, st_Pp, st_Phi, st_dx)
+        store = (st_k, st_Pm, st_Pp, st_Phi, st_dx, nbase)
         nodes = (node_rows, node_aux)
         dyn = (dyn_idx, dyn_F, t_aux)
         fb = (default_aux_idx, default_x_idx)
@@ -739,10 +753,12 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             if k_end in extra_noise:
                 P[np.diag_indices(n)] += extra_noise[k_end]
             node = int(ctl[U.C_NODE])
+            js = node - int(nbase[0])
             if want_store:
-                st_k[node] = k_end
-                st_Pm[node] = P
-                st_Phi[node] = Phi
+                st_k[js] = k_end
+                st_Pm[js] = P
+                st_Phi[js] = Phi
+                st_dx[js] = 0.0
                 Phi[:] = eye_n
             C_nb = np.empty((3, 3))
             K.dcm_into(q_nb, C_nb)
@@ -751,7 +767,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
                     C_nb = python_item(idx, k_end, C_nb)
             check_covariance(P, f"at t = {t_imu[k_end]:.3f} s")
             if want_store:
-                st_Pp[node] = P
+                st_Pp[js] = P
             write_row(k_end)
             ctl[U.C_NODE] = node + 1
             if stream and k_end % S == 0:
@@ -803,7 +819,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     for r in recoveries:
         del r["_item"]
     store = None
-    if want_store:
+    if want_store and not stream:
         store = SmootherStore(st_k.tolist(), list(st_Pm), list(st_Pp), list(st_Phi), list(st_dx))
     if stream:
         nav_sol = NavSolution._trusted(imu.time[keep], kept["lla"], kept["v"], kept["q"])

@@ -525,8 +525,9 @@ class OutputSection(_Strict):
         "auto", description="write the forward solution files while the filter runs, keeping in memory only the "
         "rows the summary and plots use (every update node, the rows around each fix, every row of an outage "
         "window, the rate_hz grid), so memory does not grow with the log: on, off, or auto (on above "
-        "1,000,000 IMU epochs). The numbers are the same either way; the smoother and the uncoupled scheme "
-        "need the whole run and are never streamed")
+        "1,000,000 IMU epochs). The numbers are the same either way. A streamed smoother keeps its node data "
+        "(about 11 KB per update node) in a scratch folder of the result folder until the run ends; the "
+        "uncoupled scheme is never streamed")
     columns: list[str] = Field(
         ["all"], description="columns of the solution files: groups \"all\", \"navigation\" (time, position, "
         "velocity, attitude), \"navigation+sigma\", \"sigma\", \"estimates\" (biases, scale factors, lever arm, "

@@ -52,7 +52,7 @@ STREAM_ABOVE_EPOCHS = 1_000_000
 
 def streams_run(cfg: NavigateConfig, n_epochs: int, smooth: bool) -> bool:
     """Whether the forward run is streamed (``[output] stream``)."""
-    if smooth or cfg.filter.scheme == "uncoupled" or cfg.output.stream == "off":
+    if cfg.filter.scheme == "uncoupled" or cfg.output.stream == "off":
         return False
     return cfg.output.stream == "on" or n_epochs > STREAM_ABOVE_EPOCHS
 
@@ -74,8 +74,8 @@ def stream_keep_rows(t, gnss: GnssData, windows, rate_hz) -> np.ndarray:
     return np.unique(np.concatenate(parts).astype(np.int64))
 
 
-def open_streams(cfg: NavigateConfig, out_dir: Path, t, settings) -> list:
-    """The forward solution files of ``[output] format`` as
+def open_streams(cfg: NavigateConfig, out_dir: Path, t, settings, label="forward") -> list:
+    """The ``label`` solution files of ``[output] format`` as
     :class:`inskit.io.parquet.SolutionStream` (temporary names in
     ``out_dir`` until :func:`write_outputs` commits them)."""
     from ..io.parquet import SolutionStream, decimation_index
@@ -83,13 +83,76 @@ def open_streams(cfg: NavigateConfig, out_dir: Path, t, settings) -> list:
     o = cfg.output
     out = []
     if o.format in ("parquet", "both"):
-        out.append(SolutionStream(out_dir / "solution_forward.parquet", columns=o.columns,
-                                  metadata={"config": cfg.name, "solution": "forward", "scheme": settings.scheme}))
+        out.append(SolutionStream(out_dir / f"solution_{label}.parquet", columns=o.columns,
+                                  metadata={"config": cfg.name, "solution": label, "scheme": settings.scheme}))
     if o.format in ("csv", "both"):
         rows = decimation_index(t, o.rate_hz)
-        out.append(SolutionStream(out_dir / "solution_forward.csv", rows=None if len(rows) == len(t) else rows,
+        out.append(SolutionStream(out_dir / f"solution_{label}.csv", rows=None if len(rows) == len(t) else rows,
                                   columns=o.columns))
     return out
+
+
+class _ForwardScratch:
+    """The forward run's every row (time, position, velocity, attitude,
+    estimates) in files of a scratch folder, for the smoother's pass over
+    the rows after the filter's (a streamed smoothed run)."""
+
+    NAMES = (("lla", 3), ("v", 3), ("q", 4))
+
+    def __init__(self, folder, aux_size):
+        self.folder, self.aux_size = Path(folder), aux_size
+        self._fh = {k: open(self.folder / f"fwd_{k}.bin", "wb") for k, _ in self.NAMES + (("aux", 0),)}
+
+    def __call__(self, sg):
+        for k, a in (("lla", sg.lla), ("v", sg.v_n), ("q", sg.q_nb), ("aux", sg.aux)):
+            np.ascontiguousarray(a).tofile(self._fh[k])
+
+    def close(self):
+        for fh in self._fh.values():
+            fh.close()
+
+    def rows(self, a, b):
+        """``lla, v, q, aux`` of rows ``a .. b-1``."""
+        out = []
+        for k, w in self.NAMES + (("aux", self.aux_size),):
+            out.append(np.fromfile(self.folder / f"fwd_{k}.bin", count=(b - a) * w, offset=a * w * 8).reshape(b - a, w))
+        return out
+
+
+def _smooth_streamed(cfg, out, store, scratch, imu, settings, stream_dir, log=None):
+    """The RTS smoother of a streamed run: the backward pass over the nodes on
+    disk, then the smoothed rows segment by segment into their files;
+    returns the smoothed track at the forward run's kept rows and the
+    smoothed files' streams."""
+    from ..integration.engine import NAV_SIGMA_BLOCKS, SEGMENT_ROWS
+    from ..integration.smoother import backward_pass, smooth_rows
+
+    lay = settings.layout
+    t0 = time.perf_counter()
+    nodes = backward_pass(store.block, store.m, lay.initial_covariance())
+    nodes.t = imu.time[nodes.k]
+    streams = open_streams(cfg, Path(stream_dir), imu.time, settings, "smoothed")
+    try:
+        N = len(imu)
+        for a in range(0, N, SEGMENT_ROWS):
+            b = min(a + SEGMENT_ROWS, N)
+            lla, v, q, aux = scratch.rows(a, b)
+            tr = smooth_rows(nodes, lay, NavSolution._trusted(imu.time[a:b], lla, v, q), aux, np.arange(a, b))
+            sol = NavSolution._trusted(tr.nav.time, tr.nav.lla, tr.nav.v_n, tr.nav.q_nb,
+                                       lay.columns(tr.aux, tr.sigma, sigma_blocks=NAV_SIGMA_BLOCKS))
+            for w in streams:
+                w.write(sol, a)
+        for w in streams:
+            w.close()
+    except BaseException:
+        for w in streams:
+            w.abort()
+        raise
+    if log:
+        log(f"smoother: {store.m} nodes, rows written in {time.perf_counter() - t0:.1f} s")
+    kept = smooth_rows(nodes, lay, out.nav, out.aux, out.rows)
+    kept.rows = out.rows
+    return kept, streams
 
 
 WEEK_S = 604800.0  #: seconds in a GPS week
@@ -525,27 +588,47 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         if stream_dir is not None and streams_run(cfg, len(imu), smooth):
             from ..integration.engine import NAV_SIGMA_BLOCKS
 
+            import shutil
+            import tempfile
+
+            from ..integration.smoother import DiskStore
+
             Path(stream_dir).mkdir(parents=True, exist_ok=True)
             streams = open_streams(cfg, Path(stream_dir), imu.time, settings)
             lay = settings.layout
+            scratch_dir = Path(tempfile.mkdtemp(prefix=".smoother-", dir=stream_dir)) if smooth else None
+            store = DiskStore(scratch_dir / "store", lay.size) if smooth else None
+            scratch = _ForwardScratch(scratch_dir, lay.aux_size) if smooth else None
 
             def sink(sg):
                 extra_cols = lay.columns(sg.aux, sg.sigma, sigma_blocks=NAV_SIGMA_BLOCKS)
                 sol = NavSolution._trusted(sg.time, sg.lla, sg.v_n, sg.q_nb, extra_cols)
                 for w in streams:
                     w.write(sol, sg.start)
+                if scratch is not None:
+                    scratch(sg)
+            sm = None
             try:
                 out = run_filter(imu, initial, meas, settings, progress=progress, extra_noise=extra, sink=sink,
-                                 keep_rows=stream_keep_rows(imu.time, gnss, windows, cfg.output.rate_hz))
+                                 keep_rows=stream_keep_rows(imu.time, gnss, windows, cfg.output.rate_hz),
+                                 smoother=smooth, store_sink=store)
                 for w in streams:
                     w.close()
+                if smooth:
+                    store.close()
+                    scratch.close()
+                    sm, s_streams = _smooth_streamed(cfg, out, store, scratch, imu, settings, stream_dir, log)
+                    streams += s_streams
             except BaseException:
                 for w in streams:
                     w.abort()
                 raise
+            finally:
+                if scratch_dir is not None:
+                    shutil.rmtree(scratch_dir, ignore_errors=True)
         else:
             out = run_filter(imu, initial, meas, settings, smoother=smooth, progress=progress, extra_noise=extra)
-        sm = rts_smooth(out) if smooth else None
+            sm = rts_smooth(out) if smooth else None
     score_f = score_outages(out.solution, gnss, windows, lever, truth=truth)
     score_s = score_outages(sm.solution, gnss, windows, lever, truth=truth) if sm is not None else None
     return NavigateResult(cfg, imu, gnss, windows, used, startup, settings, out, sm, score_f, score_s,
@@ -912,7 +995,7 @@ def write_outputs(res: NavigateResult, out_dir: Path, s: dict) -> list:
     tracks = [("forward", res.forward)] + ([("smoothed", res.smoothed)] if res.smoothed is not None else [])
     if res.streams:  # written while the filter ran: renamed into place now
         files += [w.commit() for w in res.streams]
-        tracks = tracks[1:]
+        tracks = []
     for label, track in tracks:
         sol = track.solution
         if o.format in ("parquet", "both"):
