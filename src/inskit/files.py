@@ -66,8 +66,6 @@ def write_csv(path, columns, float_format="%.15g"):
     """
     import re
 
-    import pandas as pd
-
     m = re.fullmatch(r"%\.(\d+)g", float_format or "")
     if m and isinstance(columns, dict):
         cols = {k: np.asarray(v) for k, v in columns.items()}
@@ -77,6 +75,8 @@ def write_csv(path, columns, float_format="%.15g"):
                 and len({len(v) for v in cols.values()}) == 1:
             return write_csv_fast(path, {k: v if v.dtype.kind in "OUiub" else v.astype(np.float64)
                                          for k, v in cols.items()}, int(m.group(1)))
+    import pandas as pd  # only for what the fast writer does not take
+
     df = columns if isinstance(columns, pd.DataFrame) else pd.DataFrame(columns)
     with atomic_write(path) as tmp:
         df.to_csv(tmp, index=False, float_format=float_format)
@@ -114,6 +114,31 @@ def round_significant(x, digits=CSV_DIGITS) -> np.ndarray:
 CSV_EXPONENT_BELOW = 1e-2
 
 
+def arrow_array(v):
+    """A 1-D NumPy array as an Arrow array, built on its buffer (no copy for
+    float64 and int64).  ``pyarrow.array`` would do the same after
+    importing pandas (a quarter of a second) to check whether ``v`` is a
+    pandas object.  Floats become float64, integers int64, booleans bool,
+    anything else UTF-8 strings."""
+    import pyarrow as pa
+
+    v = np.asarray(v)
+    n = len(v)
+    if v.dtype.kind == "f":
+        return pa.Array.from_buffers(pa.float64(), n, [None, pa.py_buffer(np.ascontiguousarray(v, np.float64))])
+    if v.dtype.kind in "iu":
+        return pa.Array.from_buffers(pa.int64(), n, [None, pa.py_buffer(np.ascontiguousarray(v, np.int64))])
+    if v.dtype.kind == "b":
+        return pa.Array.from_buffers(pa.bool_(), n, [None, pa.py_buffer(np.packbits(v, bitorder="little"))])
+    b = np.char.encode(v.astype(str), "utf-8")
+    lengths = np.char.str_len(b).astype(np.int64)
+    width = b.dtype.itemsize
+    raw = np.frombuffer(b.tobytes(), np.uint8).reshape(n, width) if n and width else np.zeros((n, 0), np.uint8)
+    data = raw[np.arange(width) < lengths[:, None]]
+    offsets = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int32)
+    return pa.Array.from_buffers(pa.string(), n, [None, pa.py_buffer(offsets), pa.py_buffer(data)])
+
+
 def format_column(x, digits=CSV_DIGITS):
     """A float column as an Arrow column for the CSV writer: rounded to
     ``digits`` significant digits (:func:`round_significant`), numbers below
@@ -126,14 +151,16 @@ def format_column(x, digits=CSV_DIGITS):
     ar = np.abs(r)
     small = (ar >= 1e-290) & (ar < CSV_EXPONENT_BELOW)  # pyarrow writes smaller ones with an exponent itself
     if not small.any():
-        return pa.array(r)
+        return arrow_array(r)
     rs = r[small]
     e = np.floor(np.log10(np.abs(rs)))
     m = round_significant(rs * np.power(10.0, -e), digits)  # in [1, 10), or 10 after rounding 9.99..: still exact
-    text = pc.binary_join_element_wise(pc.cast(pa.array(m), pa.string()),
-                                       pc.cast(pa.array(e.astype(np.int64)), pa.string()), "e")
+    # call_function with arrays only: the keyword wrappers of pyarrow.compute import pandas to inspect arguments
+    sep = arrow_array(np.full(len(m), "e"))
+    text = pc.call_function("binary_join_element_wise", [pc.cast(arrow_array(m), pa.string()),
+                                                         pc.cast(arrow_array(e.astype(np.int64)), pa.string()), sep])
     # one float-to-text conversion per value: Arrow's (shortest round trip) for the rest
-    return pc.replace_with_mask(pc.cast(pa.array(r), pa.string()), pa.array(small), text)
+    return pc.call_function("replace_with_mask", [pc.cast(arrow_array(r), pa.string()), arrow_array(small), text])
 
 
 def write_csv_fast(path, cols: dict, digits=CSV_DIGITS) -> Path:
@@ -152,9 +179,9 @@ def write_csv_fast(path, cols: dict, digits=CSV_DIGITS) -> Path:
     def column(v):  # text and integers as they are (an integer is exact: no rounding to digits), floats formatted
         v = np.asarray(v)
         if v.dtype.kind in "OU":
-            return pa.array(v.astype(str))
+            return arrow_array(v.astype(str))
         if v.dtype.kind in "iub":
-            return pa.array(v)
+            return arrow_array(v)
         return format_column(v, digits)
 
     opts = pcsv.WriteOptions(include_header=False, batch_size=8192, quoting_style="none")

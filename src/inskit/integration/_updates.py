@@ -795,7 +795,7 @@ def _end_node(nav, filt, outs, flags, ctl, store, nodes):
     ctl[C_IN_NODE] = 0
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)  # nogil: a streamed run writes its files meanwhile
 def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstate, recs, recov, counts, store,
               nodes, dyn, fb, w_raw, C, ctl):
     """Run the filter over update nodes from item ``ctl[C_I]`` (see the

@@ -13,7 +13,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from .. import rotations as rot
 from ..errors import InputError
@@ -40,7 +39,7 @@ _GYRO_RAD_MAX = 10.0      # 99th percentile |w| in rad/s above this looks like d
 _GYRO_RAD_MEDIAN = 1.0    # median |w| in rad/s above this looks like deg/s
 
 
-def read_table(path) -> tuple[Path, pd.DataFrame]:
+def read_table(path) -> tuple:
     """Read a comma-separated table with one header line, or a Parquet file;
     gzip and Parquet data are recognised by their content whatever the file
     is called.  (In messages about a Parquet table, "line" n is row n - 2.)"""
@@ -68,6 +67,8 @@ def read_table(path) -> tuple[Path, pd.DataFrame]:
         return path, df
     with open(path, "rb") as fh:
         gz = fh.read(2) == b"\x1f\x8b"
+    import pandas as pd  # here, not at import: the lean readers and the writers need no pandas
+
     try:
         # only an empty cell is missing: 'nan', 'NA', 'null' stay text, so a message can show what the cell holds
         df = pd.read_csv(path, skipinitialspace=True, compression="gzip" if gz else "infer",
@@ -157,7 +158,7 @@ def lean_columns(path, groups):
                     col = b.column(c)
                     if col.null_count or not (pa.types.is_floating(col.type) or pa.types.is_integer(col.type)):
                         return None
-                    out[i:i + m, j] = col.to_numpy(zero_copy_only=False)
+                    out[i:i + m, j] = _values(col)
             i += m
     except (pa.ArrowException, OSError, KeyError, ValueError):
         return None
@@ -169,6 +170,17 @@ def lean_columns(path, groups):
     if not all(np.isfinite(o).all() for o in outs):
         return None
     return outs
+
+
+def _values(col):
+    """A null-free numeric Arrow array's values as a NumPy view of its
+    buffer (``to_numpy`` would import pandas, half a second)."""
+    import pyarrow as pa
+
+    t = col.type
+    kind = "f" if pa.types.is_floating(t) else ("u" if pa.types.is_unsigned_integer(t) else "i")
+    size = t.bit_width // 8
+    return np.frombuffer(col.buffers()[1], dtype=np.dtype(f"{kind}{size}"), count=len(col), offset=col.offset * size)
 
 
 def _count_lines(path) -> int:
@@ -185,8 +197,39 @@ def _count_lines(path) -> int:
     return n + (last != b"\n")
 
 
+class LeanFrame:
+    """The columns of a table read by :func:`lean_columns` (all finite
+    numbers), with the little of a DataFrame's face the readers use:
+    ``columns`` (every name of the header) and ``len``."""
+
+    def __init__(self, names, data: dict):
+        self.columns, self.data = list(names), data
+
+    def __len__(self):
+        return len(next(iter(self.data.values())))
+
+
+def read_numeric_table(path, wanted):
+    """:func:`read_table` for readers of number columns: the ``wanted``
+    columns the header holds, read by :func:`lean_columns` into a
+    :class:`LeanFrame` when the file is plain well-formed numbers (no
+    pandas), else the DataFrame of :func:`read_table` (whose faults
+    :func:`numeric_columns` then names)."""
+    names = _header_names(path)
+    if names is not None:
+        have = [c for c in wanted if c in names]
+        got = lean_columns(path, [[c] for c in have]) if have else None
+        if got is not None:
+            return Path(path), LeanFrame(names, {c: a[:, 0] for c, a in zip(have, got)})
+    return read_table(path)
+
+
 def numeric_columns(path, df, columns):
     """The named columns as a float array; names the line of a bad value."""
+    if isinstance(df, LeanFrame):
+        return np.column_stack([df.data[c] for c in columns])
+    import pandas as pd
+
     out = np.empty((len(df), len(columns)))
     for j, c in enumerate(columns):
         col = pd.to_numeric(df[c], errors="coerce").to_numpy(dtype=float)
@@ -564,7 +607,7 @@ def read_gnss(path) -> GnssData:
     sigma_d_m`` and optionally ``vn_m_s, ve_m_s, vd_m_s, sigma_vn_m_s,
     sigma_ve_m_s, sigma_vd_m_s``.  Sigmas are 1-sigma and must be > 0.
     """
-    path, df = read_table(path)
+    path, df = read_numeric_table(path, GNSS_COLUMNS + GNSS_VEL_COLUMNS)
     require_columns(path, df, GNSS_COLUMNS)
     a = numeric_columns(path, df, GNSS_COLUMNS)
     check_time_column(path, a[:, 0])

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import ConfigError, InputError
 from ..files import CSV_DIGITS, CSV_EXPONENT_BELOW, format_column, round_significant, write_csv_fast  # noqa: F401 (re-exported)
-from ..files import atomic_write
+from ..files import arrow_array, atomic_write
 from ..types import NavSolution
 
 #: the first four bytes (and the last four) of every Parquet file
@@ -211,7 +211,7 @@ def write_parquet(path, cols: dict, metadata: dict | None = None, compression="z
 
     path = Path(path)
     schema = _schema(cols, metadata)
-    table = pa.Table.from_arrays([pa.array(np.asarray(v, np.float64)) for v in cols.values()], schema=schema)
+    table = pa.Table.from_arrays([arrow_array(np.asarray(v, np.float64)) for v in cols.values()], schema=schema)
     with atomic_write(path) as tmp:
         pq.write_table(table, str(tmp), compression=compression, **_PARQUET_OPTIONS)
     return path
@@ -290,7 +290,7 @@ class SolutionStream:
                     self._schema = _schema(cols, self.metadata)
                     self._writer = pq.ParquetWriter(str(self.tmp), self._schema, compression="zstd",
                                                     **_PARQUET_OPTIONS)
-                self._writer.write_table(pa.Table.from_arrays([pa.array(v) for v in cols.values()],
+                self._writer.write_table(pa.Table.from_arrays([arrow_array(v) for v in cols.values()],
                                                               schema=self._schema))
             else:
                 import pyarrow.csv as pcsv
@@ -337,6 +337,21 @@ class SolutionStream:
         self.tmp.unlink(missing_ok=True)
 
 
+def _column_values(col):
+    """A numeric Arrow column as float64 values (nulls as NaN), without
+    pyarrow's ``to_numpy`` (which imports pandas)."""
+    from .csv_formats import _values
+
+    parts = []
+    for ch in col.chunks:
+        v = _values(ch).astype(np.float64)
+        if ch.null_count:
+            valid = np.unpackbits(np.frombuffer(ch.buffers()[0], np.uint8), bitorder="little")[ch.offset:ch.offset + len(ch)]
+            v = np.where(valid.astype(bool), v, np.nan)
+        parts.append(v)
+    return np.concatenate(parts) if parts else np.zeros(0)
+
+
 def read_parquet_columns(path) -> tuple[dict, dict]:
     """The float columns of a Parquet file and its inskit metadata.
 
@@ -370,7 +385,7 @@ def read_parquet_columns(path) -> tuple[dict, dict]:
     for name, col in zip(table.column_names, table.columns):
         if not (pa.types.is_floating(col.type) or pa.types.is_integer(col.type)):
             raise InputError(f"{path}: column '{name}' holds {col.type}; expected numbers (float64)")
-        cols[name] = col.to_numpy().astype(np.float64, copy=False)
+        cols[name] = _column_values(col)
     meta.setdefault("units", {k: column_unit(k) for k in cols})
     return cols, meta
 

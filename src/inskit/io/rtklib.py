@@ -11,7 +11,6 @@ from datetime import datetime, timezone
 from pathlib import Path
 
 import numpy as np
-import pandas as pd
 
 from .. import rotations as rot
 from ..errors import InputError
@@ -25,6 +24,8 @@ WEEK_S = 604800.0
 
 def gps_week_seconds(stamps):
     """``(week, seconds of week)`` of ``YYYY/MM/DD HH:MM:SS.sss`` GPST strings."""
+    import pandas as pd  # here, not at import: the IMU path of navigate needs no pandas
+
     ts = pd.to_datetime(pd.Series(stamps), format="%Y/%m/%d %H:%M:%S.%f", utc=True, errors="coerce")
     if ts.isna().any():
         i = int(np.argmax(ts.isna().to_numpy()))
@@ -83,6 +84,8 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
     for lineno, f in rows:
         if len(f) < width:
             raise InputError(f"{path}: line {lineno}: has {len(f)} fields, the header names {width}")
+    import pandas as pd
+
     df = pd.DataFrame([f[:width] for _, f in rows], columns=names)
     linenos = np.array([ln for ln, _ in rows])
     try:
