@@ -171,3 +171,21 @@ def test_duration_limit_cuts_the_run(tmp_path):
     p.write_text(text.replace('name = "car"', 'name = "car"\nduration_limit_s = -1.0', 1))
     with pytest.raises(ConfigError):
         load_scenario(p)
+
+
+def test_uniform_hermite_matches_scipy():
+    """The simulator's position interpolation (written out to spare the
+    scipy.interpolate import) against scipy's CubicHermiteSpline: the same
+    cubics inside the grid and beyond its ends, to rounding (1e-14 relative)."""
+    from scipy.interpolate import CubicHermiteSpline
+
+    from inskit.simulation.segments import _UniformHermite
+
+    rng = np.random.default_rng(1)
+    h, n = 0.05, 1000
+    tg = np.arange(n) * h
+    y = 0.7 + np.cumsum(rng.normal(size=(n, 3)), axis=0) * 1e-6
+    dy = rng.normal(size=(n, 3)) * 1e-6
+    t = np.concatenate([rng.uniform(-0.1, tg[-1] + 0.1, 5000), tg[[0, 10, -1]]])
+    ref = CubicHermiteSpline(tg, y, dy, axis=0)(t)
+    assert np.allclose(_UniformHermite(h, y, dy)(t), ref, rtol=1e-14, atol=0)

@@ -219,11 +219,23 @@ def evaluate(solution_file, truth_file, t_from, t_to, remove_offset, per_epoch_f
 @cli.command()
 @click.option("--quick", is_flag=True, help="Shorter runs (10 min of data instead of 1 h; 2 min for the commands).")
 @click.option("--no-cli", is_flag=True, help="Leave out the end-to-end command figures (navigate_cli_epochs_per_s, ...).")
+@click.option("--long", "long_runs", is_flag=True,
+              help="Only navigate on 1, 4 and 8 h of 200 Hz car (forward and smoothed: wall time, peak memory, "
+              "seconds per hour); minutes, and 2.4 GB of cached drives.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def bench(quick, no_cli, as_json):
+def bench(quick, no_cli, long_runs, as_json):
     """Throughput of the compiled kernels (epochs per second, one core) and of
     the user commands end to end (navigate, simulate, mechanize on a simulated
     hour of car: wall time, peak memory)."""
+    if long_runs:
+        from .jobs.bench_cli import long_benchmarks
+
+        res = long_benchmarks(progress=lambda name: _log(f"bench: {name} done"))
+        table = "\n".join(f"{r['hours']:>3} h: forward {r['forward_wall_s']:7.1f} s {r['forward_peak_rss_mb']:7.0f} MiB, "
+                          f"smoothed {r['smoothed_wall_s']:7.1f} s {r['smoothed_peak_rss_mb']:7.0f} MiB"
+                          for r in res.get("navigate_long", []))
+        _emit(res, as_json, table or str(res))
+        return
     from .jobs.bench import run_benchmarks
 
     res = run_benchmarks(quick=quick, progress=lambda name: _log(f"bench: {name} done"), cli=not no_cli)
@@ -257,8 +269,8 @@ def bench(quick, no_cli, as_json):
               help="Rows per second of the CSV solution files (default: [output] rate_hz, else 10 Hz); a rate at "
               "or above the IMU rate writes every epoch.")
 @click.option("--stream", type=click.Choice(["auto", "on", "off"]),
-              help="Write the forward solution files while the filter runs, memory bounded whatever the log's "
-              "length (default: [output] stream, else auto: above 1,000,000 IMU epochs).")
+              help="Write the solution files while the filter runs, memory bounded whatever the log's length "
+              "(default: [output] stream, else auto = on); off keeps every row in memory.")
 @click.option("--truth", "truth_file", type=click.Path(dir_okay=False),
               help="A truth file (e.g. from inskit simulate; sets [truth] file): the outages are also scored "
               "against it (keys ..._vs_truth_...) and its errors added to the summary.")

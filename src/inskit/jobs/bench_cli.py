@@ -186,3 +186,31 @@ def cli_benchmarks(quick=False, repeats=3, progress=None, root=None) -> dict:
         if progress:
             progress("mechanize")
     return out
+
+
+def long_benchmarks(hours=(1, 4, 8), progress=None, root=None) -> dict:
+    """``inskit bench --long``: ``inskit navigate`` (forward, then with
+    ``--smooth``) on 1, 4 and 8 hours of the 200 Hz car with 1 Hz GNSS, ZUPT
+    and NHC at 10 Hz, one run each after a warm-up run on the hour: wall
+    time, the child's peak RSS and the wall time per hour (a run linear in
+    the log's length keeps it flat).  The drives are simulated once into the
+    cache (8 h: 0.8 GB of IMU CSV and 1.6 GB of truth); the runs write 1.4 GB
+    of Parquet into a temporary folder."""
+    if not (_EXAMPLES / "car.toml").is_file():
+        return {"long_note": "examples/car.toml not found (run from a source checkout)"}
+    rows = []
+    with tempfile.TemporaryDirectory(prefix="inskit-bench-long-") as tmp:
+        for i, h in enumerate(hours):
+            d = bench_drive(3600.0 * h, 200.0, root)
+            base = ["navigate", d / "navigate.toml", "--out", Path(tmp) / "nav", "--force", "--no-plots", "--json"]
+            if i == 0:
+                _run_timed(base)  # warm-up: compile and page caches
+            wf, rf, out = _run_timed(base)
+            ws, rs, _ = _run_timed(base + ["--smooth"])
+            rows.append({"hours": h, "epochs": int(json.loads(out)["epochs"]),
+                         "forward_wall_s": round(wf, 2), "forward_peak_rss_mb": round(rf, 1),
+                         "smoothed_wall_s": round(ws, 2), "smoothed_peak_rss_mb": round(rs, 1),
+                         "forward_s_per_hour": round(wf / h, 2), "smoothed_s_per_hour": round(ws / h, 2)})
+            if progress:
+                progress(f"navigate {h} h")
+    return {"navigate_long": rows}

@@ -522,12 +522,12 @@ class OutputSection(_Strict):
         "epoch. 10 Hz matches the ZUPT/NHC update rate and makes 1 h of 31 columns 21 MB instead of 211 MB "
         "at 100 Hz; Parquet files always hold every epoch; --output-rate overrides it")
     stream: Literal["auto", "on", "off"] = Field(
-        "auto", description="write the forward solution files while the filter runs, keeping in memory only the "
-        "rows the summary and plots use (every update node, the rows around each fix, every row of an outage "
-        "window, the rate_hz grid), so memory does not grow with the log: on, off, or auto (on above "
-        "1,000,000 IMU epochs). The numbers are the same either way. A streamed smoother keeps its node data "
-        "(about 11 KB per update node) in a scratch folder of the result folder until the run ends; the "
-        "uncoupled scheme is never streamed")
+        "auto", description="write the solution files while the filter runs, keeping in memory only the rows "
+        "the summary and plots use (every update node, the rows around each fix, every row of an outage window, "
+        "the rate_hz grid), so memory does not grow with the log and the files are written on a second core "
+        "while the filter computes: auto and on (the same: every run with a filter), or off (every row kept, as "
+        "navigate() in Python does). The numbers are the same either way. A streamed smoother keeps its node "
+        "data (about 11 KB per update node) in a scratch folder of the result folder until the run ends")
     columns: list[str] = Field(
         ["all"], description="columns of the solution files: groups \"all\", \"navigation\" (time, position, "
         "velocity, attitude), \"navigation+sigma\", \"sigma\", \"estimates\" (biases, scale factors, lever arm, "

@@ -46,15 +46,10 @@ class NavigateResult:
     streams: list = None  #: solution files written during a streamed run, committed by write_outputs
 
 
-#: ``[output] stream = "auto"`` streams logs longer than this many IMU epochs
-STREAM_ABOVE_EPOCHS = 1_000_000
-
-
 def streams_run(cfg: NavigateConfig, n_epochs: int, smooth: bool) -> bool:
-    """Whether the forward run is streamed (``[output] stream``)."""
-    if cfg.filter.scheme == "uncoupled" or cfg.output.stream == "off":
-        return False
-    return cfg.output.stream == "on" or n_epochs > STREAM_ABOVE_EPOCHS
+    """Whether the run is streamed (``[output] stream``: "auto" and "on"
+    stream every run that has a filter; the uncoupled scheme keeps its rows)."""
+    return cfg.filter.scheme != "uncoupled" and cfg.output.stream != "off"
 
 
 def stream_keep_rows(t, gnss: GnssData, windows, rate_hz) -> np.ndarray:
@@ -90,6 +85,46 @@ def open_streams(cfg: NavigateConfig, out_dir: Path, t, settings, label="forward
         out.append(SolutionStream(out_dir / f"solution_{label}.csv", rows=None if len(rows) == len(t) else rows,
                                   columns=o.columns))
     return out
+
+
+class _Pipe:
+    """Run ``fn(item)`` on a worker thread for each item put, in order, at
+    most ``depth`` waiting (memory stays bounded): a streamed run converts
+    and writes a segment while the compiled filter (which releases the GIL)
+    computes the next.  An error in ``fn`` is raised by the next
+    :meth:`put` or by :meth:`close`."""
+
+    def __init__(self, fn, depth=2):
+        import queue
+        import threading
+
+        self.fn, self.error = fn, None
+        self.q = queue.Queue(maxsize=depth)
+        self.thread = threading.Thread(target=self._run, name="inskit-writer", daemon=True)
+        self.thread.start()
+
+    def _run(self):
+        while True:
+            item = self.q.get()
+            if item is None:
+                return
+            if self.error is None:
+                try:
+                    self.fn(item)
+                except BaseException as exc:  # noqa: BLE001 (handed to the main thread)
+                    self.error = exc
+
+    def put(self, item):
+        if self.error is not None:
+            raise self.error
+        self.q.put(item)
+
+    def close(self):
+        """Wait for every item; raise the worker's error, if any."""
+        self.q.put(None)
+        self.thread.join()
+        if self.error is not None:
+            raise self.error
 
 
 class _ForwardScratch:
@@ -600,18 +635,27 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
             store = DiskStore(scratch_dir / "store", lay.size) if smooth else None
             scratch = _ForwardScratch(scratch_dir, lay.aux_size) if smooth else None
 
-            def sink(sg):
+            from ..integration.engine import Segment
+
+            def write(sg):
                 extra_cols = lay.columns(sg.aux, sg.sigma, sigma_blocks=NAV_SIGMA_BLOCKS)
                 sol = NavSolution._trusted(sg.time, sg.lla, sg.v_n, sg.q_nb, extra_cols)
                 for w in streams:
                     w.write(sol, sg.start)
                 if scratch is not None:
                     scratch(sg)
+            pipe = _Pipe(write)
+
+            def sink(sg):  # the views are the engine's buffers: copied, then converted and written on the worker
+                pipe.put(Segment(sg.start, sg.time, sg.lla.copy(), sg.v_n.copy(), sg.q_nb.copy(), sg.aux, sg.sigma))
             sm = None
             try:
-                out = run_filter(imu, initial, meas, settings, progress=progress, extra_noise=extra, sink=sink,
-                                 keep_rows=stream_keep_rows(imu.time, gnss, windows, cfg.output.rate_hz),
-                                 smoother=smooth, store_sink=store)
+                try:
+                    out = run_filter(imu, initial, meas, settings, progress=progress, extra_noise=extra, sink=sink,
+                                     keep_rows=stream_keep_rows(imu.time, gnss, windows, cfg.output.rate_hz),
+                                     smoother=smooth, store_sink=store)
+                finally:
+                    pipe.close()
                 for w in streams:
                     w.close()
                 if smooth:

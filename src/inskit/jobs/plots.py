@@ -76,6 +76,7 @@ def plot_all(res, out_dir):
     # errors against every GNSS fix, with the filter's 3-sigma envelope
     tg = g.time[inside]
     fig, axes = plt.subplots(3, 1, figsize=(10, 8), sharex=True)
+    worst = np.zeros(3)  # per axis: the largest error, which the axis must show whole
     for s, label, color in ((fwd, "forward", "tab:blue"),) + (
             ((res.smoothed.solution, "smoothed", "tab:green"),) if res.smoothed is not None else ()):
         ant = antenna_positions(s, tg, lever)
@@ -84,16 +85,19 @@ def plot_all(res, out_dir):
         for j, name in enumerate(("north", "east", "down")):
             ax = axes[j]
             ax.plot(tg - t0, d[:, j], lw=0.7, color=color, label=f"{label} - GNSS")
+            if len(d):
+                worst[j] = max(worst[j], float(np.nanmax(np.abs(d[:, j]))))
             sig = si.extra[("sigma_n_m", "sigma_e_m", "sigma_d_m")[j]]
             ax.plot(tg - t0, 3 * sig, lw=0.5, ls="--", color=color)
             ax.plot(tg - t0, -3 * sig, lw=0.5, ls="--", color=color)
             ax.set_ylabel(f"{name} [m]")
-    for ax in axes:
+    for j, ax in enumerate(axes):
         _shade(ax, res.windows, t0)
         ax.grid(alpha=0.3)
-        ax.set_ylim(-6, 6)
+        lim = max(6.0, 1.08 * worst[j])  # the worst error whole; the sigma envelope may leave the axis
+        ax.set_ylim(-lim, lim)
     axes[0].legend(fontsize=8, loc="upper left")
-    axes[0].set_title("antenna position minus GNSS fix (grey: outages; dashed: +-3 sigma)")
+    axes[0].set_title("antenna position minus GNSS fix (grey: outages; dashed: +-3 sigma, may leave the axis)")
     axes[-1].set_xlabel("time after first GNSS fix [s]")
     fig.tight_layout()
     files.append(out_dir / "errors.png")
