@@ -36,3 +36,13 @@ def test_cli_figures_are_measured(tmp_path):
         assert r[k] > 0 and r[f"{k}_spread"][0] <= r[k] <= r[f"{k}_spread"][1]
     assert 50 < r["navigate_peak_rss_mb"] < 24000
     assert r["navigate_cli_fixes_used"] >= 100
+
+
+@pytest.mark.slow
+def test_long_figures_are_measured_per_length(tmp_path):
+    """bench --long on short drives (the same code path): one row per length, forward and smoothed runs timed
+    and their memory read, the smoothed run the slower (it does the forward run and more)."""
+    r = B.long_benchmarks(hours=(0.05, 0.1), root=tmp_path)["navigate_long"]
+    assert [x["hours"] for x in r] == [0.05, 0.1] and r[1]["epochs"] == 72001
+    for x in r:
+        assert 0 < x["forward_wall_s"] < x["smoothed_wall_s"] and 50 < x["forward_peak_rss_mb"] < 24000

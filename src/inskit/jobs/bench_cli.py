@@ -17,7 +17,9 @@ cache folder once, and reports the median of the repeats with the spread
 * ``mechanize_cli_epochs_per_s``: ``inskit mechanize`` of that 100 Hz IMU
   file from the truth's first state, writing the solution CSV.
 
-Quick mode (the tests) uses 120 s instead of an hour.
+Quick mode (the tests) uses 120 s instead of an hour.  ``inskit bench
+--long`` (:func:`long_benchmarks`) times navigate alone on 1, 4 and 8 hours
+(forward and smoothed, wall time and peak memory per length).
 """
 
 from __future__ import annotations
