@@ -403,3 +403,43 @@ def test_a_streamed_run_writes_the_same_files_and_summary(tmp_path, smooth):
     if smooth:
         assert s0["solution"] == "smoothed" and s0["outage_end_horizontal_rms_m"] < s0["forward"]["outage_end_horizontal_rms_m"]
     assert not list((tmp_path / "on").glob(".*"))  # no temporary file or scratch folder left
+
+
+def test_a_streamed_run_that_cannot_write_leaves_nothing(tmp_path, monkeypatch):
+    """The disk fills while the worker writes segment 3 of a streamed run: the
+    error names the file, reaches the caller (here when the files are
+    finished), and no solution file, whole or temporary, is left."""
+    import inskit.integration.engine as E
+    from inskit.errors import InputError
+    from inskit.io import parquet as P
+    from inskit.jobs.navigate import abort_streams, write_outputs
+
+    calls = {"n": 0}
+    real = P.SolutionStream.write
+
+    def failing(self, sol, start):
+        calls["n"] += 1
+        if calls["n"] == 5:
+            raise OSError(28, "No space left on device")
+        return real(self, sol, start)
+
+    def full(self, sol, start):
+        try:
+            return failing(self, sol, start)
+        except OSError as exc:
+            self.abort()
+            raise InputError(f"{self.path}: could not be written ({exc.strerror})") from None
+
+    monkeypatch.setattr(P.SolutionStream, "write", full)
+    monkeypatch.setitem(E.run_filter.__kwdefaults__, "segment_rows", 4096)
+    cfg = load_config(EXAMPLE, {"output": {"plots": False}})
+    out = tmp_path / "out"
+    try:
+        res = navigate(cfg, stream_dir=out)
+        write_outputs(res, out, summary(res))
+        raise AssertionError("the write error was lost")
+    except InputError as exc:
+        assert "solution_forward" in str(exc) and "No space left" in str(exc)
+        if "res" in locals():
+            abort_streams(res)
+    assert not [p for p in out.iterdir() if p.name.startswith((".part", "solution"))]

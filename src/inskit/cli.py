@@ -358,8 +358,7 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
             N.clear_previous_run(target)
         files = N.write_outputs(res, target, s)
     except BaseException:  # the streamed solution files (temporary names) go with the run
-        for w in res.streams or ():
-            w.abort()
+        N.abort_streams(res)
         raise
     if with_report:
         from .jobs.report import build_report

@@ -44,6 +44,30 @@ class NavigateResult:
     rate_changes: list = None
     truth: NavSolution | None = None  #: the truth scored against ([truth] file / --truth)
     streams: list = None  #: solution files written during a streamed run, committed by write_outputs
+    pending: object = None  #: the writer still finishing them (:func:`finish_streams`)
+
+
+def finish_streams(res: NavigateResult) -> None:
+    """Wait for a streamed run's writer and close its files (still under
+    their temporary names; :func:`write_outputs` commits them)."""
+    pipe, res.pending = res.pending, None
+    if pipe is not None:
+        try:
+            pipe.close()
+        except BaseException:
+            abort_streams(res)
+            raise
+    for w in res.streams or ():
+        w.close()
+
+
+def abort_streams(res: NavigateResult) -> None:
+    """Stop a streamed run's writer and remove its temporary files."""
+    pipe, res.pending = res.pending, None
+    if pipe is not None:
+        pipe.close(quiet=True)
+    for w in res.streams or ():
+        w.abort()
 
 
 def streams_run(cfg: NavigateConfig, n_epochs: int, smooth: bool) -> bool:
@@ -119,11 +143,12 @@ class _Pipe:
             raise self.error
         self.q.put(item)
 
-    def close(self):
-        """Wait for every item; raise the worker's error, if any."""
+    def close(self, quiet=False):
+        """Wait for every item; raise the worker's error, if any (``quiet``:
+        the caller is already failing and only wants the thread stopped)."""
         self.q.put(None)
         self.thread.join()
-        if self.error is not None:
+        if self.error is not None and not quiet:
             raise self.error
 
 
@@ -619,7 +644,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
                 log(f"yaw bank: {len(bank['scores'])} hypotheses over {bank['span_s']:.0f} s in "
                     f"{bank['elapsed_s']:.1f} s; kept {bank['chosen_yaw_deg']:.1f} deg (mean NIS per dof "
                     f"{bank['score']:.2f}, next best {bank['runner_up_score']})")
-        streams = None
+        streams = pending = None
         if stream_dir is not None and streams_run(cfg, len(imu), smooth):
             from ..integration.engine import NAV_SIGMA_BLOCKS
 
@@ -654,11 +679,15 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
                     out = run_filter(imu, initial, meas, settings, progress=progress, extra_noise=extra, sink=sink,
                                      keep_rows=stream_keep_rows(imu.time, gnss, windows, cfg.output.rate_hz),
                                      smoother=smooth, store_sink=store)
-                finally:
+                except BaseException:
+                    pipe.close(quiet=True)
+                    raise
+                if not smooth:  # the last segments are written while the caller shows the result (finish_streams)
+                    pending = pipe
+                else:
                     pipe.close()
-                for w in streams:
-                    w.close()
-                if smooth:
+                    for w in streams:
+                        w.close()
                     store.close()
                     scratch.close()
                     sm, s_streams = _smooth_streamed(cfg, out, store, scratch, imu, settings, stream_dir, log)
@@ -677,7 +706,8 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     score_s = score_outages(sm.solution, gnss, windows, lever, truth=truth) if sm is not None else None
     return NavigateResult(cfg, imu, gnss, windows, used, startup, settings, out, sm, score_f, score_s,
                           time.perf_counter() - t_start, measured, gaps, raw, clock_start, rate_changes, truth,
-                          streams if cfg.filter.scheme != "uncoupled" else None)
+                          streams if cfg.filter.scheme != "uncoupled" else None,
+                          pending if cfg.filter.scheme != "uncoupled" else None)
 
 
 def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, log=None):
@@ -1038,6 +1068,7 @@ def write_outputs(res: NavigateResult, out_dir: Path, s: dict) -> list:
     files = []
     tracks = [("forward", res.forward)] + ([("smoothed", res.smoothed)] if res.smoothed is not None else [])
     if res.streams:  # written while the filter ran: renamed into place now
+        finish_streams(res)
         files += [w.commit() for w in res.streams]
         tracks = []
     for label, track in tracks:
