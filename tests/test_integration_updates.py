@@ -282,7 +282,10 @@ def test_a_python_plugin_among_compiled_ones(drive):
 
     meas = [MyFix(g)] + standard_measurements(imu, g)[2:]
     a, b = both(imu, truth.state(0), meas, scale_factors=True, recovery_after_s=5.0)
-    assert_same_run(a, b)
+    # three recoveries multiply the navigation covariance by up to 2 * 4^k: the two paths' rounding (1e-16)
+    # grows with it, to 6e-9 of a sigma in the innovations after them (the covariances still agree to 2e-12).
+    # 1e-7 of a sigma still tells a fault in either path (a wrong term moves the state by a fraction of a sigma)
+    assert_same_run(a, b, REL=1e-7)
     assert a.counts["my_fix"]["rejected"] >= 8 and len(a.recoveries) >= 2
 
 

@@ -27,7 +27,7 @@ same results to rounding).
 Streaming: the run goes in segments of :data:`SEGMENT_ROWS` IMU rows (a node
 without a measurement ends each).  Given a ``sink``, :func:`run_filter` hands
 each finished segment (every row's state, estimates and sigmas) to it and
-keeps only the rows asked for, so its memory does not grow with the log;
+keeps only the rows asked for, so its memory grows only by the IMU log it is given;
 without one it keeps every row.  Both make the same nodes, so both give the
 same numbers.
 """

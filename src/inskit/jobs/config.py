@@ -524,8 +524,8 @@ class OutputSection(_Strict):
     stream: Literal["auto", "on", "off"] = Field(
         "auto", description="write the solution files while the filter runs, keeping in memory only the rows "
         "the summary and plots use (every update node, the rows around each fix, every row of an outage window, "
-        "the rate_hz grid), so memory does not grow with the log and the files are written on a second core "
-        "while the filter computes: auto and on (the same: every run with a filter), or off (every row kept, as "
+        "the rate_hz grid), so memory grows only by the IMU log itself (56 bytes per epoch) and the files are "
+        "written on a second core while the filter computes: auto and on (the same: every run with a filter), or off (every row kept, as "
         "navigate() in Python does). The numbers are the same either way. A streamed smoother keeps its node "
         "data (about 11 KB per update node) in a scratch folder of the result folder until the run ends")
     columns: list[str] = Field(
