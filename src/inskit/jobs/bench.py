@@ -51,7 +51,11 @@ def run_benchmarks(quick=False, progress=None, cli=True):
     ``ecef_epochs_per_s``, ``inertial_epochs_per_s``, ``lc_epochs_per_s``
     (the whole closed-loop 21-state filter as navigate runs it by default:
     IMU-rate covariance propagation with Gauss-Markov biases, 1 Hz GNSS
-    position updates, NHC at 10 Hz, through the public ``run_filter``),
+    position updates, NHC at 10 Hz, through the public ``run_filter``, on a
+    static log), ``lc_drive_epochs_per_s`` and ``lc_drive_4hz_epochs_per_s``
+    (the same filter on the dynamic 200 Hz car drive of the whole-command
+    figure, with its 1 Hz fixes and with 4 Hz fixes: :func:`_drive_filter_jobs`;
+    with ``cli`` only, as they need ``examples/car.toml``),
     ``tc_epochs_per_s`` (the same with a receiver clock and pseudorange plus
     Doppler updates from 8 satellites at 1 Hz), ``spp_epochs_per_s``
     (single-point positioning of the bundled ABPO day),
@@ -88,6 +92,16 @@ def run_benchmarks(quick=False, progress=None, cli=True):
     out["lc_gnss_rate_hz"] = 1.0
     if progress:
         progress("lc")
+    if cli:  # the filter alone on the dynamic drive of the whole-command figure (needs examples/car.toml)
+        jobs = _drive_filter_jobs(quick)
+        if jobs:
+            n_d = jobs.pop("epochs")
+            for key, fn in jobs.items():
+                med, spread = _median_rate(fn, n_d, 2 if quick else 3)
+                out[key], out[f"{key}_spread"] = round(med), [round(v) for v in spread]
+            out["lc_drive_epochs"] = n_d
+            if progress:
+                progress("lc on the drive")
     put("tc_epochs_per_s", _tc_job(imu, init))
     out["tc_satellites"] = 8
     out["tc_rate_hz"] = 1.0
@@ -203,6 +217,49 @@ def _navigate_noise():
     from .navigate import sensor_noise
 
     return sensor_noise(NoiseSection())
+
+
+def _drive_filter_jobs(quick):
+    """The filter alone (``run_filter``, no reading or writing) on the 200 Hz
+    car drive of ``navigate_cli_epochs_per_s`` (1 h; 10 min in quick mode),
+    started from the truth's first row, 21 states, ZUPT where the fixes
+    stand still and NHC at 10 Hz:
+
+    * ``lc_drive_epochs_per_s``: its 1 Hz fixes (antenna 1.2 m above the
+      IMU), the settings of the whole-command figure;
+    * ``lc_drive_4hz_epochs_per_s``: 4 Hz fixes (the truth with 2 cm of
+      noise), the update rates of drive_0708's config (ZUPT/NHC at 10 Hz,
+      4 Hz GNSS).
+
+    Returns ``{key: job, "epochs": n}``, or {} without ``examples/car.toml``."""
+    from ..alignment.coarse import static_intervals
+    from ..integration import FilterSettings, GnssPosition, NonHolonomic, ZeroVelocity, run_filter
+    from ..io.csv_formats import lean_columns, read_gnss, read_imu
+    from ..types import GnssData, NavState
+    from .bench_cli import _EXAMPLES, bench_drive
+
+    if not (_EXAMPLES / "car.toml").is_file():
+        return {}
+    d = bench_drive(600.0 if quick else 3600.0, 200.0)
+    imu, g1 = read_imu(d / "imu.csv"), read_gnss(d / "gnss.csv")
+    names = ["time_s", "lat_deg", "lon_deg", "height_m", "vn_m_s", "ve_m_s", "vd_m_s", "roll_deg", "pitch_deg",
+             "yaw_deg"]
+    tr = lean_columns(d / "truth.csv", [names])[0]
+    init = NavState.from_euler(float(tr[0, 0]), np.radians(tr[0, 1:3]).tolist() + [float(tr[0, 3])], tr[0, 4:7],
+                               np.radians(tr[0, 7:10]))
+    k4 = np.searchsorted(tr[:, 0], np.arange(tr[0, 0], tr[-1, 0], 0.25))
+    rng = np.random.default_rng(4)
+    lla4 = np.column_stack([np.radians(tr[k4, 1]), np.radians(tr[k4, 2]), tr[k4, 3]])
+    lla4[:, 2] += rng.normal(0.0, 0.02, len(k4))
+    g4 = GnssData(tr[k4, 0], lla4, np.full((len(k4), 3), 0.02))
+    settings = FilterSettings.standard(_navigate_noise(), scale_factors=True)
+    still = ZeroVelocity(static_intervals(g1), 10.0, 0.02)
+    nhc = NonHolonomic([(imu.time[0], imu.time[-1])], 10.0, 0.1)
+    m1 = [GnssPosition(g1, lever_arm_b=np.array([0.0, 0.0, -1.2])), still, nhc]
+    m4 = [GnssPosition(g4), still, nhc]
+    return {"lc_drive_epochs_per_s": lambda: run_filter(imu, init, m1, settings),
+            "lc_drive_4hz_epochs_per_s": lambda: run_filter(imu, init, m4, settings),
+            "epochs": len(imu) - 1}
 
 
 def _lc_job(imu, init):
