@@ -216,3 +216,27 @@ def test_the_python_api_scores_the_outages_against_a_truth_it_is_given(drive):
     assert run.summary["truth_file"] == "(given to navigate() in Python)"
     assert run.summary["outage_worst_h_vs_truth_rms_m"] == pytest.approx(want["outage_worst_h_vs_truth_rms_m"])
     assert run.summary["truth_errors"].keys() == want["truth_errors"].keys()
+
+
+def test_a_streamed_run_scores_every_row_against_the_truth(drive, tmp_path, monkeypatch):
+    """Streamed in segments of 2048 rows, with the smoother: the truth errors
+    are summed over every row as the segments go (not over the rows kept for
+    the plots, which weigh the outages' full-rate rows above the rest), and
+    equal the whole run's to rounding; the outage scores are the same."""
+    import inskit.integration.engine as E
+    from inskit.jobs.navigate import navigate, summary, write_outputs
+
+    res, d = drive
+    monkeypatch.setitem(E.run_filter.__kwdefaults__, "segment_rows", 2048)
+    whole = navigate(res.config, smooth=True)
+    st = navigate(res.config, smooth=True, stream_dir=tmp_path / "out")
+    s_w, s_s = summary(whole), summary(st)
+    write_outputs(st, tmp_path / "out", s_s)
+    assert s_s["streamed"] and s_s["rows_kept"] < len(st.imu) and not s_w["streamed"]
+    for label in ("forward", "smoothed"):
+        a, b = s_w["truth_errors"][label], s_s["truth_errors"][label]
+        assert b["epochs"] == a["epochs"] == len(st.imu)
+        for k in ("horizontal_m", "down_m", "yaw_deg", "vn_m_s"):
+            for f in ("rms", "max", "final"):
+                assert b[k][f] == pytest.approx(a[k][f], rel=1e-12, abs=1e-15), (label, k, f)
+    assert s_s["outage_table"] == s_w["outage_table"]

@@ -70,9 +70,52 @@ def nav_error(sol: NavSolution, truth: NavSolution) -> NavError:
     return NavError(s.time, dpos, s.v_n - tr.v_n, datt)
 
 
-def _stats(x):
-    x = np.asarray(x, dtype=float)
-    return {"rms": float(np.sqrt(np.mean(x**2))), "max": float(np.max(np.abs(x))), "final": float(x[-1])}
+def _components(err: NavError) -> dict:
+    """The error components :func:`summarize` reports, by key."""
+    p, v = err.pos_ned, err.vel_ned
+    a, a_deg = err.att_rpy / ARCMIN, err.att_rpy / DEG
+    return {
+        "north_m": p[:, 0], "east_m": p[:, 1], "down_m": p[:, 2],
+        "horizontal_m": err.horizontal, "3d_m": np.linalg.norm(p, axis=1),
+        "vn_m_s": v[:, 0], "ve_m_s": v[:, 1], "vd_m_s": v[:, 2],
+        "roll_arcmin": a[:, 0], "pitch_arcmin": a[:, 1], "yaw_arcmin": a[:, 2],
+        "roll_deg": a_deg[:, 0], "pitch_deg": a_deg[:, 1], "yaw_deg": a_deg[:, 2],
+    }
+
+
+class ErrorSummary:
+    """:func:`summarize` of errors handed over in time order, part by part
+    (a streamed run's segments): sums of squares, largest magnitudes and last
+    values per component, so the figures are those of the whole without
+    keeping it."""
+
+    def __init__(self):
+        self.n, self.t0, self.t1 = 0, None, None
+        self.sq, self.max, self.final = {}, {}, {}
+
+    def add(self, err: NavError) -> "ErrorSummary":
+        if not len(err.time):
+            return self
+        for k, x in _components(err).items():
+            x = np.asarray(x, dtype=float)
+            self.sq[k] = self.sq.get(k, 0.0) + float(np.sum(x * x))
+            self.max[k] = max(self.max.get(k, 0.0), float(np.max(np.abs(x))))
+            self.final[k] = float(x[-1])
+        self.n += len(err.time)
+        self.t0 = float(err.time[0]) if self.t0 is None else self.t0
+        self.t1 = float(err.time[-1])
+        return self
+
+    def result(self) -> dict:
+        if not self.n:
+            raise InputError("no epoch of the solution lies inside the truth's span")
+        out = {k: {"rms": float(np.sqrt(self.sq[k] / self.n)), "max": self.max[k], "final": self.final[k]}
+               for k in self.sq}
+        out["epochs"] = self.n
+        out["duration_s"] = self.t1 - self.t0
+        out["first_epoch_s"] = self.t0
+        out["last_epoch_s"] = self.t1
+        return out
 
 
 def summarize(err: NavError) -> dict:
@@ -84,31 +127,21 @@ def summarize(err: NavError) -> dict:
     same attitude figures in arcmin (``roll_arcmin``, ``pitch_arcmin``,
     ``yaw_arcmin``, kept for earlier readers); each maps to ``{"rms", "max",
     "final"}``.  Also ``epochs``, ``duration_s``, ``first_epoch_s`` and
-    ``last_epoch_s`` (the time span scored).
+    ``last_epoch_s`` (the time span scored).  :class:`ErrorSummary` makes
+    the same from parts.
     """
-    p, v, a = err.pos_ned, err.vel_ned, err.att_rpy / ARCMIN
-    a_deg = err.att_rpy / DEG
-    out = {
-        "north_m": _stats(p[:, 0]),
-        "east_m": _stats(p[:, 1]),
-        "down_m": _stats(p[:, 2]),
-        "horizontal_m": _stats(err.horizontal),
-        "3d_m": _stats(np.linalg.norm(p, axis=1)),
-        "vn_m_s": _stats(v[:, 0]),
-        "ve_m_s": _stats(v[:, 1]),
-        "vd_m_s": _stats(v[:, 2]),
-        "roll_arcmin": _stats(a[:, 0]),
-        "pitch_arcmin": _stats(a[:, 1]),
-        "yaw_arcmin": _stats(a[:, 2]),
-        "roll_deg": _stats(a_deg[:, 0]),
-        "pitch_deg": _stats(a_deg[:, 1]),
-        "yaw_deg": _stats(a_deg[:, 2]),
-    }
-    out["epochs"] = int(len(err.time))
-    out["duration_s"] = float(err.time[-1] - err.time[0])
-    out["first_epoch_s"] = float(err.time[0])
-    out["last_epoch_s"] = float(err.time[-1])
-    return out
+    return ErrorSummary().add(err).result()
+
+
+def nav_error_part(sol: NavSolution, truth: NavSolution) -> NavError:
+    """:func:`nav_error` of a part of a solution (a segment of a streamed
+    run), empty where the part lies outside the truth's span (no error: the
+    whole run's check of the overlap is :meth:`ErrorSummary.result`)."""
+    inside = (sol.time >= truth.time[0]) & (sol.time <= truth.time[-1])
+    if not inside.any():
+        e = np.zeros((0, 3))
+        return NavError(np.zeros(0), e, e, e)
+    return nav_error(sol, truth)
 
 
 def _epoch_tolerance(t):

@@ -527,6 +527,14 @@ def _innovation_stats(P, nu, H, R, k, cols, nc, PHt, S, L, w):
                 j = cols[c]
                 acc += H[r, j] * PHt[j, s]
             S[r, s] = acc + R[r, s]
+    return _cholesky_nis(S, nu, k, L, w)
+
+
+@njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
+def _cholesky_nis(S, nu, k, L, w):
+    """``nu^T S^-1 nu`` through the Cholesky factor ``L`` of the leading
+    ``k x k`` block of S (``w = L^-1 nu``).  Returns ``(ok, nis)``; ``ok``
+    False when S is not positive definite (or not finite)."""
     for r in range(k):
         for s in range(r + 1):
             acc = S[r, s]
@@ -612,24 +620,8 @@ def _nis_inflated(P, nu, H, R, k, alpha, Pa, S, L, w):
                     for j in range(n):
                         acc += hi * Pa[i, j] * H[s, j]
             S[r, s] = acc + R[r, s]
-    # nu^T S^-1 nu by Cholesky (S is positive definite: P and R are)
-    for r in range(k):
-        for s in range(r + 1):
-            acc = S[r, s]
-            for m in range(s):
-                acc -= L[r, m] * L[s, m]
-            if r == s:
-                L[r, r] = math.sqrt(acc) if acc > 0.0 else math.nan
-            else:
-                L[r, s] = acc / L[s, s]
-    v = 0.0
-    for r in range(k):
-        acc = nu[r]
-        for m in range(r):
-            acc -= L[r, m] * w[m]
-        w[r] = acc / L[r, r]
-        v += w[r] * w[r]
-    return v
+    ok, v = _cholesky_nis(S, nu, k, L, w)  # S is positive definite: P and R are
+    return v if ok else math.nan
 
 
 @njit(cache=True, error_model="numpy")

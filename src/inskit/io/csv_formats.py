@@ -397,7 +397,8 @@ def _read_imu_lean(path, check_units, first_row):
     names = _header_names(path)
     if names is None or "time_s" not in names or first_row == "increment":
         return None
-    du, vu = _find_triplet(_Names(names), "dtheta", DTHETA_UNITS), _find_triplet(_Names(names), "dv", DV_UNITS)
+    header = LeanFrame(names, {})
+    du, vu = _find_triplet(header, "dtheta", DTHETA_UNITS), _find_triplet(header, "dv", DV_UNITS)
     if not (du and vu):
         return None
     tcols = [f"dtheta_{a}_{du}" for a in AXES]
@@ -422,13 +423,6 @@ def _read_imu_lean(path, check_units, first_row):
         check_units_norms(path, _norm(dth[1:]) / dt, _norm(dv[1:]) / dt, tcols[0], vcols[0],
                           "rad_s" if du == "rad" else "deg_s", "m_s2")
     return ImuData(t, dth, dv)
-
-
-class _Names:
-    """Column names where :func:`_find_triplet` looks for ``columns``."""
-
-    def __init__(self, names):
-        self.columns = names
 
 
 def first_row_rule(path, t, inc, columns, first_row="initial"):

@@ -45,6 +45,7 @@ class NavigateResult:
     truth: NavSolution | None = None  #: the truth scored against ([truth] file / --truth)
     streams: list = None  #: solution files written during a streamed run, committed by write_outputs
     pending: object = None  #: the writer still finishing them (:func:`finish_streams`)
+    truth_parts: dict = None  #: a streamed run's truth errors, segment by segment (``analysis.ErrorSummary``)
 
 
 def finish_streams(res: NavigateResult) -> None:
@@ -70,7 +71,7 @@ def abort_streams(res: NavigateResult) -> None:
         w.abort()
 
 
-def streams_run(cfg: NavigateConfig, n_epochs: int, smooth: bool) -> bool:
+def streams_run(cfg: NavigateConfig) -> bool:
     """Whether the run is streamed (``[output] stream``: "auto" and "on"
     stream every run that has a filter; the uncoupled scheme keeps its rows)."""
     return cfg.filter.scheme != "uncoupled" and cfg.output.stream != "off"
@@ -80,14 +81,18 @@ def stream_keep_rows(t, gnss: GnssData, windows, rate_hz) -> np.ndarray:
     """The IMU rows a streamed run keeps in memory for the summary and the
     plots (the engine adds every update node): the two rows around each fix
     (used or withheld, so the antenna position at a fix interpolates as in
-    the whole run), every row of an outage window (its worst point) and the
-    ``rate_hz`` grid (:func:`inskit.io.parquet.decimation_index`)."""
+    the whole run), every row of an outage's unaided span (from the last used
+    fix before it to the first after it, :func:`.outages.unaided_spans`:
+    where its worst point against a truth is looked for) and the ``rate_hz``
+    grid (:func:`inskit.io.parquet.decimation_index`)."""
     from ..io.parquet import decimation_index
+    from .outages import unaided_spans
 
     n = len(t)
     k = np.searchsorted(t, gnss.time, side="right") - 1
     parts = [np.clip(k, 0, n - 1), np.clip(k + 1, 0, n - 1), decimation_index(t, rate_hz)]
-    for a, b in windows:
+    for (a, b), (t_prev, t_next) in zip(windows, unaided_spans(gnss, windows)):
+        a, b = min(a, t_prev) if np.isfinite(t_prev) else a, max(b, t_next) if np.isfinite(t_next) else b
         lo, hi = np.searchsorted(t, [a, b])
         parts.append(np.arange(max(lo - 1, 0), min(hi + 1, n)))
     return np.unique(np.concatenate(parts).astype(np.int64))
@@ -179,11 +184,13 @@ class _ForwardScratch:
         return out
 
 
-def _smooth_streamed(cfg, out, store, scratch, imu, settings, stream_dir, log=None):
+def _smooth_streamed(cfg, out, store, scratch, imu, settings, stream_dir, log=None, truth=None, truth_parts=None):
     """The RTS smoother of a streamed run: the backward pass over the nodes on
-    disk, then the smoothed rows segment by segment into their files;
-    returns the smoothed track at the forward run's kept rows and the
-    smoothed files' streams."""
+    disk, then the smoothed rows segment by segment into their files (and
+    their truth errors into ``truth_parts["smoothed"]``); returns the
+    smoothed track at the forward run's kept rows and the smoothed files'
+    streams."""
+    from ..analysis.errors import nav_error_part
     from ..integration.engine import NAV_SIGMA_BLOCKS, SEGMENT_ROWS
     from ..integration.smoother import backward_pass, smooth_rows
 
@@ -202,6 +209,8 @@ def _smooth_streamed(cfg, out, store, scratch, imu, settings, stream_dir, log=No
                                        lay.columns(tr.aux, tr.sigma, sigma_blocks=NAV_SIGMA_BLOCKS))
             for w in streams:
                 w.write(sol, a)
+            if truth_parts is not None:
+                truth_parts["smoothed"].add(nav_error_part(sol, truth))
         for w in streams:
             w.close()
     except BaseException:
@@ -608,7 +617,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         if smooth:
             raise InputError("the RTS smoother needs a filter: the uncoupled scheme has none")
         out = _uncoupled_track(imu, initial, gnss, used, lever, settings)
-        sm = None
+        sm = streams = pending = truth_parts = None
     else:
         if tight:
             meas = list(meas_gnss)
@@ -644,13 +653,13 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
                 log(f"yaw bank: {len(bank['scores'])} hypotheses over {bank['span_s']:.0f} s in "
                     f"{bank['elapsed_s']:.1f} s; kept {bank['chosen_yaw_deg']:.1f} deg (mean NIS per dof "
                     f"{bank['score']:.2f}, next best {bank['runner_up_score']})")
-        streams = pending = None
-        if stream_dir is not None and streams_run(cfg, len(imu), smooth):
-            from ..integration.engine import NAV_SIGMA_BLOCKS
-
+        streams = pending = truth_parts = None
+        if stream_dir is not None and streams_run(cfg):
             import shutil
             import tempfile
 
+            from ..analysis.errors import ErrorSummary, nav_error_part
+            from ..integration.engine import NAV_SIGMA_BLOCKS, Segment
             from ..integration.smoother import DiskStore
 
             Path(stream_dir).mkdir(parents=True, exist_ok=True)
@@ -659,8 +668,9 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
             scratch_dir = Path(tempfile.mkdtemp(prefix=".smoother-", dir=stream_dir)) if smooth else None
             store = DiskStore(scratch_dir / "store", lay.size) if smooth else None
             scratch = _ForwardScratch(scratch_dir, lay.aux_size) if smooth else None
-
-            from ..integration.engine import Segment
+            # the truth errors of every row, summed segment by segment (the kept rows would weigh the outages'
+            # full-rate rows above the rest)
+            truth_parts = None if truth is None else {"forward": ErrorSummary(), "smoothed": ErrorSummary()}
 
             def write(sg):
                 extra_cols = lay.columns(sg.aux, sg.sigma, sigma_blocks=NAV_SIGMA_BLOCKS)
@@ -669,6 +679,8 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
                     w.write(sol, sg.start)
                 if scratch is not None:
                     scratch(sg)
+                if truth_parts is not None:
+                    truth_parts["forward"].add(nav_error_part(sol, truth))
             pipe = _Pipe(write)
 
             def sink(sg):  # the views are the engine's buffers: copied, then converted and written on the worker
@@ -690,7 +702,8 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
                         w.close()
                     store.close()
                     scratch.close()
-                    sm, s_streams = _smooth_streamed(cfg, out, store, scratch, imu, settings, stream_dir, log)
+                    sm, s_streams = _smooth_streamed(cfg, out, store, scratch, imu, settings, stream_dir, log,
+                                                     truth, truth_parts)
                     streams += s_streams
             except BaseException:
                 for w in streams:
@@ -706,8 +719,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     score_s = score_outages(sm.solution, gnss, windows, lever, truth=truth) if sm is not None else None
     return NavigateResult(cfg, imu, gnss, windows, used, startup, settings, out, sm, score_f, score_s,
                           time.perf_counter() - t_start, measured, gaps, raw, clock_start, rate_changes, truth,
-                          streams if cfg.filter.scheme != "uncoupled" else None,
-                          pending if cfg.filter.scheme != "uncoupled" else None)
+                          streams, pending, truth_parts)
 
 
 def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, log=None):
@@ -743,9 +755,14 @@ def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, lo
 
 def truth_errors(res: NavigateResult, truth: NavSolution) -> dict:
     """Errors of the forward (and smoothed) solution against a truth file,
-    summarised (:func:`inskit.analysis.summarize`)."""
+    summarised (:func:`inskit.analysis.summarize`) over every row (a
+    streamed run: summed segment by segment as it ran)."""
     from .. import analysis
 
+    if res.truth_parts is not None:
+        finish_streams(res)  # the writer's last segments hold the last rows' errors
+        return {label: res.truth_parts[label].result() for label, track in
+                (("forward", res.forward), ("smoothed", res.smoothed)) if track is not None}
     out = {}
     for label, track in (("forward", res.forward), ("smoothed", res.smoothed)):
         if track is not None:
@@ -794,9 +811,9 @@ def summary(res: NavigateResult) -> dict:
     out["streamed"] = rows is not None
     if rows is not None:
         out["rows_kept"] = int(len(rows))
-        out["rows_kept_note"] = ("streamed run: the solution files hold every epoch; the summary's truth errors and "
-                                 "the plots use the kept rows (every update node, the rows around each fix, every "
-                                 "row of an outage window, the [output] rate_hz grid)")
+        out["rows_kept_note"] = ("streamed run: the solution files and the truth errors cover every epoch; the plots "
+                                 "use the kept rows (every update node, the rows around each fix, every row of an "
+                                 "outage window, the [output] rate_hz grid)")
     if "time_offset" in fw.layout:
         out["estimated_time_offset_s"] = float(fw.estimate("time_offset")[-1, 0])
     out["final_bias"] = {
