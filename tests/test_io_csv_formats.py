@@ -43,6 +43,19 @@ def test_well_formed_files_are_read_exactly_by_the_lean_path(tmp_path, monkeypat
     assert np.array_equal(back.dtheta_b, dth) and np.array_equal(back.time, t) and len(calls) == 2
 
 
+@pytest.mark.parametrize("whole_bytes", [0, 1 << 40])
+def test_whole_and_streamed_csv_parsing_give_the_same_exact_arrays(tmp_path, monkeypatch, whole_bytes):
+    # a small file parsed whole (the default below WHOLE_CSV_BYTES) or streamed block by block (above it):
+    # the same doubles either way, in several blocks when streamed
+    t, dth, dv = _increments(200_000)
+    p = tmp_path / "imu.csv"
+    _write(p, t, dth, dv)
+    assert p.stat().st_size > 3 * (1 << 22)  # more than one 4 MB block of the streaming reader
+    monkeypatch.setattr(C, "WHOLE_CSV_BYTES", whole_bytes)
+    imu = C.read_imu(p)
+    assert np.array_equal(imu.time, t) and np.array_equal(imu.dtheta_b, dth) and np.array_equal(imu.dv_b, dv)
+
+
 def test_degrees_and_the_discard_rule_on_the_lean_path(tmp_path):
     t, dth, dv = _increments(500)
     p = tmp_path / "imu.csv"

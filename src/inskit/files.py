@@ -130,11 +130,16 @@ def arrow_array(v):
         return pa.Array.from_buffers(pa.int64(), n, [None, pa.py_buffer(np.ascontiguousarray(v, np.int64))])
     if v.dtype.kind == "b":
         return pa.Array.from_buffers(pa.bool_(), n, [None, pa.py_buffer(np.packbits(v, bitorder="little"))])
-    b = np.char.encode(v.astype(str), "utf-8")
-    lengths = np.char.str_len(b).astype(np.int64)
+    # each distinct text encoded once (a column of measurement names has a handful), then gathered row by row
+    uniq, inv = np.unique(v.astype(str), return_inverse=True)
+    b = np.char.encode(uniq, "utf-8")
+    ulen = np.char.str_len(b).astype(np.int64)
     width = b.dtype.itemsize
-    raw = np.frombuffer(b.tobytes(), np.uint8).reshape(n, width) if n and width else np.zeros((n, 0), np.uint8)
-    data = raw[np.arange(width) < lengths[:, None]]
+    m = len(uniq)
+    raw_u = np.frombuffer(b.tobytes(), np.uint8).reshape(m, width) if m and width else np.zeros((m, width), np.uint8)
+    inv = inv.reshape(-1)
+    lengths = ulen[inv]
+    data = raw_u[inv][np.arange(width) < lengths[:, None]]
     offsets = np.concatenate([[0], np.cumsum(lengths)]).astype(np.int32)
     return pa.Array.from_buffers(pa.string(), n, [None, pa.py_buffer(offsets), pa.py_buffer(data)])
 

@@ -291,7 +291,7 @@ def propagation_work(model, n_active):
     for e in range(crow.shape[0]):
         F[crow[e], ccol[e]] = cval[e]
     return (F, np.empty((n, n)), np.zeros((n, n)), np.empty((n, n_active)), np.empty((n, n)),
-            np.empty((n, 1)), np.empty((n, 1)))
+            np.empty((n, 1)), np.empty((n, 1)), np.empty(16))
 
 
 @njit(cache=True)
@@ -317,8 +317,18 @@ def propagate(imu, nav, filt, model, out, k0, k1, flags):
         there).  Row ``k`` goes to index ``k - base[0]`` (``base``: (1,)
         int64), so the arrays may hold the whole run (base 0) or one segment
         of it (a streamed run, :func:`inskit.integration.engine.run_filter`).
-    flags : tuple ``(coning, want_phi, open_loop, second_order, gravity)``
+    flags : tuple ``(coning, want_phi, open_loop, second_order, gravity, cov_step)``
         ``gravity``: the code of the gravity model (:data:`inskit.earth.GRAVITY_MODELS`).
+        ``cov_step``: the covariance (and ``Phi``, and the open-loop error
+        state) is stepped at the row that brings the gathered time nearest to
+        this [s] (at 100 Hz, 0.01 s steps every row, jitter or not; at
+        200 Hz every second row), and always at
+        ``k1 - 1`` (the caller's calls end where an update, a node or the run
+        needs it); 0 steps it at every row.  A step of several rows uses
+        their mean rate and specific force (``sum dtheta / sum dt``) and the
+        attitude at the start of its last row; the strapdown integrates every
+        row either way (SYSTEM.md §2: the error model's propagation interval
+        need not be the mechanization's, Groves 2013 §3.2.2).
     """
     propagate_rows(imu, nav, filt, model, out, k0, k1, flags, propagation_work(model, model[4].shape[0]))
 
@@ -332,9 +342,9 @@ def propagate_rows(imu, nav, filt, model, out, k0, k1, flags, work):
     x, P, aux, Phi = filt
     kidx, q_psd, rows, cols, active, crow, ccol, cval = model
     out_lla, out_v, out_q, out_var, obase = out
-    coning, want_phi, open_loop, second_order, gravity = flags
+    coning, want_phi, open_loop, second_order, gravity, cov_step = flags
     b = obase[0]
-    F, A, B, T, tmp, xt, xtmp = work
+    F, A, B, T, tmp, xt, xtmp, gather = work
     n = kidx[N_STATES]
     C = np.empty((3, 3))
     dth = np.empty(3)
@@ -346,22 +356,45 @@ def propagate_rows(imu, nav, filt, model, out, k0, k1, flags, work):
     o_q = np.empty(4)
     no_gains = np.zeros(2)
     sc = sensor_corrections(kidx, aux)
+    # gather[0]: time gathered since the last covariance step; 1..3, 4..6: the rows' summed corrected
+    # angle and velocity increments (a step of one row uses that row's rate and specific force exactly)
+    gather[0] = 0.0
+    for i in range(1, 7):
+        gather[i] = 0.0
     for k in range(k0, k1):
         dt = t[k] - carry[0]
         correct_increments(sc, dth_all[k], dv_all[k], dt, dth, dv, w_b, f_b)
         dcm_into(q_nb, C)
         ned_step(dth, dv, dt, lla, v_n, q_nb, carry, coning, 0, 0.0, no_gains, gravity)
         carry[0] = t[k]
-        fill_transition(F, kidx, lla, v_n, C, f_b, w_b, sc, gravity)
-        propagate_covariance(P, F, rows, cols, active, dt, q_psd, A, B, T, second_order)
-        if open_loop:
-            for i in range(n):
-                xt[i, 0] = x[i]
-            _sparse_step(xt, F, rows, cols, dt, xtmp)
-            for i in range(n):
-                x[i] = xt[i, 0]
-        if want_phi:
-            _sparse_step(Phi, F, rows, cols, dt, tmp)
+        step = dt
+        if cov_step > 0.0:
+            gather[0] += dt
+            for i in range(3):
+                gather[1 + i] += dth[i]
+                gather[4 + i] += dv[i]
+            if gather[0] < cov_step - 0.5 * dt and k < k1 - 1:  # the nearest row to cov_step
+                step = 0.0
+            elif gather[0] != dt:  # several rows: their mean rate and specific force
+                step = gather[0]
+                inv = 1.0 / step
+                for i in range(3):
+                    w_b[i] = gather[1 + i] * inv
+                    f_b[i] = gather[4 + i] * inv
+        if step > 0.0:
+            gather[0] = 0.0
+            for i in range(1, 7):
+                gather[i] = 0.0
+            fill_transition(F, kidx, lla, v_n, C, f_b, w_b, sc, gravity)
+            propagate_covariance(P, F, rows, cols, active, step, q_psd, A, B, T, second_order)
+            if open_loop:
+                for i in range(n):
+                    xt[i, 0] = x[i]
+                _sparse_step(xt, F, rows, cols, step, xtmp)
+                for i in range(n):
+                    x[i] = xt[i, 0]
+            if want_phi:
+                _sparse_step(Phi, F, rows, cols, step, tmp)
         if open_loop:
             apply_correction(lla, v_n, q_nb, x, 1.0, o_lla, o_v, o_q)
             for i in range(3):

@@ -456,6 +456,10 @@ class FilterSection(_Strict):
                                              "15 s) the covariance is inflated and the measurement applied")
     smoother_node_s: float = Field(0.25, gt=0, description="spacing of the extra RTS smoother nodes between "
                                    "updates (with --smooth)")
+    covariance_step_s: float = Field(0.02, ge=0, le=1, description="interval of the covariance propagation [s]: "
+                                     "stepped at the IMU row nearest this much gathered time (and always up to "
+                                     "an update), with the rows' mean rate and specific force; the strapdown "
+                                     "integrates every IMU row whatever it is; 0: at every IMU row")
 
 
 class OutagesSection(_Strict):

@@ -496,6 +496,7 @@ def build_settings(cfg: NavigateConfig, startup: Startup | None, measured=None, 
         accel_bias0=tuple(startup.accel_bias) if startup else (0.0, 0.0, 0.0),
         scheme="closed" if f.scheme == "uncoupled" else f.scheme, gate_probability=f.gate_probability,
         gate_max_consecutive=f.gate_max_consecutive, smoother_node_s=f.smoother_node_s,
+        covariance_step_s=f.covariance_step_s,
         extra_blocks=tuple(extra_blocks), gravity=cfg.earth.gravity,
     )
 
