@@ -94,3 +94,39 @@ def test_count_lines_with_and_without_a_final_newline(tmp_path):
     assert C._count_lines(p) == 3
     p.write_bytes(b"h\n1\n2\n")
     assert C._count_lines(p) == 3
+
+
+def test_a_plain_solution_csv_is_read_by_the_lean_path_like_the_pandas_one(tmp_path, monkeypatch):
+    """A well-formed solution CSV goes the pyarrow way (no pandas), with its
+    extra columns, and reads the same numbers as the pandas path (which a
+    file with a text cell still takes); a time going back is still named by
+    its line."""
+    import pandas as pd
+
+    rng = np.random.default_rng(3)
+    n = 400
+    df = pd.DataFrame({"time_s": 100.0 + 0.01 * np.arange(n), "lat_deg": 45.0 + 1e-6 * rng.standard_normal(n),
+                       "lon_deg": 7.0 + 1e-6 * rng.standard_normal(n), "height_m": 300.0 + rng.standard_normal(n),
+                       "vn_m_s": rng.standard_normal(n), "ve_m_s": rng.standard_normal(n),
+                       "vd_m_s": 0.1 * rng.standard_normal(n), "roll_deg": rng.standard_normal(n),
+                       "pitch_deg": rng.standard_normal(n), "yaw_deg": 180.0 * rng.uniform(-1, 1, n),
+                       "sigma_n_m": rng.uniform(0.1, 1.0, n)})
+    p = tmp_path / "sol.csv"
+    df.to_csv(p, index=False, float_format="%.17g")
+    calls = []
+    lean = C._read_solution_lean
+    monkeypatch.setattr(C, "_read_solution_lean", lambda path: calls.append(path) or lean(path))
+    fast = C.read_solution(p)
+    assert calls and fast is not None and list(fast.extra) == ["sigma_n_m"]
+    monkeypatch.setattr(C, "_read_solution_lean", lambda path: None)
+    slow = C.read_solution(p)
+    assert np.array_equal(fast.time, slow.time) and np.allclose(fast.lla, slow.lla, rtol=1e-15, atol=0)
+    assert np.allclose(fast.q_nb, slow.q_nb, rtol=0, atol=1e-15)
+    # %.17g text read back correctly rounded: the very doubles written (pandas' default parser may miss by an ulp)
+    assert np.array_equal(fast.extra["sigma_n_m"], df["sigma_n_m"].to_numpy())
+    assert np.allclose(slow.extra["sigma_n_m"], df["sigma_n_m"].to_numpy(), rtol=1e-15, atol=0)
+    monkeypatch.setattr(C, "_read_solution_lean", lean)
+    df.loc[57, "time_s"] = df.loc[55, "time_s"]
+    df.to_csv(p, index=False, float_format="%.17g")
+    with pytest.raises(InputError, match=r"line 59: time_s=.* goes back in time"):
+        C.read_solution(p)

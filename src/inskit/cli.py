@@ -105,6 +105,9 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
         raise InputError(f"{out_file}: is an input of this command; refusing to overwrite it")
     if out_file:
         check_folder_writable(Path(out_file).resolve().parent)
+    from .jobs.warm import warm_compiled_code
+
+    warm_compiled_code()  # numba's set-up beside the reading
     imu = io.read_imu(imu_file, check_units=not no_unit_check, first_row=first_row)
     if init_text and init_from:
         raise InputError("give either --init or --init-from, not both")

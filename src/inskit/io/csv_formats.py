@@ -693,6 +693,9 @@ def read_solution(path) -> NavSolution:
         return _read_solution_parquet(p)
     if p.suffix == ".parquet" and p.is_file():
         raise InputError(f"{p}: named .parquet but not a Parquet file (no PAR1 magic at its start)")
+    lean = _read_solution_lean(p)
+    if lean is not None:
+        return lean
     path, df = read_table(path)
     require_columns(path, df, SOLUTION_COLUMNS)
     a = numeric_columns(path, df, SOLUTION_COLUMNS)
@@ -705,6 +708,28 @@ def read_solution(path) -> NavSolution:
     lla = np.column_stack([a[:, 1] * DEG, a[:, 2] * DEG, a[:, 3]])
     rpy = a[:, 7:10] * DEG
     return NavSolution(a[:, 0], lla, a[:, 4:7], rot.quat_from_euler(rpy), extra)
+
+
+def _read_solution_lean(path) -> NavSolution | None:
+    """:func:`read_solution` of a plain, well-formed CSV (every cell a
+    finite number) by :func:`lean_columns`, the columns parsed by pyarrow on
+    every core straight into one array; None for anything else, which the
+    pandas path then reads and judges (its messages name the line)."""
+    names = _header_names(path)
+    if names is None or not set(SOLUTION_COLUMNS) <= set(names) or len(set(names)) != len(names):
+        return None
+    got = lean_columns(path, [names])
+    if got is None:
+        return None
+    a = got[0]
+    cols = {c: a[:, j] for j, c in enumerate(names)}
+    check_time_column(path, cols["time_s"])
+    _check_latlon(path, cols["lat_deg"], cols["lon_deg"])
+    lla = np.column_stack([cols["lat_deg"] * DEG, cols["lon_deg"] * DEG, cols["height_m"]])
+    v_n = np.column_stack([cols["vn_m_s"], cols["ve_m_s"], cols["vd_m_s"]])
+    rpy = np.column_stack([cols["roll_deg"], cols["pitch_deg"], cols["yaw_deg"]]) * DEG
+    extra = {c: np.ascontiguousarray(v) for c, v in cols.items() if c not in SOLUTION_COLUMNS}
+    return NavSolution(cols["time_s"].copy(), lla, v_n, rot.quat_from_euler(rpy), extra)
 
 
 def _read_solution_parquet(path) -> NavSolution:

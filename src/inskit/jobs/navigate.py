@@ -514,32 +514,6 @@ def _uncoupled_track(imu, initial, gnss, used, lever, settings):
                                       "nis": np.empty(0), "accepted": np.empty(0, bool)}}, settings, None)
 
 
-def warm_compiled_code():
-    """Start numba's own set-up (its registries, scipy's BLAS, a cached
-    function's first load: a quarter of a second, paid once per process)
-    in a background thread, so that it overlaps the reading of the inputs,
-    which pyarrow parses without holding the GIL.  Nothing is compiled
-    here; a process that has done it already returns at once."""
-    global _WARMING
-    if _WARMING is not None:
-        return
-    import threading
-
-    def warm():
-        try:
-            from ..rotations import quat_from_rotvec
-
-            quat_from_rotvec(np.zeros((2, 3)))  # a cached kernel: loading it sets numba up
-        except Exception:  # noqa: BLE001 (a warm-up only: the run itself then says what is wrong)
-            pass
-
-    _WARMING = threading.Thread(target=warm, name="inskit-warm", daemon=True)
-    _WARMING.start()
-
-
-_WARMING = None
-
-
 def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=None, log=None,
              inputs=None, truth: NavSolution | None = None, stream_dir=None) -> NavigateResult:
     """Run the whole job described by ``cfg``.
@@ -557,6 +531,8 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     tight = cfg.gnss.coupling == "tight"
     raw = None
     if inputs is None:
+        from .warm import warm_compiled_code
+
         warm_compiled_code()  # numba's own start-up, beside the reading (which pyarrow does without the GIL)
         raw = load_raw_gnss(cfg, log) if (tight or cfg.gnss.file is None) else None
         imu, gnss = load_inputs(cfg, time_offset_s, raw)
