@@ -692,7 +692,9 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             if code == U.DONE:
                 break
             if code == U.CHUNK:
-                if stream:
+                # a segment is handed on once full (its boundary node done), not at every progress chunk: a
+                # writer's cost is per segment (a short log cut into fifty pieces paid it fifty times)
+                if stream and int(ctl[U.C_KDONE]) >= segment_stop(max(int(obase[0]), 1)):
                     flush(int(ctl[U.C_KDONE]))
                 continue
             i = int(ctl[U.C_I])

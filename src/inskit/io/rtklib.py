@@ -16,23 +16,36 @@ from .. import rotations as rot
 from ..errors import InputError
 from ..types import GnssData, ImuData
 from ..units import DEG, G0
-from .csv_formats import check_imu_units, check_time_column, numeric_columns, read_table, require_columns
+from .csv_formats import (_header_names, check_imu_units, check_time_column, lean_columns, numeric_columns, read_table,
+                          require_columns)
 
 GPS_EPOCH = datetime(1980, 1, 6, tzinfo=timezone.utc)
 WEEK_S = 604800.0
 
 
 def gps_week_seconds(stamps):
-    """``(week, seconds of week)`` of ``YYYY/MM/DD HH:MM:SS.sss`` GPST strings."""
-    import pandas as pd  # here, not at import: the IMU path of navigate needs no pandas
-
-    ts = pd.to_datetime(pd.Series(stamps), format="%Y/%m/%d %H:%M:%S.%f", utc=True, errors="coerce")
-    if ts.isna().any():
-        i = int(np.argmax(ts.isna().to_numpy()))
-        raise InputError(f"line with time {stamps[i]!r}: expected YYYY/MM/DD HH:MM:SS.sss")
-    sec = (ts - pd.Timestamp(GPS_EPOCH)).dt.total_seconds().to_numpy()
-    week = np.floor(sec / WEEK_S).astype(int)
-    return week, sec - week * WEEK_S
+    """``(week, seconds of week)`` of ``YYYY/MM/DD HH:MM:SS.sss`` GPST strings
+    (parsed by NumPy's ISO 8601 reader in C, counted in integer nanoseconds
+    from the GPS epoch, so the seconds are exact to the nanosecond)."""
+    stamps = [str(x) for x in stamps]
+    iso = np.char.replace(np.char.replace(np.asarray(stamps, dtype=str), "/", "-"), " ", "T")
+    shaped = (np.char.count(np.asarray(stamps, dtype=str), "/") == 2) & (np.char.count(iso, "T") == 1)
+    try:
+        if not shaped.all():
+            raise ValueError
+        ns = (iso.astype("datetime64[ns]") - np.datetime64("1980-01-06T00:00:00", "ns")).astype(np.int64)
+    except ValueError:
+        for i, text in enumerate(stamps):
+            try:
+                if not shaped[i]:
+                    raise ValueError
+                np.datetime64(str(iso[i]), "ns")
+            except ValueError:
+                raise InputError(f"line with time {text!r}: expected YYYY/MM/DD HH:MM:SS.sss") from None
+        raise
+    week_ns = int(WEEK_S) * 1_000_000_000
+    week = ns // week_ns
+    return week.astype(int), (ns - week * week_ns) / 1e9
 
 
 def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
@@ -84,30 +97,30 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
     for lineno, f in rows:
         if len(f) < width:
             raise InputError(f"{path}: line {lineno}: has {len(f)} fields, the header names {width}")
-    import pandas as pd
-
-    df = pd.DataFrame([f[:width] for _, f in rows], columns=names)
+    # a few thousand lines of fields split above: columns by NumPy (no pandas, half a second to import)
+    table = np.array([f[:width] for _, f in rows], dtype=str)
     linenos = np.array([ln for ln, _ in rows])
     try:
-        week, sow = gps_week_seconds(list(df["date"] + " " + df["time"]))
+        week, sow = gps_week_seconds(np.char.add(np.char.add(table[:, 0], " "), table[:, 1]))
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
     if week0 is None:
         week0 = int(week[0])
     t = (week - week0) * WEEK_S + sow + time_offset_s
     num = {}
-    for c in names[2:]:
-        col = pd.to_numeric(df[c], errors="coerce").to_numpy(float)
+    for j, c in enumerate(names[2:], start=2):
+        col = _floats(table[:, j])
         if (~np.isfinite(col)).any() and c in need + ["vn(m/s)", "ve(m/s)", "vu(m/s)", "sdvn", "sdve", "sdvu"]:
             i = int(np.argmax(~np.isfinite(col)))
-            raise InputError(f"{path}: line {linenos[i]}: column '{c}' has {df[c].iloc[i]!r}; expected a finite "
-                             "number")
+            raise InputError(f"{path}: line {linenos[i]}: column '{c}' has {str(table[i, j])!r}; expected a "
+                             "finite number")
         num[c] = col
     for c, limit in (("latitude(deg)", 90.0), ("longitude(deg)", 360.0)):
         bad = np.abs(num[c]) > limit
         if bad.any():
             i = int(np.argmax(bad))
-            raise InputError(f"{path}: line {linenos[i]}: column '{c}' has {df[c].iloc[i]!r}; expected a value in "
+            raise InputError(f"{path}: line {linenos[i]}: column '{c}' has {str(table[i, names.index(c)])!r}; "
+                             "expected a value in "
                              f"[-{limit:g}, {limit:g}] degrees")
     keep = np.isin(num["Q"].astype(int), list(quality))
     if not keep.any():
@@ -129,6 +142,22 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
         if (sv <= 0).any():
             v = sv = None  # velocity sigmas absent: treat the velocity as unusable
     return GnssData(t[keep], lla, sig, v, sv), week0
+
+
+def _floats(text):
+    """A column of number texts as floats, NaN where a text is no number
+    (as pandas' ``to_numeric(errors="coerce")``), converted in C when all
+    are numbers."""
+    try:
+        return text.astype(float)
+    except ValueError:
+        out = np.empty(len(text))
+        for i, x in enumerate(text):
+            try:
+                out[i] = float(x)
+            except ValueError:
+                out[i] = np.nan
+        return out
 
 
 def _open_text(path):
@@ -174,10 +203,15 @@ def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0
         In body axes (forward-right-down).
     week0 : int
     """
-    path, df = read_table(path)
     cols = ["gps_week", "gps_sow_s", "acc_x_g", "acc_y_g", "acc_z_g", "gyro_x_dps", "gyro_y_dps", "gyro_z_dps"]
-    require_columns(path, df, cols)
-    a = numeric_columns(path, df, cols)
+    names = _header_names(path)
+    got = lean_columns(path, [cols]) if names is not None and set(cols) <= set(names) else None
+    if got is not None:  # plain numbers: parsed by pyarrow, no pandas
+        path, a = Path(path), got[0]
+    else:  # anything else: the pandas path, whose messages name the line and the column
+        path, df = read_table(path)
+        require_columns(path, df, cols)
+        a = numeric_columns(path, df, cols)
     week = a[:, 0].astype(int)
     if week0 is None:
         week0 = int(week[0])
