@@ -86,3 +86,38 @@ def test_a_header_of_no_known_format_names_them(tmp_path):
     (tmp_path / "e.csv").write_text("")
     with pytest.raises(InputError, match=r"e\.csv: the file is empty"):
         io.read_imu(tmp_path / "e.csv")
+
+
+def test_the_lean_readers_of_the_real_logs_agree_with_the_pandas_way(monkeypatch):
+    """The bundled gzip IMU log parsed by pyarrow reads the same numbers as
+    the pandas path it replaced (which any irregular file still takes), and
+    the .pos times, parsed by NumPy, are the GPS seconds of week that
+    Python's datetime gives for the same stamps."""
+    from datetime import datetime, timezone
+
+    import gzip
+
+    from inskit.io import csv_formats, rtklib
+
+    lean, _ = read_rtklibexplorer_imu(DRIVE_IMU)
+    monkeypatch.setattr(rtklib, "lean_columns", lambda *a: None)
+    slow, _ = read_rtklibexplorer_imu(DRIVE_IMU)
+    np.testing.assert_allclose(lean.time, slow.time, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(lean.dv_b, slow.dv_b, rtol=1e-14, atol=1e-18)
+    np.testing.assert_allclose(lean.dtheta_b, slow.dtheta_b, rtol=1e-14, atol=1e-18)
+    assert csv_formats._header_names(DRIVE_IMU)[:2] == ["gps_week", "gps_sow_s"]
+    stamps = []
+    with gzip.open(DRIVE_POS, "rt") as fh:
+        for line in fh:
+            if not line.startswith("%") and line.strip():
+                f = line.split()
+                stamps.append(f"{f[0]} {f[1]}")
+    week, sow = rtklib.gps_week_seconds(stamps)
+    epoch = datetime(1980, 1, 6, tzinfo=timezone.utc)
+    for i in (0, len(stamps) // 2, len(stamps) - 1):
+        d = datetime.strptime(stamps[i], "%Y/%m/%d %H:%M:%S.%f").replace(tzinfo=timezone.utc) - epoch
+        whole = d.days * 86400 + d.seconds
+        assert week[i] == whole // 604800
+        assert sow[i] == pytest.approx(whole % 604800 + d.microseconds * 1e-6, abs=1e-9)
+    with pytest.raises(InputError, match="expected YYYY/MM/DD HH:MM:SS.sss"):
+        rtklib.gps_week_seconds(["2025/07/08 19:34:24.5", "2025/07/32 01:00:00.0"])
