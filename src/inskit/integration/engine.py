@@ -125,8 +125,9 @@ class FilterSettings:
         (and always up to an update or a node), with the rows' mean rate and
         specific force; the strapdown integrates every row whatever it is.
         Default 0.02 s (50 Hz): at 200 Hz a quarter of the propagation's
-        cost of every row, for outage errors within 0.3 % of it on a 1 h
-        car drive (``tests/test_integration_engine.py``); the error model's
+        cost of every row, for sigmas within 1 % of the every-row filter's
+        where both are propagated to the same time and a 40 s outage within
+        2 % (``tests/test_integration_kernel.py``); the error model's
         dynamics (Schuler, the bias couplings, the vehicle's turns) are far
         slower than 0.02 s, and the mean rate and specific force are the
         right low-pass of what lies between.  0: at every row.
