@@ -659,63 +659,8 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
                     f"{bank['score']:.2f}, next best {bank['runner_up_score']})")
         streams = pending = truth_parts = None
         if stream_dir is not None and streams_run(cfg):
-            import shutil
-            import tempfile
-
-            from ..analysis.errors import ErrorSummary, nav_error_part
-            from ..integration.engine import NAV_SIGMA_BLOCKS, Segment
-            from ..integration.smoother import DiskStore
-
-            Path(stream_dir).mkdir(parents=True, exist_ok=True)
-            streams = open_streams(cfg, Path(stream_dir), imu.time, settings)
-            lay = settings.layout
-            scratch_dir = Path(tempfile.mkdtemp(prefix=".smoother-", dir=stream_dir)) if smooth else None
-            store = DiskStore(scratch_dir / "store", lay.size) if smooth else None
-            scratch = _ForwardScratch(scratch_dir, lay.aux_size) if smooth else None
-            # the truth errors of every row, summed segment by segment (the kept rows would weigh the outages'
-            # full-rate rows above the rest)
-            truth_parts = None if truth is None else {"forward": ErrorSummary(), "smoothed": ErrorSummary()}
-
-            def write(sg):
-                extra_cols = lay.columns(sg.aux, sg.sigma, sigma_blocks=NAV_SIGMA_BLOCKS)
-                sol = NavSolution._trusted(sg.time, sg.lla, sg.v_n, sg.q_nb, extra_cols)
-                for w in streams:
-                    w.write(sol, sg.start)
-                if scratch is not None:
-                    scratch(sg)
-                if truth_parts is not None:
-                    truth_parts["forward"].add(nav_error_part(sol, truth))
-            pipe = _Pipe(write)
-
-            def sink(sg):  # the views are the engine's buffers: copied, then converted and written on the worker
-                pipe.put(Segment(sg.start, sg.time, sg.lla.copy(), sg.v_n.copy(), sg.q_nb.copy(), sg.aux, sg.sigma))
-            sm = None
-            try:
-                try:
-                    out = run_filter(imu, initial, meas, settings, progress=progress, extra_noise=extra, sink=sink,
-                                     keep_rows=stream_keep_rows(imu.time, gnss, windows, cfg.output.rate_hz),
-                                     smoother=smooth, store_sink=store)
-                except BaseException:
-                    pipe.close(quiet=True)
-                    raise
-                if not smooth:  # the last segments are written while the caller shows the result (finish_streams)
-                    pending = pipe
-                else:
-                    pipe.close()
-                    for w in streams:
-                        w.close()
-                    store.close()
-                    scratch.close()
-                    sm, s_streams = _smooth_streamed(cfg, out, store, scratch, imu, settings, stream_dir, log,
-                                                     truth, truth_parts)
-                    streams += s_streams
-            except BaseException:
-                for w in streams:
-                    w.abort()
-                raise
-            finally:
-                if scratch_dir is not None:
-                    shutil.rmtree(scratch_dir, ignore_errors=True)
+            out, sm, streams, pending, truth_parts = _run_streamed(cfg, imu, gnss, windows, initial, meas, settings,
+                                                                   extra, smooth, progress, stream_dir, log, truth)
         else:
             out = run_filter(imu, initial, meas, settings, smoother=smooth, progress=progress, extra_noise=extra)
             sm = rts_smooth(out) if smooth else None
@@ -724,6 +669,75 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     return NavigateResult(cfg, imu, gnss, windows, used, startup, settings, out, sm, score_f, score_s,
                           time.perf_counter() - t_start, measured, gaps, raw, clock_start, rate_changes, truth,
                           streams, pending, truth_parts)
+
+
+def _run_streamed(cfg, imu, gnss, windows, initial, meas, settings, extra, smooth, progress, stream_dir, log,
+                  truth):
+    """The filter (and with ``smooth`` the smoother) with the solution files
+    written while it runs (:func:`streams_run`): the segments go through a
+    worker thread into the streams of ``stream_dir``; the smoother's node
+    data and the forward rows go to a scratch folder there, removed at the
+    end.  Returns ``(out, sm, streams, pending, truth_parts)``: ``pending``
+    is the writer still finishing a forward-only run (:func:`finish_streams`),
+    ``truth_parts`` the truth errors summed segment by segment."""
+    import shutil
+    import tempfile
+
+    from ..analysis.errors import ErrorSummary, nav_error_part
+    from ..integration.engine import NAV_SIGMA_BLOCKS, Segment
+    from ..integration.smoother import DiskStore
+
+    Path(stream_dir).mkdir(parents=True, exist_ok=True)
+    streams = open_streams(cfg, Path(stream_dir), imu.time, settings)
+    lay = settings.layout
+    scratch_dir = Path(tempfile.mkdtemp(prefix=".smoother-", dir=stream_dir)) if smooth else None
+    store = DiskStore(scratch_dir / "store", lay.size) if smooth else None
+    scratch = _ForwardScratch(scratch_dir, lay.aux_size) if smooth else None
+    # the truth errors of every row, summed segment by segment (the kept rows would weigh the outages'
+    # full-rate rows above the rest)
+    truth_parts = None if truth is None else {"forward": ErrorSummary(), "smoothed": ErrorSummary()}
+
+    def write(sg):
+        extra_cols = lay.columns(sg.aux, sg.sigma, sigma_blocks=NAV_SIGMA_BLOCKS)
+        sol = NavSolution._trusted(sg.time, sg.lla, sg.v_n, sg.q_nb, extra_cols)
+        for w in streams:
+            w.write(sol, sg.start)
+        if scratch is not None:
+            scratch(sg)
+        if truth_parts is not None:
+            truth_parts["forward"].add(nav_error_part(sol, truth))
+    pipe = _Pipe(write)
+
+    def sink(sg):  # the views are the engine's buffers: copied, then converted and written on the worker
+        pipe.put(Segment(sg.start, sg.time, sg.lla.copy(), sg.v_n.copy(), sg.q_nb.copy(), sg.aux, sg.sigma))
+    sm = pending = None
+    try:
+        try:
+            out = run_filter(imu, initial, meas, settings, progress=progress, extra_noise=extra, sink=sink,
+                             keep_rows=stream_keep_rows(imu.time, gnss, windows, cfg.output.rate_hz),
+                             smoother=smooth, store_sink=store)
+        except BaseException:
+            pipe.close(quiet=True)
+            raise
+        if not smooth:  # the last segments are written while the caller shows the result (finish_streams)
+            pending = pipe
+        else:
+            pipe.close()
+            for w in streams:
+                w.close()
+            store.close()
+            scratch.close()
+            sm, s_streams = _smooth_streamed(cfg, out, store, scratch, imu, settings, stream_dir, log,
+                                             truth, truth_parts)
+            streams += s_streams
+    except BaseException:
+        for w in streams:
+            w.abort()
+        raise
+    finally:
+        if scratch_dir is not None:
+            shutil.rmtree(scratch_dir, ignore_errors=True)
+    return out, sm, streams, pending, truth_parts
 
 
 def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, log=None):
