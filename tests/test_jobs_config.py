@@ -279,16 +279,6 @@ def test_first_row_only_for_increment_files():
         _cfg(LOOSE, imu={"first_row": "first"})
 
 
-def test_regular_time_tags_only_for_the_rate_log():
-    """[imu] time_tags = "regular" re-integrates the rtklibexplorer rate log on a uniform grid; an inskit file may
-    hold increments, whose intervals their own tags define, so it is refused there."""
-    assert _cfg(LOOSE).imu.time_tags == "as-logged"
-    assert _cfg(LOOSE, imu={"format": "rtklibexplorer", "time_tags": "regular"}).imu.time_tags == "regular"
-    with pytest.raises(ConfigError, match=r"field 'imu\.time_tags': time_tags = \"regular\" re-integrates a rate "
-                                          r"log"):
-        _cfg(LOOSE, imu={"time_tags": "regular"})
-
-
 # --- --outages on the command line -------------------------------------------------
 def test_mounting_keys_need_the_mounting_and_a_lateral_constraint():
     with pytest.raises(ConfigError, match=r"c\.toml: field 'constraints\.sigma_mounting_deg': "

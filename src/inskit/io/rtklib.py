@@ -151,7 +151,7 @@ def mount_dcm(mount_rpy):
 
 
 def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0.0, 0.0, 0.0),
-                            check_units=True, regular_time=False):
+                            check_units=True):
     """Read the rtklibexplorer ``imu_*_gpst.csv`` log.
 
     Columns ``gps_week, gps_sow_s, acc_{x,y,z}_g, gyro_{x,y,z}_dps,
@@ -167,11 +167,6 @@ def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0
         against GNSS velocity, -0.2 s against position).
     mount_rpy : (3,) radians
         Mounting rotation, see :func:`mount_dcm`.
-    regular_time : bool
-        Put the tags on the uniform grid of the constant-rate stream
-        (:func:`inskit.io.timetags.regular_time_tags`) before the rates are
-        integrated: the tags come from an integer-millisecond counter, so
-        the intervals of a 100 Hz log read 8 to 11 ms.
 
     Returns
     -------
@@ -188,10 +183,6 @@ def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0
         week0 = int(week[0])
     t = (week - week0) * WEEK_S + a[:, 1] + time_offset_s
     check_time_column(path, t, "gps_sow_s")
-    if regular_time:
-        from .timetags import regular_time_tags
-
-        t, _ = regular_time_tags(t)
     C_bs = mount_dcm(mount_rpy)
     f = a[:, 2:5] * G0 @ C_bs.T
     w = a[:, 5:8] * DEG @ C_bs.T

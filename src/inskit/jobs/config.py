@@ -61,9 +61,7 @@ class ImuSection(_Strict):
     """The IMU log and how to read it.
 
     Rules: first_row other than "initial" needs format = "inskit" (the
-    rtklibexplorer log holds rates); time_tags = "regular" needs format =
-    "rtklibexplorer" (a rate log; an inskit file may hold increments, which
-    their own intervals define).
+    rtklibexplorer log holds rates).
     """
 
     file: Path = Field(..., description="IMU log, relative to this config file (plain or .gz)")
@@ -84,11 +82,6 @@ class ImuSection(_Strict):
         "or 'discard' (the initial epoch: its increments are dropped); docs/formats.md")
     start_s: float | None = Field(None, description="ignore IMU data before this time (IMU time scale, after "
                                   "time_offset_s; default: the first GNSS epoch)")
-    time_tags: Literal["as-logged", "regular"] = Field(
-        "as-logged", description="rtklibexplorer: 'as-logged' integrates the rates over the intervals of the time "
-        "tags; 'regular' puts each gap-free stretch on the uniform grid of a constant-rate stream first (tags "
-        "rounded by a millisecond counter: 8-11 ms intervals around 10.0 ms; a stretch with a tag more than half "
-        "an interval off its grid keeps its tags); inskit.io.timetags")
     gap_factor: float = Field(5.0, gt=1.0, description="an interval longer than this many median intervals is a gap")
     gap_rate_sigma_deg_s: float = Field(5.0, gt=0, description="unknown rate change assumed over a bridged gap")
     gap_accel_sigma_m_s2: float = Field(1.0, gt=0, description="unknown acceleration change over a bridged gap")
@@ -98,10 +91,6 @@ class ImuSection(_Strict):
         if self.format == "rtklibexplorer" and self.first_row != "initial":
             raise _key_error("first_row", "applies to increment files (format \"inskit\" with dtheta/dv columns); "
                              "the rtklibexplorer log holds rates: remove it")
-        if self.time_tags == "regular" and self.format != "rtklibexplorer":
-            raise _key_error("time_tags", "time_tags = \"regular\" re-integrates a rate log (format "
-                             "\"rtklibexplorer\") on a uniform grid; an inskit file may hold increments, whose "
-                             "intervals their own tags define: remove it")
         return self
 
 

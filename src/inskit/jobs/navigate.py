@@ -311,8 +311,7 @@ def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = N
     if cfg.imu.format == "rtklibexplorer":
         imu, _ = read_rtklibexplorer_imu(ipath, week0=week0, time_offset_s=imu_off,
                                          mount_rpy=np.radians(cfg.imu.mount_rpy_deg),
-                                         check_units=cfg.imu.check_units,
-                                         regular_time=cfg.imu.time_tags == "regular")
+                                         check_units=cfg.imu.check_units)
     else:
         raw_imu = io.read_imu(ipath, format="inskit", check_units=cfg.imu.check_units, first_row=cfg.imu.first_row)
         from ..io.rtklib import mount_dcm
