@@ -219,6 +219,23 @@ def propagate_covariance(P, F, rows, cols, active, dt, q_psd, A, B, T, second_or
         P[i, i] += q_psd[i] * dt
 
 
+@njit(cache=True, inline="always")
+def add_body_noise(P, C, q_psd, n, dt):
+    """``P[blk] += C diag(q_b) C^T dt`` on the attitude and velocity blocks,
+    ``q_b = q_psd[n:n+3]`` (gyro) and ``q_psd[n+3:n+6]`` (accelerometer):
+    white noise per body axis, rotated into NED by the attitude of the step."""
+    for blk, off in ((T0, n), (V0, n + 3)):
+        for i in range(3):
+            for j in range(i, 3):
+                s = 0.0
+                for m in range(3):
+                    s += C[i, m] * q_psd[off + m] * C[j, m]
+                s *= dt
+                P[blk + i, blk + j] += s
+                if j != i:
+                    P[blk + j, blk + i] += s
+
+
 @njit(cache=True, fastmath={"contract"})
 def _sparse_step(M, F, rows, cols, dt, tmp):
     """``M <- (I + F dt) M`` for a square or vector M over F's pattern."""
@@ -346,6 +363,7 @@ def propagate_rows(imu, nav, filt, model, out, k0, k1, flags, work):
     o_q = np.empty(4)
     no_gains = np.zeros(2)
     sc = sensor_corrections(kidx, aux)
+    body_noise = q_psd.shape[0] >= n + 6
     for k in range(k0, k1):
         dt = t[k] - carry[0]
         correct_increments(sc, dth_all[k], dv_all[k], dt, dth, dv, w_b, f_b)
@@ -354,6 +372,8 @@ def propagate_rows(imu, nav, filt, model, out, k0, k1, flags, work):
         carry[0] = t[k]
         fill_transition(F, kidx, lla, v_n, C, f_b, w_b, sc, gravity)
         propagate_covariance(P, F, rows, cols, active, dt, q_psd, A, B, T, second_order)
+        if body_noise:
+            add_body_noise(P, C, q_psd, n, dt)
         if open_loop:
             for i in range(n):
                 xt[i, 0] = x[i]
