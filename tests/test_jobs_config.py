@@ -279,6 +279,14 @@ def test_first_row_only_for_increment_files():
         _cfg(LOOSE, imu={"first_row": "first"})
 
 
+def test_per_axis_white_noise_needs_the_static_measurement():
+    assert _cfg(LOOSE).noise.from_static_per_axis is False
+    assert _cfg(LOOSE, noise={"from_static_per_axis": True}).noise.from_static_per_axis is True
+    with pytest.raises(ConfigError, match=r"field 'noise\.from_static_per_axis': .*from_static = false measures "
+                                          r"none"):
+        _cfg(LOOSE, noise={"from_static_per_axis": True, "from_static": False})
+
+
 # --- --outages on the command line -------------------------------------------------
 def test_mounting_keys_need_the_mounting_and_a_lateral_constraint():
     with pytest.raises(ConfigError, match=r"c\.toml: field 'constraints\.sigma_mounting_deg': "

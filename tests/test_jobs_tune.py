@@ -82,3 +82,22 @@ def test_a_candidate_the_config_refuses_is_named_before_the_search(tmp_path):
             T.tune(ex / "drive_0708.toml", T.parse_grid([spec]), workers=1)
     with pytest.raises(ConfigError, match="repeated"):
         T.parse_grid(["gnss.sigma_floor_m=0,0.0"])
+
+
+def test_shifted_placements_keep_clear_of_the_protocol_and_the_ends():
+    """--shifts 3 on the drive's spacing (hold 14.75 s, reaid 7.75 s): the validation outages move by -2.75, 0 and
+    +2.75 s, each keeping 5 s of aiding from the protocol's windows and the ends of the fixes."""
+    protocol = [(40.0 + 45 * k, 54.75 + 45 * k) for k in range(3)]
+    val = T.validation_windows(protocol, 0.0, 160.0, hold_s=14.75, reaid_s=7.75, start_after_s=60.0)
+    assert val == [(62.5, 77.25), (107.5, 122.25)]
+    placed = T.shifted_windows(val, protocol, 0.0, 160.0, 7.75, 3)
+    assert [d for d, _ in placed] == [-2.75, 0.0, 2.75]
+    assert placed[1][1] == val
+    for d, w in placed:
+        assert len(w) == 2
+        for a, b in w:
+            assert all(b + 5.0 <= pa + 1e-9 or a - 5.0 >= pb - 1e-9 for pa, pb in protocol)
+    assert T.shifted_windows(val, protocol, 0.0, 160.0, 7.75, 1) == [(0.0, val)]
+    # an outage that would come within 5 s of the last fix is left out of that placement
+    late = T.shifted_windows([(140.0, 150.0)], [], 0.0, 156.0, 7.0, 3)
+    assert [len(w) for _, w in late] == [1, 1, 0]

@@ -26,9 +26,13 @@ from .cli_output import emit as _emit
                    "where one validation outage would not fit between the config's outages]")
 @click.option("--start-after", "start_after_s", type=click.FloatRange(min=0.0), default=60.0, show_default=True,
               help="No validation outage in the first seconds after the first fix (start-up).")
+@click.option("--shifts", type=click.IntRange(min=1), default=1, show_default=True,
+              help="Placements of the validation outages, shifted together within the aided stretches (each "
+                   "keeping 5 s of aiding on both sides); every candidate runs once per placement and is scored "
+                   "over all of them (more outages: a choice less at the mercy of a few).")
 @click.option("--workers", type=click.IntRange(min=1), help="Parallel runs  [default: every core]")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def tune(config_file, grids, hold_s, reaid_s, start_after_s, workers, as_json):
+def tune(config_file, grids, hold_s, reaid_s, start_after_s, shifts, workers, as_json):
     """Choose filter settings by cross-validation: each candidate is run with
     the config's own outages withheld plus validation outages placed where the
     protocol keeps GNSS on, and ranked by its error at their ends."""
@@ -40,7 +44,7 @@ def tune(config_file, grids, hold_s, reaid_s, start_after_s, workers, as_json):
     with tqdm(total=len(candidates(grid)), desc="tune", unit="run", file=sys.stderr,
               disable=not sys.stderr.isatty()) as bar:
         res = run_tune(config_file, grid, hold_s=hold_s, reaid_s=reaid_s, start_after_s=start_after_s,
-                       workers=workers, progress=bar.update)
+                       workers=workers, progress=bar.update, shifts=shifts)
     _emit(res, as_json, table=table_text(res))
 
 

@@ -219,6 +219,23 @@ def propagate_covariance(P, F, rows, cols, active, dt, q_psd, A, B, T, second_or
         P[i, i] += q_psd[i] * dt
 
 
+@njit(cache=True, inline="always")
+def add_body_noise(P, C, q_psd, n, dt):
+    """``P[blk] += C diag(q_b) C^T dt`` on the attitude and velocity blocks,
+    ``q_b = q_psd[n:n+3]`` (gyro) and ``q_psd[n+3:n+6]`` (accelerometer):
+    white noise per body axis, rotated into NED by the attitude of the step."""
+    for blk, off in ((T0, n), (V0, n + 3)):
+        for i in range(3):
+            for j in range(i, 3):
+                s = 0.0
+                for m in range(3):
+                    s += C[i, m] * q_psd[off + m] * C[j, m]
+                s *= dt
+                P[blk + i, blk + j] += s
+                if j != i:
+                    P[blk + j, blk + i] += s
+
+
 @njit(cache=True, fastmath={"contract"})
 def _sparse_step(M, F, rows, cols, dt, tmp):
     """``M <- (I + F dt) M`` for a square or vector M over F's pattern."""
@@ -356,6 +373,7 @@ def propagate_rows(imu, nav, filt, model, out, k0, k1, flags, work):
     o_q = np.empty(4)
     no_gains = np.zeros(2)
     sc = sensor_corrections(kidx, aux)
+    body_noise = q_psd.shape[0] >= n + 6
     # gather[0]: time gathered since the last covariance step; 1..3, 4..6: the rows' summed corrected
     # angle and velocity increments (a step of one row uses that row's rate and specific force exactly)
     gather[0] = 0.0
@@ -387,6 +405,8 @@ def propagate_rows(imu, nav, filt, model, out, k0, k1, flags, work):
                 gather[i] = 0.0
             fill_transition(F, kidx, lla, v_n, C, f_b, w_b, sc, gravity)
             propagate_covariance(P, F, rows, cols, active, step, q_psd, A, B, T, second_order)
+            if body_noise:
+                add_body_noise(P, C, q_psd, n, step)
             if open_loop:
                 for i in range(n):
                     xt[i, 0] = x[i]

@@ -78,6 +78,12 @@ class StateBlock:
         offset...).  ``None`` for the navigation blocks.
     entries : tuple, optional
         Extra constant entries of F: ``(row, column_block, column, value)``.
+    body_psd : (3,) array_like, optional
+        Velocity and attitude blocks only: white-noise PSDs per *body* axis
+        [unit^2 / s] (a sensor's noise differs by axis: a car's gyro shakes
+        about its pitch axis), rotated into NED at every step, ``C_nb
+        diag(body_psd) C_bn`` (Groves 2013 eq. 14.80 with its noise per
+        axis); added to ``psd``.
     predict_estimate : bool
         Carry the estimate between updates by the block's own dynamics
         (``exp(F dt)`` over its entries), as for a receiver clock whose bias
@@ -96,6 +102,7 @@ class StateBlock:
     entries: tuple = field(default=())
     description: str = ""
     predict_estimate: bool = False
+    body_psd: object = None
 
     def __post_init__(self):
         if not self.name or not isinstance(self.name, str):
@@ -112,6 +119,13 @@ class StateBlock:
             raise InputError(f"state block {self.name!r}: process-noise PSDs must be finite and >= 0, got {self.psd}")
         if not self.tau_s > 0:
             raise InputError(f"state block {self.name!r}: tau_s must be > 0 (inf for a random walk), got {self.tau_s}")
+        if self.body_psd is not None:
+            if self.role not in ("vel", "att"):
+                raise InputError(f"state block {self.name!r}: body_psd applies to the velocity and attitude blocks")
+            bp = _per_axis(self.body_psd, n, "body_psd", self.name)
+            if not np.all(np.isfinite(bp)) or np.any(bp < 0):
+                raise InputError(f"state block {self.name!r}: body-axis PSDs must be finite and >= 0, got {bp}")
+            object.__setattr__(self, "body_psd", bp)
         if self.role is not None and self.role not in NAV_ROLES + SENSOR_ROLES:
             raise InputError(f"state block {self.name!r}: unknown role {self.role!r}; "
                              f"known: {NAV_ROLES + SENSOR_ROLES}")
@@ -184,9 +198,11 @@ class VelocityError(_Named):
 
     _sig_names = ("sigma_vn_m_s", "sigma_ve_m_s", "sigma_vd_m_s")
 
-    def __init__(self, sigma0=0.1, accel_vrw=1e-2):
-        super().__init__("vel", ("n", "e", "d"), "m_s", sigma0, accel_vrw**2, role="vel",
-                         description="velocity error in NED")
+    def __init__(self, sigma0=0.1, accel_vrw=1e-2, accel_vrw_axes=None):
+        """``accel_vrw_axes``: (3,) VRW per body axis [m/s^2/sqrt(Hz)], in place of ``accel_vrw``."""
+        body = None if accel_vrw_axes is None else np.asarray(accel_vrw_axes, float) ** 2
+        super().__init__("vel", ("n", "e", "d"), "m_s", sigma0, 0.0 if body is not None else accel_vrw**2,
+                         role="vel", description="velocity error in NED", body_psd=body)
 
 
 class AttitudeError(_Named):
@@ -195,9 +211,12 @@ class AttitudeError(_Named):
 
     _sig_names = ("sigma_att_n_rad", "sigma_att_e_rad", "sigma_att_d_rad")
 
-    def __init__(self, sigma0=(np.radians(1.0), np.radians(1.0), np.radians(5.0)), gyro_arw=1e-3):
-        super().__init__("att", ("n", "e", "d"), "rad", sigma0, gyro_arw**2, role="att",
-                         description="attitude error about north, east, down")
+    def __init__(self, sigma0=(np.radians(1.0), np.radians(1.0), np.radians(5.0)), gyro_arw=1e-3,
+                 gyro_arw_axes=None):
+        """``gyro_arw_axes``: (3,) ARW per body axis [rad/sqrt(s)], in place of ``gyro_arw``."""
+        body = None if gyro_arw_axes is None else np.asarray(gyro_arw_axes, float) ** 2
+        super().__init__("att", ("n", "e", "d"), "rad", sigma0, 0.0 if body is not None else gyro_arw**2,
+                         role="att", description="attitude error about north, east, down", body_psd=body)
 
 
 def _bias_psd(sigma, tau_s):
@@ -415,6 +434,10 @@ class SensorNoise:
         Random walk of the IMU-GNSS time offset [s/sqrt(s)].
     accel_bias_tau_s : float, optional
         Correlation time of the accelerometer biases, when it differs.
+    gyro_arw_axes, accel_vrw_axes : (3,) tuple, optional
+        The white noise per body axis (same units), in place of
+        ``gyro_arw`` and ``accel_vrw``: the filter rotates it into NED at
+        every step.
     """
 
     gyro_arw: float
@@ -425,6 +448,8 @@ class SensorNoise:
     scale_sigma: float = 1e-6
     time_offset_rw: float = 1e-6
     accel_bias_tau_s: float | None = None
+    gyro_arw_axes: tuple | None = None
+    accel_vrw_axes: tuple | None = None
 
     def __post_init__(self):
         for name in ("gyro_arw", "accel_vrw", "gyro_bias_sigma", "accel_bias_sigma"):
@@ -434,6 +459,10 @@ class SensorNoise:
             v = getattr(self, name)
             if v is not None and not v > 0:
                 raise InputError(f"noise.{name} must be > 0 (inf for random walk), got {v}")
+        for name in ("gyro_arw_axes", "accel_vrw_axes"):
+            v = getattr(self, name)
+            if v is not None and not (len(v) == 3 and all(math.isfinite(x) and x > 0 for x in v)):
+                raise InputError(f"noise.{name} must be three finite values > 0, got {v}")
 
 
 @dataclass(frozen=True)
@@ -474,8 +503,8 @@ def ins_blocks(noise: SensorNoise = SensorNoise(1e-3, 1e-2, 1e-5, 1e-4),
     tau_a = n.bias_tau_s if n.accel_bias_tau_s is None else n.accel_bias_tau_s
     out = [
         PositionError(tuple(i.pos_m)),
-        VelocityError(i.vel_m_s, n.accel_vrw),
-        AttitudeError((i.roll_pitch_rad, i.roll_pitch_rad, i.yaw_rad), n.gyro_arw),
+        VelocityError(i.vel_m_s, n.accel_vrw, n.accel_vrw_axes),
+        AttitudeError((i.roll_pitch_rad, i.roll_pitch_rad, i.yaw_rad), n.gyro_arw, n.gyro_arw_axes),
         GyroBias(i.gyro_bias, n.gyro_bias_sigma, n.bias_tau_s, gyro_bias0),
         AccelBias(i.accel_bias, n.accel_bias_sigma, tau_a, accel_bias0),
     ]

@@ -397,6 +397,9 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     lay = settings.layout
     n = lay.size
     q_psd = lay.process_noise()
+    q_body = lay.body_noise()
+    if q_body is not None:  # the kernel rotates these into NED at every step (_kernel.propagate_rows)
+        q_psd = np.concatenate([q_psd, q_body])
     rows_pat, cols_pat = lay.transition_pattern()
     crow, ccol, cval = lay.constant_entries()
     active = np.unique(rows_pat)

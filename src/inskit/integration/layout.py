@@ -132,6 +132,20 @@ class StateLayout:
         """(size,) diagonal PSDs ``q`` (``Q = diag(q) dt``)."""
         return np.concatenate([b.psd for b in self.blocks])
 
+    def body_noise(self):
+        """(6,) body-axis white-noise PSDs ``[att (3), vel (3)]`` that the
+        propagation rotates into NED at every step, ``C_nb diag(q_b) C_bn``
+        (:attr:`.blocks.StateBlock.body_psd`; zeros for a block without),
+        or ``None`` when no block has them."""
+        att, vel = self.by_role("att"), self.by_role("vel")
+        if all(b is None or b.body_psd is None for b in (att, vel)):
+            return None
+        out = np.zeros(6)
+        for b, s in ((att, slice(0, 3)), (vel, slice(3, 6))):
+            if b is not None and b.body_psd is not None:
+                out[s] = b.body_psd
+        return out
+
     def kernel_index(self):
         """int64 ``[x_bg, x_ba, x_sg, x_sa, a_bg, a_ba, a_sg, a_sa, size]``:
         state and aux starts of the sensor roles (-1 if absent)."""

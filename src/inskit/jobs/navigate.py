@@ -459,15 +459,31 @@ def outage_windows(cfg: NavigateConfig, gnss: GnssData):
     return []
 
 
-def static_noise_density(imu: ImuData, t_end):
+def _noise_used(layout, measured):
+    """The white noise the filter ran with, datasheet units: one value per
+    sensor, or (``*_axes``, the body axes) when it was set per axis."""
+    att, vel = layout.block("att"), layout.block("vel")
+    if att.body_psd is not None:
+        return {"gyro_arw_axes_deg_sqrt_h": [float(v) for v in np.sqrt(att.body_psd) / DEG * 60.0],
+                "accel_vrw_axes_m_s_sqrt_h": [float(v) for v in np.sqrt(vel.body_psd) * 60.0],
+                "measured_on_static_start": measured}
+    return {"gyro_arw_deg_sqrt_h": float(np.sqrt(att.psd[0])) / DEG * 60.0,
+            "accel_vrw_m_s_sqrt_h": float(np.sqrt(vel.psd[0])) * 60.0, "measured_on_static_start": measured}
+
+
+def static_noise_density(imu: ImuData, t_end, per_axis=False):
     """White-noise densities [rad/s/sqrt(Hz), m/s^2/sqrt(Hz)] measured on the
-    static start (sample std times sqrt(dt), quadratic mean over the axes)."""
+    static start (sample std times sqrt(dt), quadratic mean over the axes);
+    ``per_axis``: also each body axis's, ``(arw, vrw, arw_axes (3,),
+    vrw_axes (3,))``."""
     head = imu.slice(0, max(int(np.searchsorted(imu.time, t_end, side="right")), 2))  # not the whole log's rates
     w, f = head.rates()
     m = (head.time > head.time[0]) & (head.time <= t_end)
     dt = float(np.median(np.diff(head.time[m])))
     arw = float(np.sqrt(np.mean(w[m].var(axis=0))) * np.sqrt(dt))
     vrw = float(np.sqrt(np.mean(f[m].var(axis=0))) * np.sqrt(dt))
+    if per_axis:
+        return arw, vrw, np.sqrt(w[m].var(axis=0) * dt), np.sqrt(f[m].var(axis=0) * dt)
     return arw, vrw
 
 
@@ -586,8 +602,9 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         if sig:
             scfg = cfg.model_copy(update={"init": i.model_copy(update=sig)})
         if cfg.noise.from_static and startup.mode == "static-then-track":
-            arw, vrw = static_noise_density(imu, startup.static_end)
-            measured = {"gyro_arw_rad_sqrt_s": arw, "accel_vrw_m_s_sqrt_s": vrw}
+            arw, vrw, arw_axes, vrw_axes = static_noise_density(imu, startup.static_end, per_axis=True)
+            measured = {"gyro_arw_rad_sqrt_s": arw, "accel_vrw_m_s_sqrt_s": vrw,
+                        "gyro_arw_axes_rad_sqrt_s": arw_axes, "accel_vrw_axes_m_s_sqrt_s": vrw_axes}
     else:
         i = cfg.init
         initial = NavState.from_euler(imu.time[0], [i.lat_deg * DEG, i.lon_deg * DEG, i.height_m], i.v_ned_m_s,
@@ -816,11 +833,7 @@ def summary(res: NavigateResult) -> dict:
         "outage_table": res.score_smoothed.table if res.score_smoothed else res.score_forward.table,
         "forward": {**fwd, "outage_table": res.score_forward.table},
         "measurements": res.forward.counts,
-        "noise_used": {
-            "gyro_arw_deg_sqrt_h": float(np.sqrt(res.settings.layout.block("att").psd[0])) / DEG * 60.0,
-            "accel_vrw_m_s_sqrt_h": float(np.sqrt(res.settings.layout.block("vel").psd[0])) * 60.0,
-            "measured_on_static_start": bool(res.measured_noise),
-        },
+        "noise_used": _noise_used(res.settings.layout, bool(res.measured_noise)),
     }
     if res.startup is not None:
         out["startup"] = res.startup.summary(res.imu.time[0])

@@ -22,14 +22,20 @@ def sensor_noise(n, measured=None) -> SensorNoise:
     """The filter's sensor noise (SI) from a ``[noise]`` section
     (:class:`~inskit.jobs.config.NoiseSection`), the white noise raised to
     what the static start measured (``measured``: ``gyro_arw_rad_sqrt_s``,
-    ``accel_vrw_m_s_sqrt_s``).
+    ``accel_vrw_m_s_sqrt_s``; with ``from_static_per_axis`` the per-axis
+    ``gyro_arw_axes_rad_sqrt_s`` and ``accel_vrw_axes_m_s_sqrt_s``, each
+    raised to the configured floor).
 
     For a random-walk bias the bias "sigma" of :class:`SensorNoise` is the
     rate random walk ``K`` and its correlation time ``inf``.
     """
     arw = n.gyro_arw_deg_sqrt_h * DEG / 60.0
     vrw = n.accel_vrw_m_s_sqrt_h / 60.0
+    arw_axes = vrw_axes = None
     if measured:
+        if getattr(n, "from_static_per_axis", False) and "gyro_arw_axes_rad_sqrt_s" in measured:
+            arw_axes = tuple(max(arw, float(v)) for v in measured["gyro_arw_axes_rad_sqrt_s"])
+            vrw_axes = tuple(max(vrw, float(v)) for v in measured["accel_vrw_axes_m_s_sqrt_s"])
         arw = max(arw, measured["gyro_arw_rad_sqrt_s"])
         vrw = max(vrw, measured["accel_vrw_m_s_sqrt_s"])
     if n.gyro_bias_model == "random-walk":
@@ -41,7 +47,8 @@ def sensor_noise(n, measured=None) -> SensorNoise:
     else:
         a = n.accel_bias_sigma_ug * MICRO_G
     return SensorNoise(arw, vrw, g, a, n.gyro_tau_s(), n.scale_factor_rw_ppm_sqrt_s * 1e-6,
-                       n.time_offset_rw_s_sqrt_s, accel_bias_tau_s=n.accel_tau_s())
+                       n.time_offset_rw_s_sqrt_s, accel_bias_tau_s=n.accel_tau_s(), gyro_arw_axes=arw_axes,
+                       accel_vrw_axes=vrw_axes)
 
 
 def turn_on_sigmas(cfg) -> tuple[float, float]:
