@@ -269,3 +269,23 @@ def test_gravity_option_of_mechanize_and_simulate(tmp_path):
                 *(["--gravity", model] if model else []))
         heights[s["gravity"]] = s["final"]["height_m"]
     assert abs(heights["j2"] - 1600.0) < 1e-3 and abs(heights["normal"] - 1600.0) > 0.05
+
+
+def test_the_program_ends_fast_yet_runs_exit_handlers_and_keeps_its_status(tmp_path):
+    """As the program (``main()`` with no arguments) the CLI skips the
+    interpreter's teardown: the atexit handlers still run (a parent's, as
+    ``inskit bench`` registers one to read the child's peak memory), what
+    was printed is all there, and the status is the command's."""
+    import subprocess
+    import sys
+
+    wrap = ("import atexit, sys\n"
+            "atexit.register(lambda: sys.stderr.write('handler ran\\n'))\n"
+            "from inskit.cli import main\n"
+            "sys.argv = ['inskit'] + sys.argv[1:]\n"
+            "main()\n")
+    ok = subprocess.run([sys.executable, "-c", wrap, "--version"], capture_output=True, text=True)
+    assert ok.returncode == 0 and "version" in ok.stdout and "handler ran" in ok.stderr
+    bad = subprocess.run([sys.executable, "-c", wrap, "navigate", str(tmp_path / "none.toml")], capture_output=True,
+                         text=True)
+    assert bad.returncode == 2 and "no such config file" in bad.stderr and "handler ran" in bad.stderr
