@@ -38,6 +38,19 @@ from importlib import import_module as _import_module
 
 from .errors import ConfigError, InputError, InskitError
 
+
+def _refresh_compile_cache():
+    """numba's cache rebuilt when a compiled source changed (:mod:`._numba_cache`)."""
+    try:
+        from . import _numba_cache
+
+        _numba_cache.refresh()
+    except Exception:  # noqa: BLE001 (a check of the cache must never stop the package from loading)
+        pass
+
+
+_refresh_compile_cache()
+
 #: public name -> (module, attribute), loaded on first access (PEP 562)
 _LAZY = {
     "navigate": ("inskit.api", "navigate"),
