@@ -42,16 +42,21 @@ def _shade(ax, windows, t0):
         ax.axvspan(a - t0, b - t0, color="0.85", zorder=0)
 
 
-def plot_all(res, out_dir):
-    plt = _plt()
-    files = []
-    fwd = res.forward.solution
-    g = res.gnss
-    t0 = g.time[0]
-    ref = g.lla[0]
-    lever = np.asarray(res.config.gnss.lever_arm_b_m, float)
-    inside = (g.time >= fwd.time[0]) & (g.time <= fwd.time[-1])
+class _Context:
+    """What every plot of a run shares."""
 
+    def __init__(self, res):
+        fwd = res.forward.solution
+        g = res.gnss
+        self.res, self.fwd, self.g = res, fwd, g
+        self.t0 = g.time[0]
+        self.ref = g.lla[0]
+        self.lever = np.asarray(res.config.gnss.lever_arm_b_m, float)
+        self.inside = (g.time >= fwd.time[0]) & (g.time <= fwd.time[-1])
+
+
+def _track(c, out_dir, plt):
+    res, fwd, g, ref = c.res, c.fwd, c.g, c.ref
     # track
     fig, ax = plt.subplots(figsize=(8, 7))
     pg = earth.lla_to_ned(g.lla, ref)
@@ -70,9 +75,11 @@ def plot_all(res, out_dir):
     ax.legend(fontsize=8)
     ax.set_title(f"{res.config.name}: track")
     fig.tight_layout()
-    files.append(out_dir / "track.png")
-    save_figure(fig, files[-1])
+    return save_figure(fig, out_dir / "track.png")
 
+
+def _errors(c, out_dir, plt):
+    res, fwd, g, t0, lever, inside = c.res, c.fwd, c.g, c.t0, c.lever, c.inside
     # errors against every GNSS fix, with the filter's 3-sigma envelope
     tg = g.time[inside]
     fig, axes = plt.subplots(3, 1, figsize=(10, 8), sharex=True)
@@ -100,9 +107,11 @@ def plot_all(res, out_dir):
     axes[0].set_title("antenna position minus GNSS fix (grey: outages; dashed: +-3 sigma, may leave the axis)")
     axes[-1].set_xlabel("time after first GNSS fix [s]")
     fig.tight_layout()
-    files.append(out_dir / "errors.png")
-    save_figure(fig, files[-1])
+    return save_figure(fig, out_dir / "errors.png")
 
+
+def _innovations(c, out_dir, plt):
+    res, t0 = c.res, c.t0
     # innovations
     inn = res.forward.innovations
     names = [k for k, v in inn.items() if len(v["t"])]
@@ -133,9 +142,11 @@ def plot_all(res, out_dir):
     axes[0, 0].set_title("normalised innovations (dashed: +-3)")
     axes[-1, 0].set_xlabel("time after first GNSS fix [s]")
     fig.tight_layout()
-    files.append(out_dir / "innovations.png")
-    save_figure(fig, files[-1])
+    return save_figure(fig, out_dir / "innovations.png")
 
+
+def _biases(c, out_dir, plt):
+    res, fwd, t0 = c.res, c.fwd, c.t0
     # sensor-error estimates
     fig, axes = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
     k = _every(len(fwd.time))
@@ -152,6 +163,52 @@ def plot_all(res, out_dir):
     axes[-1].set_xlabel("time after first GNSS fix [s]")
     axes[0].set_title("sensor bias estimates (forward filter)")
     fig.tight_layout()
-    files.append(out_dir / "biases.png")
-    save_figure(fig, files[-1])
-    return files
+    return save_figure(fig, out_dir / "biases.png")
+
+
+#: the plots of a run, each drawing one file
+PLOTS = (_track, _errors, _innovations, _biases)
+
+
+def plot_all(res, out_dir, parallel=True):
+    """The run's PNG plots (track, errors, innovations, biases) into
+    ``out_dir``; returns their paths.
+
+    ``parallel`` (Linux, two cores or more): the errors and the biases are
+    drawn by a forked child while this process draws the other two
+    (matplotlib holds the GIL: threads would not overlap); the child writes
+    its files whole (:func:`inskit.files.save_figure`) and only exits; if it
+    fails, they are drawn here, so a plot is never missing silently.
+    """
+    import os
+    import sys
+
+    c = _Context(res)
+    mine, theirs = [_track, _innovations], [_errors, _biases]
+    pid = -1
+    if parallel and sys.platform.startswith("linux") and (os.cpu_count() or 1) > 1:
+        try:
+            pid = os.fork()
+        except OSError:
+            pid = -1
+        if pid == 0:  # the child: its plots, then gone (no atexit, no stream flush: the parent owns those)
+            code = 1
+            try:
+                plt = _plt()
+                for f in theirs:
+                    f(c, out_dir, plt)
+                code = 0
+            finally:
+                os._exit(code)
+    if pid < 0:
+        mine, theirs = list(PLOTS), []
+    plt = _plt()
+    for f in mine:
+        f(c, out_dir, plt)
+    if pid > 0:
+        _, status = os.waitpid(pid, 0)
+        if status != 0:  # the child failed: draw its plots here (their errors then reach the caller)
+            for f in theirs:
+                f(c, out_dir, plt)
+    names = {_track: "track", _errors: "errors", _innovations: "innovations", _biases: "biases"}
+    return [out_dir / f"{names[f]}.png" for f in PLOTS]

@@ -1,0 +1,48 @@
+"""inskit.jobs.plots: the run's four PNG files, drawn in two processes on Linux, the same bytes as drawn in one,
+and none missing when the second process fails."""
+
+import os
+import sys
+
+import pytest
+
+from inskit.jobs import plots as PL
+from inskit.jobs.config import load_config
+from inskit.jobs.navigate import navigate
+from pathlib import Path
+
+EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "drive_0708.toml"
+NAMES = ["track.png", "errors.png", "innovations.png", "biases.png"]
+
+
+@pytest.fixture(scope="module")
+def run():
+    return navigate(load_config(EXAMPLE, {"output": {"plots": False}}))
+
+
+def test_two_processes_draw_the_same_files_as_one(run, tmp_path):
+    one, two = tmp_path / "one", tmp_path / "two"
+    one.mkdir()
+    two.mkdir()
+    assert [p.name for p in PL.plot_all(run, one, parallel=False)] == NAMES
+    assert [p.name for p in PL.plot_all(run, two, parallel=True)] == NAMES
+    for n in NAMES:
+        a, b = (one / n).read_bytes(), (two / n).read_bytes()
+        assert a[:8] == b"\x89PNG\r\n\x1a\n" and a == b, n
+    assert sorted(os.listdir(two)) == sorted(NAMES)  # no temporary file left behind
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux") or (os.cpu_count() or 1) < 2, reason="drawn in one process")
+def test_a_failing_second_process_leaves_no_plot_missing(run, tmp_path, monkeypatch):
+    parent = os.getpid()
+    real = PL._biases
+
+    def fails_in_the_child(c, out_dir, plt):
+        if os.getpid() != parent:
+            raise RuntimeError("child fails")
+        return real(c, out_dir, plt)
+
+    monkeypatch.setattr(PL, "_biases", fails_in_the_child)
+    monkeypatch.setattr(PL, "PLOTS", (PL._track, PL._errors, PL._innovations, fails_in_the_child))
+    files = PL.plot_all(run, tmp_path, parallel=True)
+    assert all(f.is_file() and f.stat().st_size > 1000 for f in files)
