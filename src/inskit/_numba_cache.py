@@ -16,9 +16,8 @@ compiled function is rebuilt from the sources as they are.  The check costs
 one ``stat`` per such file while nothing changed (their dates and sizes are
 kept with the digest: 0.3 ms); a changed date makes it read and hash them
 (25 files, 0.45 MB: milliseconds), and only a changed content clears the
-cache.  Installed
-copies whose files never change pay the ``stat`` calls only.  It runs once,
-on ``import inskit``; it never raises.
+cache.  Installed copies whose files never change pay the ``stat`` calls
+only.  It runs once, on ``import inskit``; it never raises.
 """
 
 from __future__ import annotations
