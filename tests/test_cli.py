@@ -289,3 +289,7 @@ def test_the_program_ends_fast_yet_runs_exit_handlers_and_keeps_its_status(tmp_p
     bad = subprocess.run([sys.executable, "-c", wrap, "navigate", str(tmp_path / "none.toml")], capture_output=True,
                          text=True)
     assert bad.returncode == 2 and "no such config file" in bad.stderr and "handler ran" in bad.stderr
+    prof = tmp_path / "prof.out"  # under a profiler the teardown stays: its report is written there
+    run = subprocess.run([sys.executable, "-m", "cProfile", "-o", str(prof), "-m", "inskit.cli", "--version"],
+                         capture_output=True, text=True)
+    assert run.returncode == 0 and prof.is_file() and prof.stat().st_size > 1000

@@ -687,10 +687,13 @@ def main(argv=None):
     inskit.cli``), it ends by :func:`_exit_now` once the command is done:
     every file is written and closed by then, and the interpreter's own
     teardown of numba, LLVM, scipy and pyarrow would add a fifth of a
-    second to every command.  In process (tests, ``main([...])``) it raises
-    ``SystemExit`` as usual."""
+    second to every command; not under a profiler or a tracer, whose report
+    is written at the teardown.  In process (tests, ``main([...])``) it
+    raises ``SystemExit`` as usual."""
     code = _run(argv)
-    if argv is None and not os.environ.get("INSKIT_FULL_EXIT"):
+    # a profiler or a tracer (cProfile, pyinstrument, coverage) writes its report at the teardown: keep it
+    watched = sys.getprofile() is not None or sys.gettrace() is not None
+    if argv is None and not watched and not os.environ.get("INSKIT_FULL_EXIT"):
         _exit_now(code)
     sys.exit(code)
 
