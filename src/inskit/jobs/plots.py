@@ -186,7 +186,10 @@ def plot_all(res, out_dir, parallel=True):
     c = _Context(res)
     mine, theirs = [_track, _innovations], [_errors, _biases]
     pid = -1
-    if parallel and sys.platform.startswith("linux") and (os.cpu_count() or 1) > 1:
+    import threading
+
+    if (parallel and sys.platform.startswith("linux") and (os.cpu_count() or 1) > 1
+            and threading.current_thread() is threading.main_thread()):
         try:
             pid = os.fork()
         except OSError:
