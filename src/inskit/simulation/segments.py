@@ -449,11 +449,28 @@ class _UniformHermite:
 
     def __call__(self, t):
         t = np.asarray(t, float)
-        n = len(self.y)
-        i = np.clip(np.floor(t / self.h).astype(np.int64), 0, n - 2)
-        s = (t - i * self.h) / self.h
-        s2, s3 = s * s, s * s * s
-        h00, h10, h01, h11 = 2 * s3 - 3 * s2 + 1, s3 - 2 * s2 + s, -2 * s3 + 3 * s2, s3 - s2
-        y, dy, h = self.y, self.dy, self.h
-        return (h00[..., None] * y[i] + (h * h10)[..., None] * dy[i] + h01[..., None] * y[i + 1]
-                + (h * h11)[..., None] * dy[i + 1])
+        flat = np.ascontiguousarray(t.reshape(-1))
+        out = np.empty((flat.shape[0], self.y.shape[1]))
+        _hermite_rows(self.h, np.ascontiguousarray(self.y), np.ascontiguousarray(self.dy), flat, out)
+        return out.reshape(t.shape + (self.y.shape[1],))
+
+
+@njit(cache=True)
+def _hermite_rows(h, y, dy, t, out):
+    """:class:`_UniformHermite` at every time of ``t`` into ``out``, one
+    pass (the NumPy form made eight temporaries of the million quadrature
+    times of an hour at 100 Hz)."""
+    n = y.shape[0]
+    m = y.shape[1]
+    for k in range(t.shape[0]):
+        i = int(np.floor(t[k] / h))
+        i = min(max(i, 0), n - 2)
+        s = (t[k] - i * h) / h
+        s2 = s * s
+        s3 = s2 * s
+        h00 = 2.0 * s3 - 3.0 * s2 + 1.0
+        h10 = (s3 - 2.0 * s2 + s) * h
+        h01 = -2.0 * s3 + 3.0 * s2
+        h11 = (s3 - s2) * h
+        for j in range(m):
+            out[k, j] = h00 * y[i, j] + h10 * dy[i, j] + h01 * y[i + 1, j] + h11 * dy[i + 1, j]
