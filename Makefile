@@ -3,6 +3,9 @@ PY ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.inskit-installed
+WARM := $(VENV)/.inskit-warm
+# the compiled sources: an edit of any of them rebuilds the compile cache here, not in the next command
+NUMBA_SRC := $(shell grep -rl numba src/inskit --include='*.py' 2>/dev/null)
 
 .PHONY: run test bench install clean
 
@@ -11,13 +14,16 @@ $(BIN)/python:
 
 $(STAMP): pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --disable-pip-version-check -q -e '.[test]'
+	touch $(STAMP)
+
+$(WARM): $(STAMP) $(NUMBA_SRC)
 	@echo "building the compile cache and matplotlib's font cache (one run of the main job, output discarded)"
 	$(BIN)/inskit navigate examples/drive_0708.toml --out $(VENV)/warm-up --force > /dev/null 2>&1 || \
 	  $(BIN)/inskit navigate examples/drive_0708.toml --out $(VENV)/warm-up --force
 	rm -rf $(VENV)/warm-up
-	touch $(STAMP)
+	touch $(WARM)
 
-install: $(STAMP)
+install: $(WARM)
 
 ## run: install, then the main job on the bundled default data
 run: install
