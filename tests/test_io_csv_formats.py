@@ -130,3 +130,21 @@ def test_a_plain_solution_csv_is_read_by_the_lean_path_like_the_pandas_one(tmp_p
     df.to_csv(p, index=False, float_format="%.17g")
     with pytest.raises(InputError, match=r"line 59: time_s=.* goes back in time"):
         C.read_solution(p)
+
+
+def test_a_gzip_csv_is_read_by_the_lean_path_and_a_large_one_left_to_pandas(tmp_path, monkeypatch):
+    import gzip
+
+    t, dth, dv = _increments(2000)
+    p = tmp_path / "imu.csv"
+    _write(p, t, dth, dv)
+    gz = tmp_path / "imu.csv.gz"
+    gz.write_bytes(gzip.compress(p.read_bytes()))
+    names = C._header_names(gz)
+    assert names[0] == "time_s"
+    got = C.lean_columns(gz, [names[:1], names[1:4], names[4:]])
+    assert got is not None and np.array_equal(got[1], dth) and np.array_equal(got[0][:, 0], t)
+    monkeypatch.setattr(C, "WHOLE_CSV_BYTES", 8 * (gz.stat().st_size - 1))  # "large": its length is not known ahead
+    assert C.lean_columns(gz, [names[:1]]) is None
+    imu = C.read_imu(gz)  # the pandas path reads it all the same, to its parser's precision (not correctly rounded:
+    assert np.allclose(imu.dtheta_b, dth, rtol=1e-11, atol=0)  # 1e-12 relative seen on 17-digit texts)
