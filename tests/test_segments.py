@@ -189,3 +189,21 @@ def test_uniform_hermite_matches_scipy():
     t = np.concatenate([rng.uniform(-0.1, tg[-1] + 0.1, 5000), tg[[0, 10, -1]]])
     ref = CubicHermiteSpline(tg, y, dy, axis=0)(t)
     assert np.allclose(_UniformHermite(h, y, dy)(t), ref, rtol=1e-14, atol=0)
+
+
+def test_the_navigation_shortcut_is_the_kinematics_truth():
+    """``SegmentTrajectory.navigation`` (what truth_solution takes without rates) gives the position and velocity
+    of the full kinematics bit for bit and the same attitude (quaternion up to rounding, scalar part >= 0)."""
+    from inskit import rotations as rot
+
+    root = Path(__file__).resolve().parents[1]
+    tr = build_trajectory(load_scenario(root / "examples" / "car.toml"), np.random.default_rng(3))
+    t = np.linspace(0.0, 900.0, 20001)
+    kin = tr.kinematics(t)
+    fast = truth_solution(tr, t)
+    assert np.array_equal(fast.lla, kin.lla) and np.array_equal(fast.v_n, kin.v_n)
+    q_ref = rot.quat_from_dcm(kin.C_nb)
+    q_ref *= np.where(q_ref[:, :1] < 0, -1.0, 1.0)
+    assert np.abs(fast.q_nb - q_ref).max() < 1e-14 and (fast.q_nb[:, 0] >= 0).all()
+    slow = truth_solution(tr, t, with_rates=True)  # rates asked for: the kinematics path, the same attitude
+    assert np.abs(rot.dcm_from_quat(slow.q_nb) - rot.dcm_from_quat(fast.q_nb)).max() < 1e-14

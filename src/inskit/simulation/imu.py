@@ -118,8 +118,14 @@ def truth_solution(trajectory, time, *, with_rates=False, gravity="normal"):
     acceleration ``an_m_s2, ae_m_s2, ad_m_s2`` (time derivative of ``v_n``),
     the true body rate ``wx_rad_s, wy_rad_s, wz_rad_s`` (``omega_ib_b``) and
     specific force ``fx_m_s2, fy_m_s2, fz_m_s2`` (with the gravity model
-    ``gravity``, :func:`ideal_rates`).
+    ``gravity``, :func:`ideal_rates`).  A trajectory with a
+    ``navigation(t)`` method (:class:`.segments.SegmentTrajectory`) gives
+    the solution without its kinematics when no rates are asked for.
     """
+    navigation = getattr(trajectory, "navigation", None)
+    if navigation is not None and not with_rates:  # no rates wanted: no kinematics (a third of a simulation's time)
+        t, lla, v_n, q = navigation(np.asarray(time, dtype=float))
+        return NavSolution(t, lla, v_n, q, {})
     kin = trajectory.kinematics(np.asarray(time, dtype=float))
     extra = {}
     if with_rates:

@@ -414,6 +414,18 @@ class SegmentTrajectory:
         exact angular acceleration ``omega_dot_nb_b``."""
         return _kinematics_from_ned(*self._state(t, second=True))
 
+    def navigation(self, t):
+        """``(t, lla, v_n, q_nb)`` at times ``t``: the true navigation
+        solution without the kinematics' rates (what a truth file holds;
+        :func:`.imu.truth_solution` takes it when it needs no rates), the
+        attitude straight from the Euler angles (scalar part >= 0)."""
+        from .. import rotations as rot
+
+        t, lla, v_n, _, rpy, _ = self._state(t)
+        q = rot.quat_from_euler(rpy)
+        q *= np.where(q[:, :1] < 0.0, -1.0, 1.0)
+        return t, lla, v_n, q
+
     def rates(self, t, gravity="normal"):
         """True ``(omega_ib_b, f_b)`` at times ``t``: the compiled equivalent of
         ``ideal_rates(self.kinematics(t), gravity)``."""
