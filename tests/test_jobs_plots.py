@@ -37,12 +37,34 @@ def test_a_failing_second_process_leaves_no_plot_missing(run, tmp_path, monkeypa
     parent = os.getpid()
     real = PL._biases
 
-    def fails_in_the_child(c, out_dir, plt):
+    def fails_in_the_child(c, path, plt):
         if os.getpid() != parent:
             raise RuntimeError("child fails")
-        return real(c, out_dir, plt)
+        return real(c, path, plt)
 
-    monkeypatch.setattr(PL, "_biases", fails_in_the_child)
-    monkeypatch.setattr(PL, "PLOTS", (PL._track, PL._errors, PL._innovations, fails_in_the_child))
+    monkeypatch.setattr(PL, "PLOTS", PL.PLOTS[:3] + (("biases.png", fails_in_the_child),))
     files = PL.plot_all(run, tmp_path, parallel=True)
-    assert all(f.is_file() and f.stat().st_size > 1000 for f in files)
+    assert [f.name for f in files] == NAMES and all(f.is_file() and f.stat().st_size > 1000 for f in files)
+    assert sorted(os.listdir(tmp_path)) == sorted(NAMES)
+
+
+def test_a_failing_plot_of_the_parent_is_raised_and_the_child_reaped(run, tmp_path, monkeypatch):
+    def broken(c, path, plt):
+        raise RuntimeError("parent's plot fails")
+
+    forked = []
+    real_fork = os.fork
+
+    def fork():
+        pid = real_fork()
+        if pid:
+            forked.append(pid)
+        return pid
+
+    monkeypatch.setattr(PL, "PLOTS", (("track.png", broken),) + PL.PLOTS[1:])
+    monkeypatch.setattr(os, "fork", fork)
+    with pytest.raises(RuntimeError, match="parent's plot fails"):
+        PL.plot_all(run, tmp_path, parallel=True)
+    if forked:  # the child was waited for: no zombie left behind
+        with pytest.raises(ChildProcessError):
+            os.waitpid(forked[0], os.WNOHANG)

@@ -8,6 +8,8 @@ only inside the plotting functions."""
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 
 from .. import earth
@@ -55,9 +57,8 @@ class _Context:
         self.inside = (g.time >= fwd.time[0]) & (g.time <= fwd.time[-1])
 
 
-def _track(c, out_dir, plt):
+def _track(c, path, plt):
     res, fwd, g, ref = c.res, c.fwd, c.g, c.ref
-    # track
     fig, ax = plt.subplots(figsize=(8, 7))
     pg = earth.lla_to_ned(g.lla, ref)
     ax.plot(pg[res.used, 1], pg[res.used, 0], ".", ms=2, color="0.6", label="GNSS fixes used")
@@ -75,10 +76,10 @@ def _track(c, out_dir, plt):
     ax.legend(fontsize=8)
     ax.set_title(f"{res.config.name}: track")
     fig.tight_layout()
-    return save_figure(fig, out_dir / "track.png")
+    return save_figure(fig, path)
 
 
-def _errors(c, out_dir, plt):
+def _errors(c, path, plt):
     res, fwd, g, t0, lever, inside = c.res, c.fwd, c.g, c.t0, c.lever, c.inside
     # errors against every GNSS fix, with the filter's 3-sigma envelope
     tg = g.time[inside]
@@ -107,10 +108,10 @@ def _errors(c, out_dir, plt):
     axes[0].set_title("antenna position minus GNSS fix (grey: outages; dashed: +-3 sigma, may leave the axis)")
     axes[-1].set_xlabel("time after first GNSS fix [s]")
     fig.tight_layout()
-    return save_figure(fig, out_dir / "errors.png")
+    return save_figure(fig, path)
 
 
-def _innovations(c, out_dir, plt):
+def _innovations(c, path, plt):
     res, t0 = c.res, c.t0
     # innovations
     inn = res.forward.innovations
@@ -142,10 +143,10 @@ def _innovations(c, out_dir, plt):
     axes[0, 0].set_title("normalised innovations (dashed: +-3)")
     axes[-1, 0].set_xlabel("time after first GNSS fix [s]")
     fig.tight_layout()
-    return save_figure(fig, out_dir / "innovations.png")
+    return save_figure(fig, path)
 
 
-def _biases(c, out_dir, plt):
+def _biases(c, path, plt):
     res, fwd, t0 = c.res, c.fwd, c.t0
     # sensor-error estimates
     fig, axes = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
@@ -163,31 +164,33 @@ def _biases(c, out_dir, plt):
     axes[-1].set_xlabel("time after first GNSS fix [s]")
     axes[0].set_title("sensor bias estimates (forward filter)")
     fig.tight_layout()
-    return save_figure(fig, out_dir / "biases.png")
+    return save_figure(fig, path)
 
 
-#: the plots of a run, each drawing one file
-PLOTS = (_track, _errors, _innovations, _biases)
+#: the plots of a run: (file name, function drawing it into a path and returning the path)
+PLOTS = (("track.png", _track), ("errors.png", _errors), ("innovations.png", _innovations),
+         ("biases.png", _biases))
 
 
 def plot_all(res, out_dir, parallel=True):
     """The run's PNG plots (track, errors, innovations, biases) into
     ``out_dir``; returns their paths.
 
-    ``parallel`` (Linux, two cores or more): the errors and the biases are
-    drawn by a forked child while this process draws the other two
-    (matplotlib holds the GIL: threads would not overlap); the child writes
-    its files whole (:func:`inskit.files.save_figure`) and only exits; if it
-    fails, they are drawn here, so a plot is never missing silently.
+    ``parallel`` (Linux, two cores or more, from the main thread): every
+    second plot is drawn by a forked child while this process draws the
+    others (matplotlib holds the GIL: threads would not overlap); the child
+    writes its files whole (:func:`inskit.files.save_figure`) and only
+    exits; if it fails, its plots are drawn here, so a plot is never missing
+    silently and its error reaches the caller.
     """
     import os
     import sys
-
-    c = _Context(res)
-    mine, theirs = [_track, _innovations], [_errors, _biases]
-    pid = -1
     import threading
 
+    c = _Context(res)
+    out_dir = Path(out_dir)
+    theirs = PLOTS[1::2]
+    pid = -1
     if (parallel and sys.platform.startswith("linux") and (os.cpu_count() or 1) > 1
             and threading.current_thread() is threading.main_thread()):
         try:
@@ -198,20 +201,18 @@ def plot_all(res, out_dir, parallel=True):
             code = 1
             try:
                 plt = _plt()
-                for f in theirs:
-                    f(c, out_dir, plt)
+                for name, f in theirs:
+                    f(c, out_dir / name, plt)
                 code = 0
             finally:
                 os._exit(code)
-    if pid < 0:
-        mine, theirs = list(PLOTS), []
     plt = _plt()
-    for f in mine:
-        f(c, out_dir, plt)
-    if pid > 0:
-        _, status = os.waitpid(pid, 0)
-        if status != 0:  # the child failed: draw its plots here (their errors then reach the caller)
-            for f in theirs:
-                f(c, out_dir, plt)
-    names = {_track: "track", _errors: "errors", _innovations: "innovations", _biases: "biases"}
-    return [out_dir / f"{names[f]}.png" for f in PLOTS]
+    try:
+        for name, f in (PLOTS[0::2] if pid > 0 else PLOTS):
+            f(c, out_dir / name, plt)
+    finally:
+        child_failed = pid > 0 and os.waitpid(pid, 0)[1] != 0
+    if child_failed:  # its plots drawn here: their error, if any, reaches the caller
+        for name, f in theirs:
+            f(c, out_dir / name, plt)
+    return [out_dir / name for name, _ in PLOTS]
