@@ -700,7 +700,8 @@ def main(argv=None):
 
 def _run(argv):
     """The command's exit status (0 done, 2 a user error, 3 a bug, 130
-    aborted); a ``SystemExit`` raised inside passes through."""
+    aborted); a ``SystemExit`` raised inside (not an ``Exception``) passes
+    through."""
     debug = os.environ.get("INSKIT_DEBUG")
     if not debug:  # library warnings are not the user's messages: stderr carries ours only
         import warnings
@@ -725,8 +726,6 @@ def _run(argv):
             raise
         click.echo(f"inskit: error: {exc}", err=True)
         return 2
-    except SystemExit:
-        raise
     except Exception as exc:  # noqa: BLE001 - last line of defence: never a traceback
         if debug:
             raise

@@ -138,8 +138,9 @@ def lean_columns(path, groups):
     the arrays themselves, not a DataFrame and its copies (an 8 h, 200 Hz
     log: 0.32 GB instead of 1.5 GB).
 
-    Returns None when the file is not plain well-formed numbers (gzip, an
-    empty or text cell, a NaN, a ragged row ...): the caller then reads it
+    Returns None when the file is not plain well-formed numbers (an empty
+    or text cell, a NaN, a ragged row, a gzip file above an eighth of
+    :data:`WHOLE_CSV_BYTES` ...): the caller then reads it
     through :func:`read_table` and :func:`numeric_columns`, whose messages
     name the line and the column.
     """
@@ -740,11 +741,17 @@ def _read_solution_lean(path) -> NavSolution | None:
     cols = {c: a[:, j] for j, c in enumerate(names)}
     check_time_column(path, cols["time_s"])
     _check_latlon(path, cols["lat_deg"], cols["lon_deg"])
+    return _solution_of_columns({c: np.ascontiguousarray(v) for c, v in cols.items()})
+
+
+def _solution_of_columns(cols) -> NavSolution:
+    """The :class:`NavSolution` of checked solution columns (file units:
+    degrees), the columns beyond :data:`SOLUTION_COLUMNS` in ``extra``."""
     lla = np.column_stack([cols["lat_deg"] * DEG, cols["lon_deg"] * DEG, cols["height_m"]])
     v_n = np.column_stack([cols["vn_m_s"], cols["ve_m_s"], cols["vd_m_s"]])
     rpy = np.column_stack([cols["roll_deg"], cols["pitch_deg"], cols["yaw_deg"]]) * DEG
-    extra = {c: np.ascontiguousarray(v) for c, v in cols.items() if c not in SOLUTION_COLUMNS}
-    return NavSolution(cols["time_s"].copy(), lla, v_n, rot.quat_from_euler(rpy), extra)
+    extra = {c: v for c, v in cols.items() if c not in SOLUTION_COLUMNS}
+    return NavSolution(cols["time_s"], lla, v_n, rot.quat_from_euler(rpy), extra)
 
 
 def _read_solution_parquet(path) -> NavSolution:
@@ -775,11 +782,7 @@ def _read_solution_parquet(path) -> NavSolution:
             i = int(np.argmax(bad))
             raise InputError(f"{path}: row {i}: {c}={float(cols[c][i])!r} is outside [{lim[0]:g}, {lim[1]:g}] "
                              "degrees")
-    lla = np.column_stack([cols["lat_deg"] * DEG, cols["lon_deg"] * DEG, cols["height_m"]])
-    v_n = np.column_stack([cols["vn_m_s"], cols["ve_m_s"], cols["vd_m_s"]])
-    rpy = np.column_stack([cols["roll_deg"], cols["pitch_deg"], cols["yaw_deg"]]) * DEG
-    extra = {c: v for c, v in cols.items() if c not in SOLUTION_COLUMNS}
-    return NavSolution(t, lla, v_n, rot.quat_from_euler(rpy), extra)
+    return _solution_of_columns(cols)
 
 
 def write_solution(path, sol: NavSolution, *, overwrite=False, rate_hz=None, columns=("all",), metadata=None):

@@ -28,21 +28,22 @@ def gps_week_seconds(stamps):
     (parsed by NumPy's ISO 8601 reader in C, counted in integer nanoseconds
     from the GPS epoch, so the seconds are exact to the nanosecond)."""
     stamps = [str(x) for x in stamps]
-    iso = np.char.replace(np.char.replace(np.asarray(stamps, dtype=str), "/", "-"), " ", "T")
-    shaped = (np.char.count(np.asarray(stamps, dtype=str), "/") == 2) & (np.char.count(iso, "T") == 1)
+    text = np.asarray(stamps, dtype=str)
+    iso = np.char.replace(np.char.replace(text, "/", "-"), " ", "T")
+    shaped = (np.char.count(text, "/") == 2) & (np.char.count(iso, "T") == 1)
     try:
         if not shaped.all():
             raise ValueError
         ns = (iso.astype("datetime64[ns]") - np.datetime64("1980-01-06T00:00:00", "ns")).astype(np.int64)
     except ValueError:
-        for i, text in enumerate(stamps):
+        for i, stamp in enumerate(stamps):
             try:
                 if not shaped[i]:
                     raise ValueError
                 np.datetime64(str(iso[i]), "ns")
             except ValueError:
-                raise InputError(f"line with time {text!r}: expected YYYY/MM/DD HH:MM:SS.sss") from None
-        raise
+                raise InputError(f"line with time {stamp!r}: expected YYYY/MM/DD HH:MM:SS.sss") from None
+        raise InputError("the GPST time stamps could not be read as YYYY/MM/DD HH:MM:SS.sss") from None
     week_ns = int(WEEK_S) * 1_000_000_000
     week = ns // week_ns
     return week.astype(int), (ns - week * week_ns) / 1e9
