@@ -148,3 +148,16 @@ def test_a_gzip_csv_is_read_by_the_lean_path_and_a_large_one_left_to_pandas(tmp_
     assert C.lean_columns(gz, [names[:1]]) is None
     imu = C.read_imu(gz)  # the pandas path reads it all the same, to its parser's precision (not correctly rounded:
     assert np.allclose(imu.dtheta_b, dth, rtol=1e-11, atol=0)  # 1e-12 relative seen on 17-digit texts)
+
+
+def test_a_truncated_gzip_log_is_refused_with_its_name(tmp_path):
+    import gzip
+
+    t, dth, dv = _increments(3000)
+    p = tmp_path / "imu.csv"
+    _write(p, t, dth, dv)
+    data = gzip.compress(p.read_bytes())
+    gz = tmp_path / "cut.csv.gz"
+    gz.write_bytes(data[: len(data) // 2])
+    with pytest.raises(InputError, match=r"cut\.csv\.gz: not a readable CSV file"):
+        C.read_imu(gz)

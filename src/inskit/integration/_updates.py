@@ -1051,8 +1051,8 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
         propagated = k_end + 1 > ctl[C_KDONE]
         if propagated:
             # model[1] may end with the body-axis noise (n + 6 entries), which propagate_rows rotates into NED.
-            # numba caches this loop with propagate_rows inlined and does not look at _kernel.py's date: edit
-            # this file too (or clear __pycache__/_updates*.nb?) whenever propagate_rows changes
+            # numba caches this loop with propagate_rows inlined and keys the cache on this file only:
+            # inskit._numba_cache clears it when _kernel.py (or any compiled source) changes
             K.propagate_rows(imu, nav, filt, model, outs, ctl[C_KDONE], k_end + 1, flags, pwork)
         _begin_node(t_imu, imu[1], q_nb, P, aux, filt[3], want_store, propagated, k_end, ctl, en_k, en_var, store,
                     dyn, w_raw, C)
