@@ -192,18 +192,66 @@ def test_uniform_hermite_matches_scipy():
 
 
 def test_the_navigation_shortcut_is_the_kinematics_truth():
-    """``SegmentTrajectory.navigation`` (what truth_solution takes without rates) gives the position and velocity
-    of the full kinematics bit for bit and the same attitude (quaternion up to rounding, scalar part >= 0)."""
+    """``SegmentTrajectory.navigation`` (what truth_solution takes without rates) and
+    ``navigation_and_rates`` (with them), both by the fused kernel, give the full kinematics' position,
+    velocity, attitude (scalar part >= 0), acceleration and rates to rounding."""
     from inskit import rotations as rot
+    from inskit.simulation import ideal_rates
 
     root = Path(__file__).resolve().parents[1]
     tr = build_trajectory(load_scenario(root / "examples" / "car.toml"), np.random.default_rng(3))
     t = np.linspace(0.0, 900.0, 20001)
     kin = tr.kinematics(t)
     fast = truth_solution(tr, t)
-    assert np.array_equal(fast.lla, kin.lla) and np.array_equal(fast.v_n, kin.v_n)
+    # position by the same spline operations; velocity ~1e-15 relative (the kernel sums in its own order)
+    assert np.array_equal(fast.lla, kin.lla) and np.abs(fast.v_n - kin.v_n).max() < 1e-13
     q_ref = rot.quat_from_dcm(kin.C_nb)
     q_ref *= np.where(q_ref[:, :1] < 0, -1.0, 1.0)
     assert np.abs(fast.q_nb - q_ref).max() < 1e-14 and (fast.q_nb[:, 0] >= 0).all()
-    slow = truth_solution(tr, t, with_rates=True)  # rates asked for: the kinematics path, the same attitude
-    assert np.abs(rot.dcm_from_quat(slow.q_nb) - rot.dcm_from_quat(fast.q_nb)).max() < 1e-14
+    for gravity in ("normal", "j2"):
+        slow = truth_solution(tr, t, with_rates=True, gravity=gravity)
+        assert np.array_equal(slow.lla, fast.lla) and np.array_equal(slow.q_nb, fast.q_nb)
+        w, f = ideal_rates(kin, gravity)
+        for j, a in enumerate("xyz"):
+            assert np.abs(slow.extra[f"w{a}_rad_s"] - w[:, j]).max() < 1e-15
+            assert np.abs(slow.extra[f"f{a}_m_s2"] - f[:, j]).max() < 1e-12
+        for j, a in enumerate("ned"):
+            assert np.abs(slow.extra[f"a{a}_m_s2"] - kin.a_n[:, j]).max() < 1e-12
+
+
+@pytest.mark.parametrize("name", ["car", "aircraft", "ship", "static"])
+def test_fused_kernel_is_the_numpy_state(name):
+    """The fused kernel (:func:`segments._state_kernel`) against the NumPy form of the same formulas
+    (``_state``), on sorted and shuffled times and times outside the run, per scenario (coning windows,
+    banked turns, vibration)."""
+    root = Path(__file__).resolve().parents[1]
+    path = root / "examples" / f"{name}.toml"
+    if not path.is_file():
+        pytest.skip(f"no examples/{name}.toml")
+    tr = build_trajectory(load_scenario(path), np.random.default_rng(5))
+    rng = np.random.default_rng(6)
+    t = np.concatenate([np.sort(rng.uniform(-1.0, tr.duration + 1.0, 30000)), [0.0, tr.duration]])
+    for times in (t, rng.permutation(t)):
+        _, lla, v_n, a_n, rpy, _ = tr._state(times)
+        _, o = tr._fused(times, ("lla", "v_n", "a_n", "rpy"))
+        scale_v = max(1.0, np.abs(v_n).max())
+        assert np.abs(o["lla"] - lla).max() < 1e-9  # rad and m: the same spline, at most a height rounding
+        assert np.abs(o["v_n"] - v_n).max() < 1e-14 * scale_v
+        assert np.abs(o["a_n"] - a_n).max() < 1e-12 and np.abs(o["rpy"] - rpy).max() < 1e-13
+
+
+def test_fused_kernel_with_overlapping_steps():
+    """Steps of one channel that overlap or end out of order (a long step started before a short one) are
+    summed as ``Channel.eval`` and ``Channel.integral`` sum them."""
+    tr = SegmentTrajectory((0.7, 0.2, 100.0), yaw0=0.3, speed0=5.0)
+    tr.cruise(60.0)
+    tr.speed.add_step(5.0, 30.0, 4.0)       # ends at 35 s
+    tr.speed.add_step(10.0, 5.0, -2.0)      # starts later, ends first (15 s)
+    tr.rate_flat.add_step(20.0, 20.0, 0.05)
+    tr.rate_flat.add_step(25.0, 2.0, -0.02)
+    tr.rate_bank.add_step(30.0, 4.0, 0.03)
+    t = np.linspace(0.0, 60.0, 6001)
+    _, lla, v_n, a_n, rpy, _ = tr._state(t)
+    _, o = tr._fused(t, ("lla", "v_n", "a_n", "rpy"))
+    assert np.abs(o["v_n"] - v_n).max() < 1e-13 and np.abs(o["a_n"] - a_n).max() < 1e-13
+    assert np.abs(o["rpy"] - rpy).max() < 1e-13 and np.abs(o["lla"] - lla).max() < 1e-9

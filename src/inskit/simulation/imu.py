@@ -126,48 +126,67 @@ def truth_solution(trajectory, time, *, with_rates=False, gravity="normal"):
     if navigation is not None and not with_rates:  # no rates wanted: no kinematics (a third of a simulation's time)
         t, lla, v_n, q = navigation(np.asarray(time, dtype=float))
         return NavSolution(t, lla, v_n, q, {})
+    both = getattr(trajectory, "navigation_and_rates", None)
+    if both is not None:  # the fused kernel: navigation and rates in one pass
+        t, lla, v_n, q, a_n, w_ib, f_b = both(np.asarray(time, dtype=float), gravity)
+        return NavSolution(t, lla, v_n, q, _rate_columns(a_n, w_ib, f_b))
     kin = trajectory.kinematics(np.asarray(time, dtype=float))
     extra = {}
     if with_rates:
         w_ib, f_b = ideal_rates(kin, gravity)
-        for j, a in enumerate("ned"):
-            extra[f"a{a}_m_s2"] = kin.a_n[:, j]
-        for j, a in enumerate("xyz"):
-            extra[f"w{a}_rad_s"] = w_ib[:, j]
-        for j, a in enumerate("xyz"):
-            extra[f"f{a}_m_s2"] = f_b[:, j]
+        extra = _rate_columns(kin.a_n, w_ib, f_b)
     return NavSolution(kin.t, kin.lla, kin.v_n, rot.quat_from_dcm(kin.C_nb), extra)
+
+
+def _rate_columns(a_n, w_ib, f_b):
+    """The ``extra`` columns of a truth with rates (:func:`truth_solution`)."""
+    extra = {}
+    for j, a in enumerate("ned"):
+        extra[f"a{a}_m_s2"] = a_n[:, j]
+    for j, a in enumerate("xyz"):
+        extra[f"w{a}_rad_s"] = w_ib[:, j]
+    for j, a in enumerate("xyz"):
+        extra[f"f{a}_m_s2"] = f_b[:, j]
+    return extra
+
+
+@njit(cache=True)
+def rates_at(lat, h, vn, ve, vd, an, ae, ad, r, p, y, dr, dp, dy, gravity=0):
+    """``(w_x, w_y, w_z, f_x, f_y, f_z)``: :func:`ideal_rates` at one point
+    from curvilinear position, NED velocity and acceleration, and ZYX Euler
+    angles with their rates: ``f_b = C_bn (a_n + (2 w_ie + w_en) x v_n - g_n)``
+    and ``w_ib_b = C_bn (w_ie + w_en) + E(roll, pitch) rpy_dot`` (SYSTEM.md
+    §1.4); ``g_n`` of the gravity model coded ``gravity``
+    (:func:`inskit.earth.gravity_nd`).  Shared by :func:`rates_kernel` and
+    the segment trajectories' fused kernel."""
+    sl, cl = math.sin(lat), math.cos(lat)
+    rn, re = _radii(lat, h)
+    wie0, wie2 = W_IE * cl, -W_IE * sl
+    wen0, wen1, wen2 = ve / re, -vn / rn, -ve * sl / cl / re
+    cx, cy, cz = 2 * wie0 + wen0, wen1, 2 * wie2 + wen2
+    gn, gd = _gravity_nd(lat, h, gravity)
+    fn0 = an + (cy * vd - cz * ve) - gn
+    fn1 = ae + (cz * vn - cx * vd)
+    fn2 = ad + (cx * ve - cy * vn) - gd
+    cr, sr, cp, sp, cy_, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
+    # C_nb rows (ZYX); C_bn = C_nb^T, so f_b[i] = sum_j C_nb[j, i] f_n[j]
+    c00, c01, c02 = cp * cy_, sr * sp * cy_ - cr * sy, cr * sp * cy_ + sr * sy
+    c10, c11, c12 = cp * sy, sr * sp * sy + cr * cy_, cr * sp * sy - sr * cy_
+    c20, c21, c22 = -sp, sr * cp, cr * cp
+    win0, win1, win2 = wie0 + wen0, wen1, wie2 + wen2
+    return (c00 * win0 + c10 * win1 + c20 * win2 + dr - dy * sp,
+            c01 * win0 + c11 * win1 + c21 * win2 + dp * cr + dy * sr * cp,
+            c02 * win0 + c12 * win1 + c22 * win2 - dp * sr + dy * cr * cp,
+            c00 * fn0 + c10 * fn1 + c20 * fn2,
+            c01 * fn0 + c11 * fn1 + c21 * fn2,
+            c02 * fn0 + c12 * fn1 + c22 * fn2)
 
 
 @njit(cache=True)
 def rates_kernel(lat, h, v_n, a_n, rpy, drpy, w_out, f_out, gravity=0):
-    """Compiled :func:`ideal_rates` from curvilinear position, NED velocity and
-    acceleration, and ZYX Euler angles with their rates (one pass, no
-    temporaries): ``f_b = C_bn (a_n + (2 w_ie + w_en) x v_n - g_n)`` and
-    ``w_ib_b = C_bn (w_ie + w_en) + E(roll, pitch) rpy_dot``; ``g_n`` of the
-    gravity model coded ``gravity`` (:func:`inskit.earth.gravity_nd`)."""
+    """Compiled :func:`ideal_rates` (:func:`rates_at` at every row, one pass,
+    no temporaries) into ``w_out`` and ``f_out``."""
     for k in range(lat.shape[0]):
-        sl, cl = math.sin(lat[k]), math.cos(lat[k])
-        rn, re = _radii(lat[k], h[k])
-        vn, ve, vd = v_n[k, 0], v_n[k, 1], v_n[k, 2]
-        wie0, wie2 = W_IE * cl, -W_IE * sl
-        wen0, wen1, wen2 = ve / re, -vn / rn, -ve * sl / cl / re
-        cx, cy, cz = 2 * wie0 + wen0, wen1, 2 * wie2 + wen2
-        gn, gd = _gravity_nd(lat[k], h[k], gravity)
-        fn0 = a_n[k, 0] + (cy * vd - cz * ve) - gn
-        fn1 = a_n[k, 1] + (cz * vn - cx * vd)
-        fn2 = a_n[k, 2] + (cx * ve - cy * vn) - gd
-        r, p, y = rpy[k, 0], rpy[k, 1], rpy[k, 2]
-        cr, sr, cp, sp, cy_, sy = math.cos(r), math.sin(r), math.cos(p), math.sin(p), math.cos(y), math.sin(y)
-        # C_nb rows (ZYX); C_bn = C_nb^T, so f_b[i] = sum_j C_nb[j, i] f_n[j]
-        c00, c01, c02 = cp * cy_, sr * sp * cy_ - cr * sy, cr * sp * cy_ + sr * sy
-        c10, c11, c12 = cp * sy, sr * sp * sy + cr * cy_, cr * sp * sy - sr * cy_
-        c20, c21, c22 = -sp, sr * cp, cr * cp
-        f_out[k, 0] = c00 * fn0 + c10 * fn1 + c20 * fn2
-        f_out[k, 1] = c01 * fn0 + c11 * fn1 + c21 * fn2
-        f_out[k, 2] = c02 * fn0 + c12 * fn1 + c22 * fn2
-        win0, win1, win2 = wie0 + wen0, wen1, wie2 + wen2
-        dr, dp, dy = drpy[k, 0], drpy[k, 1], drpy[k, 2]
-        w_out[k, 0] = c00 * win0 + c10 * win1 + c20 * win2 + dr - dy * sp
-        w_out[k, 1] = c01 * win0 + c11 * win1 + c21 * win2 + dp * cr + dy * sr * cp
-        w_out[k, 2] = c02 * win0 + c12 * win1 + c22 * win2 - dp * sr + dy * cr * cp
+        w_out[k, 0], w_out[k, 1], w_out[k, 2], f_out[k, 0], f_out[k, 1], f_out[k, 2] = rates_at(
+            lat[k], h[k], v_n[k, 0], v_n[k, 1], v_n[k, 2], a_n[k, 0], a_n[k, 1], a_n[k, 2],
+            rpy[k, 0], rpy[k, 1], rpy[k, 2], drpy[k, 0], drpy[k, 1], drpy[k, 2], gravity)

@@ -22,6 +22,7 @@ from numba import njit
 
 from .. import earth
 from ..errors import ConfigError
+from .imu import rates_at
 from .trajectory import Kinematics, kinematics_from_curvilinear
 
 _A, _E2 = earth.A, earth.E2
@@ -187,6 +188,141 @@ def _rk4_lla(y, v_grid, v_half, h):
         for c in range(3):
             y[i + 1, c] = y[i, c] + h / 6.0 * (k[0, c] + 2.0 * k[1, c] + 2.0 * k[2, c] + k[3, c])
 
+
+
+#: the channels of :class:`SegmentTrajectory`, in the order of the fused kernel's tables
+_CHANNELS = ("speed", "rate_flat", "rate_bank", "gamma", "roll", "pitch")
+_TARGETS = ("roll", "pitch", "yaw", "down")
+
+
+@njit(cache=True)
+def _smooth3(x):
+    """:func:`smoothstep` of one value (clipped to [0, 1])."""
+    x = min(max(x, 0.0), 1.0)
+    return (x**3 * (10 - 15 * x + 6 * x * x), 30 * x * x * (1 - x) ** 2, 60 * x * (1 - x) * (1 - 2 * x))
+
+
+@njit(cache=True)
+def _state_kernel(t, c0, off, t0, T, A, end, osc, h, y, dy, yaw0, gravity, lla_o, v_o, a_o, rpy_o, w_o, f_o):
+    """:meth:`SegmentTrajectory._state` (and, with ``rates``, :func:`.imu.rates_at`
+    on it) at the sorted times ``t`` in one pass, no temporaries: the
+    channels' quintic steps swept with one pointer per channel (steps sorted
+    by start; ``t0 <= t < t0 + T`` inside a step, after it the step's full
+    amplitude, as :meth:`Channel.eval`), the heading as
+    :meth:`Channel.integral`, the position by the Hermite spline
+    ``(h, y, dy)`` (:func:`_hermite_rows`), the oscillations ``osc`` (rows
+    ``target, amplitude, frequency, phase, windowed, w_t0, w_t1, w_ramp``).
+
+    Writes position ``(lat, lon, h)``, NED velocity and acceleration, Euler
+    angles, ``omega_ib_b`` and ``f_b`` (gravity model coded ``gravity``) into
+    those of ``lla_o, v_o, a_o, rpy_o, w_o, f_o`` that have rows (the others
+    are ``(0, 3)``)."""
+    nch = c0.shape[0]
+    lo = off[:nch].copy()           # per channel: steps before lo have ended
+    after = np.zeros(nch)           # sum of the ended steps' amplitudes
+    slope = np.zeros(nch)           # heading integral: sum A of ended steps
+    icpt = np.zeros(nch)            # ... and sum -A (t0 + T/2)
+    val = np.empty(nch)
+    der = np.empty(nch)
+    der2 = np.empty(nch)
+    integ = np.empty(nch)
+    npos = y.shape[0]
+    for k in range(t.shape[0]):
+        tk = t[k]
+        for c in range(nch):
+            hi = off[c + 1]
+            while lo[c] < hi and end[lo[c]] <= tk:
+                j = lo[c]
+                after[c] += A[j]
+                slope[c] += A[j]
+                icpt[c] -= A[j] * (t0[j] + 0.5 * T[j])
+                lo[c] += 1
+            v = 0.0
+            d = 0.0
+            dd = 0.0
+            ii = 0.0
+            late = 0.0
+            lslope = 0.0
+            licpt = 0.0
+            j = lo[c]
+            while j < hi and t0[j] <= tk:
+                if end[j] <= tk:    # ended out of order (steps overlapping)
+                    late += A[j]
+                    lslope += A[j]
+                    licpt -= A[j] * (t0[j] + 0.5 * T[j])
+                else:
+                    x = (tk - t0[j]) / T[j]
+                    s, ds, dds = _smooth3(x)
+                    v += A[j] * s
+                    d += A[j] * ds / T[j]
+                    dd += A[j] * dds / T[j] ** 2
+                    xc = min(max(x, 0.0), 1.0)
+                    ii += A[j] * T[j] * (xc**6 - 3 * xc**5 + 2.5 * xc**4)
+                j += 1
+            val[c] = v + (c0[c] + (after[c] + late))
+            der[c] = d
+            der2[c] = dd
+            integ[c] = c0[c] * tk + ii + ((slope[c] + lslope) * tk + (icpt[c] + licpt))
+        sp_, dsp = val[0], der[0]
+        rf, rb, drb = val[1], val[2], der[2]
+        g, dg = val[3], der[3]
+        psi = yaw0 + integ[1] + integ[2]
+        r = rf + rb
+        cg, sg, cp, spsi = np.cos(g), np.sin(g), np.cos(psi), np.sin(psi)
+        vn, ve, vd = sp_ * cg * cp, sp_ * cg * spsi, -sp_ * sg
+        an = dsp * cg * cp - sp_ * sg * dg * cp - sp_ * cg * spsi * r
+        ae = dsp * cg * spsi - sp_ * sg * dg * spsi + sp_ * cg * cp * r
+        ad = -dsp * sg - sp_ * cg * dg
+        # position: the Hermite spline of the integrated (lat, lon, h)
+        i = int(np.floor(tk / h))
+        i = min(max(i, 0), npos - 2)
+        u = (tk - i * h) / h
+        u2 = u * u
+        u3 = u2 * u
+        h00, h10, h01, h11 = 2.0 * u3 - 3.0 * u2 + 1.0, (u3 - 2.0 * u2 + u) * h, -2.0 * u3 + 3.0 * u2, (u3 - u2) * h
+        lat = h00 * y[i, 0] + h10 * dy[i, 0] + h01 * y[i + 1, 0] + h11 * dy[i + 1, 0]
+        lon = h00 * y[i, 1] + h10 * dy[i, 1] + h01 * y[i + 1, 1] + h11 * dy[i + 1, 1]
+        hgt = h00 * y[i, 2] + h10 * dy[i, 2] + h01 * y[i + 1, 2] + h11 * dy[i + 1, 2]
+        q = sp_ * rb / G_COORD
+        bank = np.arctan(q)
+        dbank = (dsp * rb + sp_ * drb) / G_COORD / (1 + q**2)
+        e0, e1, e2 = val[4] + bank, g + val[5], psi
+        de0, de1, de2 = der[4] + dbank, dg + der[5], r
+        for o in range(osc.shape[0]):
+            w = 2 * np.pi * osc[o, 2]
+            ph = w * tk + osc[o, 3]
+            sn, cs = np.sin(ph), np.cos(ph)
+            amp = osc[o, 1]
+            x, dx, ddx = amp * sn, amp * w * cs, -amp * w * w * sn
+            if osc[o, 4] != 0.0:
+                ramp = osc[o, 7]
+                a, da, dda = _smooth3((tk - osc[o, 5]) / ramp)
+                b, db, ddb = _smooth3((tk - osc[o, 6] + ramp) / ramp)
+                gw, dgw, ddgw = a - b, (da - db) / ramp, (dda - ddb) / ramp**2
+                x, dx, ddx = gw * x, dgw * x + gw * dx, ddgw * x + 2 * dgw * dx + gw * ddx
+            tg = int(osc[o, 0])
+            if tg == 3:
+                hgt -= x
+                vd += dx
+                ad += ddx
+            elif tg == 0:
+                e0 += x
+                de0 += dx
+            elif tg == 1:
+                e1 += x
+                de1 += dx
+            else:
+                e2 += x
+                de2 += dx
+        if w_o.shape[0] > 0:
+            w_o[k, 0], w_o[k, 1], w_o[k, 2], f_o[k, 0], f_o[k, 1], f_o[k, 2] = rates_at(
+                lat, hgt, vn, ve, vd, an, ae, ad, e0, e1, e2, de0, de1, de2, gravity)
+        if lla_o.shape[0] > 0:
+            lla_o[k, 0], lla_o[k, 1], lla_o[k, 2] = lat, lon, hgt
+            v_o[k, 0], v_o[k, 1], v_o[k, 2] = vn, ve, vd
+            rpy_o[k, 0], rpy_o[k, 1], rpy_o[k, 2] = e0, e1, e2
+        if a_o.shape[0] > 0:
+            a_o[k, 0], a_o[k, 1], a_o[k, 2] = an, ae, ad
 
 
 class SegmentTrajectory:
@@ -418,27 +554,83 @@ class SegmentTrajectory:
         """``(t, lla, v_n, q_nb)`` at times ``t``: the true navigation
         solution without the kinematics' rates (what a truth file holds;
         :func:`.imu.truth_solution` takes it when it needs no rates), the
-        attitude straight from the Euler angles (scalar part >= 0)."""
-        from .. import rotations as rot
+        attitude straight from the Euler angles (scalar part >= 0); by the
+        fused kernel (:func:`_state_kernel`, the formulas of :meth:`_state`)."""
+        t, o = self._fused(t, ("lla", "v_n", "rpy"))
+        return t, o["lla"], o["v_n"], _quat(o["rpy"])
 
-        t, lla, v_n, _, rpy, _ = self._state(t)
-        q = rot.quat_from_euler(rpy)
-        q *= np.where(q[:, :1] < 0.0, -1.0, 1.0)
-        return t, lla, v_n, q
+    def navigation_and_rates(self, t, gravity="normal"):
+        """``(t, lla, v_n, q_nb, a_n, omega_ib_b, f_b)`` at times ``t``:
+        :meth:`navigation` with the NED acceleration and the true rates of
+        :func:`.imu.ideal_rates` (gravity model ``gravity``), in one pass of
+        the fused kernel (a truth file with rates)."""
+        t, o = self._fused(t, ("lla", "v_n", "rpy", "a_n", "w_ib", "f_b"), gravity)
+        return t, o["lla"], o["v_n"], _quat(o["rpy"]), o["a_n"], o["w_ib"], o["f_b"]
 
     def rates(self, t, gravity="normal"):
         """True ``(omega_ib_b, f_b)`` at times ``t``: the compiled equivalent of
-        ``ideal_rates(self.kinematics(t), gravity)``."""
-        from ..earth import gravity_model_code
-        from .imu import rates_kernel
+        ``ideal_rates(self.kinematics(t), gravity)`` (:func:`_state_kernel`:
+        the trajectory and the rates in one pass; the NumPy form made some
+        thirty temporaries of the two million quadrature times of an hour
+        at 100 Hz, two thirds of ``inskit simulate``)."""
+        _, o = self._fused(t, ("w_ib", "f_b"), gravity)
+        return o["w_ib"], o["f_b"]
 
-        t, lla, v_n, a_n, rpy, drpy = self._state(t)
-        w = np.empty((len(t), 3))
-        f = np.empty((len(t), 3))
-        rates_kernel(np.ascontiguousarray(lla[:, 0]), np.ascontiguousarray(lla[:, 2]), np.ascontiguousarray(v_n),
-                     np.ascontiguousarray(a_n), np.ascontiguousarray(rpy), np.ascontiguousarray(drpy), w, f,
-                     gravity_model_code(gravity))
-        return w, f
+    def _tables(self):
+        """The channels' steps and the oscillations as the arrays of
+        :func:`_state_kernel`: per channel its constant, and its steps
+        ``(t0, T, A, t0 + T)`` sorted by start, the channel ``c`` being rows
+        ``off[c]:off[c + 1]``; one row per oscillation."""
+        c0 = np.array([getattr(self, c).c0 for c in _CHANNELS], float)
+        steps = [sorted(getattr(self, c).steps, key=lambda st: st[0]) for c in _CHANNELS]
+        off = np.zeros(len(steps) + 1, np.int64)
+        off[1:] = np.cumsum([len(st) for st in steps])
+        flat = np.array([st for ch in steps for st in ch], float).reshape(-1, 3)
+        t0, T, A = (np.ascontiguousarray(flat[:, j]) for j in range(3))
+        osc = np.zeros((len(self.osc), 8))
+        for i, o in enumerate(self.osc):
+            osc[i, :4] = _TARGETS.index(o.target), o.amplitude, o.frequency, o.phase
+            if o.window is not None:
+                osc[i, 4:] = 1.0, o.window.t0, o.window.t1, o.window.ramp
+        return c0, off, t0, T, A, t0 + T, osc
+
+    def _fused(self, t, want, gravity="normal"):
+        """:func:`_state_kernel` at times ``t`` (any order: sorted for the
+        sweep, results in the order given): ``t`` and a dict of the arrays
+        named in ``want`` (a subset of ``lla, v_n, a_n, rpy, w_ib, f_b``;
+        position, velocity and angles come together, as do the two rates)."""
+        from ..earth import gravity_model_code
+
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        code = gravity_model_code(gravity)
+        if self._pos is None:
+            self._integrate_position()
+        order = None
+        ts = t
+        if len(t) > 1 and np.any(t[1:] < t[:-1]):
+            order = np.argsort(t, kind="stable")
+            ts = t[order]
+        groups = {"lla": "nav", "v_n": "nav", "rpy": "nav", "a_n": "acc", "w_ib": "rates", "f_b": "rates"}
+        on = {groups[w] for w in want}
+        names = ("lla", "v_n", "a_n", "rpy", "w_ib", "f_b")
+        outs = {k: np.empty((len(ts) if groups[k] in on else 0, 3)) for k in names}
+        pos = self._pos
+        _state_kernel(np.ascontiguousarray(ts), *self._tables(), pos.h, np.ascontiguousarray(pos.y),
+                      np.ascontiguousarray(pos.dy), self.yaw0, code, *(outs[k] for k in names))
+        res = {k: outs[k] for k in want}
+        if order is not None:
+            for o in res.values():
+                o[order] = o.copy()
+        return t, res
+
+
+def _quat(rpy):
+    """``q_nb`` of ZYX Euler angles, scalar part >= 0."""
+    from .. import rotations as rot
+
+    q = rot.quat_from_euler(rpy)
+    q *= np.where(q[:, :1] < 0.0, -1.0, 1.0)
+    return q
 
 
 def _kinematics_from_ned(t, lla, v_n, a_n, rpy, drpy, ddrpy=None):
