@@ -7,10 +7,18 @@ from scipy.stats import chi2
 from inskit.filters.kalman import chi2_threshold, joseph_update
 
 
-@pytest.mark.parametrize("dof", [1, 2, 3, 6, 8, 40])
-@pytest.mark.parametrize("p", [0.5, 0.95, 0.99, 0.9999])
+@pytest.mark.parametrize("dof", [1, 2, 3, 6, 8, 15, 40, 120])
+@pytest.mark.parametrize("p", [1e-9, 1e-3, 0.05, 0.5, 0.95, 0.99, 0.9999, 1 - 1e-9])
 def test_chi2_threshold_is_the_chi_square_quantile(dof, p):
+    """The hand-made quantile (bisection on the incomplete gamma) against scipy's, both tails."""
     assert chi2_threshold(dof, p) == pytest.approx(chi2.ppf(p, dof), rel=1e-12)
+
+
+def test_chi2_threshold_edges():
+    assert chi2_threshold(3, 0.0) == 0.0 and chi2_threshold(3, 1.0) == np.inf
+    for dof, p in ((0, 0.9), (2, 1.5), (2, -0.1)):
+        with pytest.raises(ValueError):
+            chi2_threshold(dof, p)
 
 
 def test_joseph_update_equals_the_textbook_update_and_gates():

@@ -51,6 +51,19 @@ def _refresh_compile_cache():
 
 _refresh_compile_cache()
 
+
+def _install_blas_finder():
+    """numba's BLAS check without ``scipy.linalg``'s import (:mod:`._numba_blas`)."""
+    try:
+        from . import _numba_blas
+
+        _numba_blas.install()
+    except Exception:  # noqa: BLE001 (a speed-up only: numba then does as it always did)
+        pass
+
+
+_install_blas_finder()
+
 #: public name -> (module, attribute), loaded on first access (PEP 562)
 _LAZY = {
     "navigate": ("inskit.api", "navigate"),
