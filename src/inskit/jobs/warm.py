@@ -2,8 +2,8 @@
 
 The first compiled function a process calls, even one loaded from the
 compile cache, pays for numba's set-up: its typing and lowering registries,
-scipy's BLAS bindings, the cache's first load (about a quarter of a
-second, once per process).  A command that reads its inputs first starts
+its BLAS check (without scipy.linalg: :mod:`inskit._numba_blas`), the
+cache's first load (about a quarter of a second, once per process).  A command that reads its inputs first starts
 that set-up here, in a thread, before reading: pyarrow parses CSV and
 Parquet without holding the GIL, so the two overlap and the compiled code
 is ready when the data are (``inskit navigate`` and ``inskit mechanize``).
