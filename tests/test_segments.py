@@ -255,3 +255,21 @@ def test_fused_kernel_with_overlapping_steps():
     _, o = tr._fused(t, ("lla", "v_n", "a_n", "rpy"))
     assert np.abs(o["v_n"] - v_n).max() < 1e-13 and np.abs(o["a_n"] - a_n).max() < 1e-13
     assert np.abs(o["rpy"] - rpy).max() < 1e-13 and np.abs(o["lla"] - lla).max() < 1e-9
+
+
+def test_fused_kernel_in_threads_is_bit_identical(monkeypatch):
+    """A long run's times split among threads (each chunk sweeping the steps from the start) give the very
+    bits of one pass, at any split."""
+    from inskit.simulation import segments
+
+    root = Path(__file__).resolve().parents[1]
+    tr = build_trajectory(load_scenario(root / "examples" / "aircraft.toml"), np.random.default_rng(2))
+    t = np.sort(np.random.default_rng(3).uniform(0.0, tr.duration, 50001))
+    monkeypatch.setattr(segments, "_PARALLEL_MIN", 10**12)
+    one = tr._fused(t, ("lla", "v_n", "a_n", "rpy", "w_ib", "f_b"))[1]
+    monkeypatch.setattr(segments, "_PARALLEL_MIN", 10)
+    monkeypatch.setattr("os.cpu_count", lambda: 3)
+    assert len(segments._chunks(len(t))) == 3
+    split = tr._fused(t, ("lla", "v_n", "a_n", "rpy", "w_ib", "f_b"))[1]
+    for k in one:
+        assert np.array_equal(one[k], split[k]), k

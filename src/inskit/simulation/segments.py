@@ -202,7 +202,7 @@ def _smooth3(x):
     return (x**3 * (10 - 15 * x + 6 * x * x), 30 * x * x * (1 - x) ** 2, 60 * x * (1 - x) * (1 - 2 * x))
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)  # nogil: two threads share a long run (SegmentTrajectory._fused)
 def _state_kernel(t, c0, off, t0, T, A, end, osc, h, y, dy, yaw0, gravity, lla_o, v_o, a_o, rpy_o, w_o, f_o):
     """:meth:`SegmentTrajectory._state` (and, with ``rates``, :func:`.imu.rates_at`
     on it) at the sorted times ``t`` in one pass, no temporaries: the
@@ -615,13 +615,42 @@ class SegmentTrajectory:
         names = ("lla", "v_n", "a_n", "rpy", "w_ib", "f_b")
         outs = {k: np.empty((len(ts) if groups[k] in on else 0, 3)) for k in names}
         pos = self._pos
-        _state_kernel(np.ascontiguousarray(ts), *self._tables(), pos.h, np.ascontiguousarray(pos.y),
-                      np.ascontiguousarray(pos.dy), self.yaw0, code, *(outs[k] for k in names))
+        ts = np.ascontiguousarray(ts)
+        args = (*self._tables(), pos.h, np.ascontiguousarray(pos.y), np.ascontiguousarray(pos.dy), self.yaw0, code)
+
+        def run(a, b):  # rows a:b (each chunk sweeps the steps from the start: exact, whatever the split)
+            _state_kernel(ts[a:b], *args, *(o[a:b] for o in (outs[k] for k in names)))
+
+        parts = _chunks(len(ts))
+        if len(parts) == 1:
+            run(*parts[0])
+        else:
+            from concurrent.futures import ThreadPoolExecutor
+
+            with ThreadPoolExecutor(max_workers=len(parts) - 1, thread_name_prefix="inskit-trajectory") as pool:
+                pending = [pool.submit(run, a, b) for a, b in parts[1:]]
+                run(*parts[0])
+                for f in pending:
+                    f.result()
         res = {k: outs[k] for k in want}
         if order is not None:
             for o in res.values():
                 o[order] = o.copy()
         return t, res
+
+
+#: below this many times one thread evaluates the trajectory (a thread's start costs more than it saves)
+_PARALLEL_MIN = 200_000
+
+
+def _chunks(n):
+    """Row ranges of :meth:`SegmentTrajectory._fused`: one per core (at most
+    four) for ``n >= _PARALLEL_MIN``, else one."""
+    import os
+
+    k = min(4, os.cpu_count() or 1) if n >= _PARALLEL_MIN else 1
+    edges = np.linspace(0, n, k + 1).astype(int)
+    return [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:])]
 
 
 def _quat(rpy):
