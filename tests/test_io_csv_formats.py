@@ -161,3 +161,50 @@ def test_a_truncated_gzip_log_is_refused_with_its_name(tmp_path):
     gz.write_bytes(data[: len(data) // 2])
     with pytest.raises(InputError, match=r"cut\.csv\.gz: not a readable CSV file"):
         C.read_imu(gz)
+
+
+@pytest.mark.parametrize("kind", ["csv", "csv.gz", "parquet"])
+def test_read_solution_until_reads_the_head_only(tmp_path, kind):
+    """``read_solution(until_s=...)``: the first rows, up to the first after that time, as the whole read has
+    them (CSV, gzip CSV, Parquet); a time before the file, past its end, or a fault in the head gives the
+    whole read (its span, its line); a fault beyond the head is not read."""
+    import gzip
+
+    from inskit.types import NavSolution
+    from inskit.rotations import quat_from_euler
+
+    n = 200_000  # several of the head reader's blocks
+    t = 50.0 + 0.01 * np.arange(n)
+    rng = np.random.default_rng(1)
+    lla = np.column_stack([np.radians(45.0) + 1e-8 * np.arange(n), np.full(n, np.radians(7.0)), 300.0 + 0 * t])
+    v = rng.standard_normal((n, 3))
+    q = quat_from_euler(np.column_stack([0 * t, 0 * t, np.radians(1e-3 * np.arange(n) % 180.0)]))
+    sol = NavSolution(t, lla, v, q, {"sigma_n_m": rng.uniform(0.1, 1.0, n)})
+    p = tmp_path / f"sol.{kind}"
+    if kind == "csv.gz":
+        plain = tmp_path / "plain.csv"
+        C.write_solution(plain, sol)
+        p.write_bytes(gzip.compress(plain.read_bytes()))
+    else:
+        C.write_solution(p, sol)
+    full = C.read_solution(p)
+    for u in (50.0, 50.004, 1234.567):
+        head = C.read_solution(p, until_s=u)
+        k = len(head.time)
+        assert 2 <= k < n and head.time[-2] <= u < head.time[-1]
+        assert np.array_equal(head.time, full.time[:k]) and np.array_equal(head.lla, full.lla[:k])
+        assert np.array_equal(head.q_nb, full.q_nb[:k]) and np.array_equal(head.extra["sigma_n_m"],
+                                                                            full.extra["sigma_n_m"][:k])
+        a, b = full.interpolate(np.array([u])).state(0), head.interpolate(np.array([u])).state(0)
+        assert np.array_equal(a.lla, b.lla) and np.array_equal(a.v_n, b.v_n) and np.array_equal(a.q_nb, b.q_nb)
+    assert len(C.read_solution(p, until_s=1e9).time) == n
+    assert len(C.read_solution(p, until_s=10.0).time) == n  # before the file: the whole read
+    if kind == "csv":
+        lines = p.read_text().splitlines()
+        lines[150_001] = lines[150_000]  # time repeats far beyond the head
+        p.write_text("\n".join(lines) + "\n")
+        assert len(C.read_solution(p, until_s=60.0).time) < 10_000
+        lines[5] = lines[4]  # ... and in it: named by its line, as by the whole read
+        p.write_text("\n".join(lines) + "\n")
+        with pytest.raises(InputError, match=r"line 6: duplicate timestamp"):
+            C.read_solution(p, until_s=60.0)

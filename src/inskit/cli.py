@@ -112,7 +112,7 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
     if init_text and init_from:
         raise InputError("give either --init or --init-from, not both")
     if init_from:
-        ref = io.read_solution(init_from)
+        ref = io.read_solution(init_from, until_s=float(imu.time[0]))  # the rows around the start only
         init = ref.interpolate(imu.time[:1]).state(0)
     elif init_text:
         x = _parse_init(init_text)

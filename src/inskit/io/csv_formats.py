@@ -692,7 +692,7 @@ def write_gnss(path, gnss: GnssData, *, overwrite=False):
     return write_csv(path, cols, "%.15g")
 
 
-def read_solution(path) -> NavSolution:
+def read_solution(path, *, until_s=None) -> NavSolution:
     """Read a navigation solution or truth file: CSV (``.csv``, gzip-compressed
     ``.csv.gz``) or Parquet (``.parquet``, as ``inskit navigate`` writes at
     full rate), told apart by content (Parquet's ``PAR1`` magic), not name.
@@ -701,10 +701,21 @@ def read_solution(path) -> NavSolution:
     roll_deg, pitch_deg, yaw_deg``; any further numeric columns are kept in
     ``NavSolution.extra`` under their own names.  A bad value is named by its
     line (CSV, header = line 1) or its row (Parquet, first data row = row 0).
+
+    With ``until_s`` [s] the file is read only up to its first row after
+    that time, two rows at least (in blocks of about a megabyte; the whole file when no
+    row reaches it, or when the head is not plain numbers, so that the
+    messages are those of a whole read): the initial state of a run
+    (``mechanize --init-from``) needs the rows around its start, not an
+    hour of truth.
     """
     from .parquet import is_parquet
 
     p = Path(path)
+    if until_s is not None:
+        head = _read_solution_head(p, float(until_s))
+        if head is not None:
+            return head
     if is_parquet(p):
         return _read_solution_parquet(p)
     if p.suffix == ".parquet" and p.is_file():
@@ -742,6 +753,61 @@ def _read_solution_lean(path) -> NavSolution | None:
     check_time_column(path, cols["time_s"])
     _check_latlon(path, cols["lat_deg"], cols["lon_deg"])
     return _solution_of_columns({c: np.ascontiguousarray(v) for c, v in cols.items()})
+
+
+def _read_solution_head(path, until_s) -> NavSolution | None:
+    """The rows of a solution file up to the first after ``until_s`` (two at
+    least) (:func:`read_solution`), by pyarrow's streaming readers; None
+    when the head is not plain finite numbers with the solution columns, or
+    no row passes ``until_s`` (the caller then reads the whole file)."""
+    import pyarrow as pa
+
+    from .parquet import is_parquet
+
+    try:
+        if is_parquet(path):
+            import pyarrow.parquet as pq
+
+            batches = pq.ParquetFile(str(path)).iter_batches(batch_size=1 << 14)
+        else:
+            import pyarrow.csv as pcsv
+
+            names = _header_names(path)
+            if names is None or not set(SOLUTION_COLUMNS) <= set(names) or len(set(names)) != len(names):
+                return None
+            co = pcsv.ConvertOptions(column_types={c: pa.float64() for c in names})
+            src = pa.input_stream(str(path), compression="gzip") if _is_gzip(path) else str(path)
+            batches = pcsv.open_csv(src, read_options=pcsv.ReadOptions(block_size=1 << 20), convert_options=co)
+        got, reached = [], False
+        for b in batches:
+            got.append(b)
+            tcol = b.column("time_s")
+            if len(tcol) and (pa.types.is_floating(tcol.type) or pa.types.is_integer(tcol.type)) \
+                    and tcol.null_count == 0 and float(_values(tcol).max()) > until_s \
+                    and sum(len(x) for x in got) >= 2:
+                reached = True
+                break
+    except (pa.ArrowException, OSError, KeyError, ValueError):
+        return None
+    if not reached:
+        return None
+    cols = {}
+    for c in got[0].schema.names:
+        parts = [b.column(c) for b in got]
+        if any(x.null_count or not (pa.types.is_floating(x.type) or pa.types.is_integer(x.type)) for x in parts):
+            return None
+        cols[c] = np.concatenate([_values(x).astype(float) for x in parts])
+    if not set(SOLUTION_COLUMNS) <= set(cols) or not all(np.isfinite(v).all() for v in cols.values()):
+        return None
+    # the rows up to the first after until_s (two at least: an interpolation's pair), checked as a whole file is
+    t = cols["time_s"]
+    if t[0] > until_s:
+        return None  # before the file: the whole read, whose span the caller's message then names
+    stop = max(int(np.argmax(t > until_s)) + 1, 2)
+    cols = {c: np.ascontiguousarray(v[:stop]) for c, v in cols.items()}
+    check_time_column(path, cols["time_s"])
+    _check_latlon(path, cols["lat_deg"], cols["lon_deg"])
+    return _solution_of_columns(cols)
 
 
 def _solution_of_columns(cols) -> NavSolution:
