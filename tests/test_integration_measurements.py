@@ -91,6 +91,28 @@ def test_nhc_without_the_mounting_block_uses_the_imu_axes():
     assert abs(nu_m[1] - nu[1]) > 0.9
 
 
+@pytest.mark.parametrize("mounting", [True, False])
+def test_nhc_lever_arm_takes_the_constraint_at_the_wheel_point(mounting):
+    """With a lever arm the constraint holds at the wheel point, ``v_b +
+    omega x l`` (here 0.6 rad/s of yaw on 1.2 m forward: 0.72 m/s more
+    lateral velocity), and H, now with gyro bias and scale-factor columns,
+    matches the finite differences with and without the mounting block."""
+    lay = LAY if mounting else StateLayout([b for b in LAY.blocks if b.name != "mounting"])
+    ctx = context(layout=lay)
+    lev = np.array([1.2, -0.3, 0.8])
+    m = NonHolonomic([(0, 200)], 10.0, 0.1, lever_arm_b=lev)
+    assert m.compiled(lay) is None  # the Python path
+    nu, H, _ = m.linearize(ctx, 0)
+    J = numerical_jacobian(m, ctx, 0, EPS)
+    scale = np.abs(J).max(axis=1, keepdims=True)
+    assert np.all(np.abs(H - J) <= 1e-6 * scale + 1e-9)
+    assert np.abs(H[:, lay.slice("bg")]).max() > 0.1 and np.abs(H[:, lay.slice("sg")]).max() > 0.01
+    nu0, _, _ = NonHolonomic([(0, 200)], 10.0, 0.1).linearize(ctx, 0)
+    if not mounting:
+        assert np.allclose(nu - nu0, np.cross(ctx.omega_ib_b, lev)[1:3], atol=1e-12)
+        assert abs((nu - nu0)[0] - 0.6 * 1.2 + 0.05 * 0.8) < 0.02
+
+
 def test_gnss_velocity_has_the_lever_arm_block():
     """Review defect 1: H had no lever-arm columns (omega x l_b is in h)."""
     ctx = context()

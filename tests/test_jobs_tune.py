@@ -27,6 +27,10 @@ def test_grid_parsing_and_snippet():
     assert len(T.candidates(g)) == 4
     snip = T.toml_snippet({"noise.bias_tau_s": 300, "constraints.nhc": False})
     assert snip == "[noise]\nbias_tau_s = 300\n[constraints]\nnhc = false\n"
+    g = T.parse_grid(["constraints.nhc_lever_arm_b_m=[0,0,0], [0.06, 0, 0.81]"])
+    assert g == {"constraints.nhc_lever_arm_b_m": [(0, 0, 0), (0.06, 0, 0.81)]}
+    assert T.toml_snippet({"constraints.nhc_lever_arm_b_m": (0.06, 0, 0.81)}) == \
+        "[constraints]\nnhc_lever_arm_b_m = [0.06, 0, 0.81]\n"
     for bad in (["nosuch.key=1"], ["noise.bias_tau_s"], ["outages.protocol=none"], ["noise.x=1", "noise.x=2"], []):
         with pytest.raises(ConfigError):
             T.parse_grid(bad)

@@ -370,37 +370,54 @@ class NonHolonomic(_GridMeasurement):
     """Non-holonomic constraint: a land vehicle does not slide sideways or
     jump, so its lateral and vertical velocities are zero.
 
-    They are zero in the vehicle's axes: ``v_v = C_vb C_bn v_n``, with
-    ``C_vb`` of the ``mounting`` block's estimate when the layout holds one
-    (:class:`.blocks.Mounting`), else ``I`` (the IMU's axes are taken for
-    the vehicle's).  ``H_vel = (C_vb C_bn)[1:3]``, ``H_att = -(C_vb C_bn [v_n
-    x])[1:3]``, ``H_mounting = [dC_vb/dpitch v_b, dC_vb/dyaw v_b][1:3]``.
+    They are zero in the vehicle's axes at the point where the constraint
+    holds (for the lateral slip, the centre of the unsteered rear axle):
+    ``v_v = C_vb (C_bn v_n + omega_ib_b x l_b)``, with ``l_b`` the IMU to
+    that point in body axes (Groves 2013 §16.2.3 and eq. 6.55, the wheel's
+    lever-arm velocity), default 0: the constraint is then taken at the IMU,
+    where in a turn the lateral velocity is ``omega_z l_x - omega_x l_z``.
+    ``C_vb`` is of the ``mounting`` block's estimate when the layout holds
+    one (:class:`.blocks.Mounting`), else ``I`` (the IMU's axes are taken
+    for the vehicle's).  With ``C_vn = C_vb C_bn`` and ``v_o = C_bn v_n +
+    omega x l_b``: ``H_vel = C_vn[1:3]``, ``H_att = -(C_vn [v_n x])[1:3]``,
+    ``H_rate = -(C_vb [l_b x])[1:3]`` (through ``d omega`` into the gyro
+    bias and scale-factor columns), ``H_mounting = [dC_vb/dpitch v_o,
+    dC_vb/dyaw v_o][1:3]``.
     """
 
     name = "nhc"
 
+    def __init__(self, intervals, rate_hz, sigma, lever_arm_b=(0.0, 0.0, 0.0)):
+        super().__init__(intervals, rate_hz, sigma)
+        lev = np.asarray(lever_arm_b, dtype=float)
+        if lev.shape != (3,) or not np.all(np.isfinite(lev)):
+            raise ValueError(f"`lever_arm_b` must be three finite numbers (body axes, m), got {lever_arm_b!r}")
+        self.lever_arm_b = lev
+
     def linearize(self, ctx: UpdateContext, row):
         lay = ctx.layout
         C_bn = ctx.C_nb.T
-        v_b = C_bn @ ctx.v_n
+        lev = self.lever_arm_b
+        v_o = C_bn @ ctx.v_n
         H = np.zeros((2, lay.size))
         mount = vehicle_axes(ctx)
-        if mount is None:
-            H[:, 3:6] = C_bn[1:3]
-            H[:, 6:9] = -(C_bn @ skew(ctx.v_n))[1:3]
-            return v_b[1:3], H, np.eye(2) * self.sigma**2
-        C_vb, d_p, d_y = mount
-        C_vn = C_vb @ C_bn
+        C_vb = np.eye(3) if mount is None else mount[0]
+        C_vn = C_bn if mount is None else C_vb @ C_bn
         H[:, 3:6] = C_vn[1:3]
         H[:, 6:9] = -(C_vn @ skew(ctx.v_n))[1:3]
-        s = lay.slice("mounting")
-        H[:, s.start] = (d_p @ v_b)[1:3]
-        H[:, s.start + 1] = (d_y @ v_b)[1:3]
-        return (C_vb @ v_b)[1:3], H, np.eye(2) * self.sigma**2
+        if lev.any():
+            v_o = v_o + _cross(ctx.omega_ib_b, lev)
+            _sensor_rate_columns(H, ctx, -(C_vb @ skew(lev))[1:3])
+        if mount is not None:
+            s = lay.slice("mounting")
+            H[:, s.start] = (mount[1] @ v_o)[1:3]
+            H[:, s.start + 1] = (mount[2] @ v_o)[1:3]
+        return (C_vb @ v_o)[1:3], H, np.eye(2) * self.sigma**2
 
     def compiled(self, layout):
-        """:meth:`linearize` in compiled form (:mod:`._updates`)."""
-        if not compiled_form_applies(self, NonHolonomic):
+        """:meth:`linearize` in compiled form (:mod:`._updates`); with a
+        lever arm, the Python path (0.2 s of a 9 min drive at 10 Hz)."""
+        if not compiled_form_applies(self, NonHolonomic) or self.lever_arm_b.any():
             return None
         return U.spec(U.KIND_NHC, 2, np.empty((len(self._t), 0)), self.sigma)
 

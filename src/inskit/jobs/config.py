@@ -433,6 +433,9 @@ class ConstraintsSection(_Strict):
     nhc: bool = Field(True, description="non-holonomic constraint: no lateral or vertical velocity in body axes "
                       "(a land vehicle; off for a handheld device)")
     nhc_sigma_m_s: float = Field(0.1, gt=0, description="sigma of the lateral and vertical body velocity")
+    nhc_lever_arm_b_m: tuple[float, float, float] = Field(
+        (0.0, 0.0, 0.0), description="IMU to the point where the non-holonomic constraint holds (the centre "
+        "of the unsteered rear axle), body axes [m]; 0: at the IMU")
     rate_hz: float = Field(10.0, gt=0, le=1000, description="rate of the zero-velocity and non-holonomic updates")
     mounting: bool = Field(False, description="estimate the IMU's mounting in the vehicle (pitch and yaw of the "
                            "vehicle axes against the IMU's, after imu.mount_rpy_deg; 2 states) for the "

@@ -653,7 +653,8 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         if c.zupt:
             meas.append(ZeroVelocity(static_intervals(gnss_used), c.rate_hz, c.zupt_sigma_m_s))
         if c.nhc:
-            meas.append(NonHolonomic([(imu.time[0], imu.time[-1])], c.rate_hz, c.nhc_sigma_m_s))
+            meas.append(NonHolonomic([(imu.time[0], imu.time[-1])], c.rate_hz, c.nhc_sigma_m_s,
+                                    lever_arm_b=c.nhc_lever_arm_b_m))
         if odo is not None:
             meas.append(odo)
         if cfg.gnss.speed_course is not None:

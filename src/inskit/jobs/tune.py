@@ -51,7 +51,7 @@ _SECTIONS = ("imu", "gnss", "noise", "init", "constraints", "filter", "odometer"
 def parse_grid(specs) -> dict:
     """``["noise.bias_tau_s=300,3000", "constraints.nhc_sigma_m_s=0.1,0.3"]``
     as ``{"noise.bias_tau_s": [300.0, 3000.0], ...}`` (numbers, true/false,
-    or text)."""
+    text, or a vector in brackets: ``constraints.nhc_lever_arm_b_m=[0,0,0],[0.06,0,0.81]``)."""
     grid = {}
     for spec in specs:
         if "=" not in spec:
@@ -63,7 +63,7 @@ def parse_grid(specs) -> dict:
                               f"({', '.join(_SECTIONS)})")
         if key in grid:
             raise ConfigError(f"--grid {spec!r}: the key {key} is given twice; give its values in one --grid")
-        items = [v.strip() for v in vals.split(",") if v.strip()]
+        items = [v.strip() for v in _split_top(vals) if v.strip()]
         if not items:
             raise ConfigError(f"--grid {spec!r}: no values")
         vals = [_value(v) for v in items]
@@ -75,7 +75,22 @@ def parse_grid(specs) -> dict:
     return grid
 
 
+def _split_top(text):
+    """``text`` split at the commas outside brackets."""
+    out, depth, cur = [], 0, ""
+    for ch in text:
+        depth += (ch == "[") - (ch == "]")
+        if ch == "," and depth == 0:
+            out.append(cur)
+            cur = ""
+        else:
+            cur += ch
+    return out + [cur]
+
+
 def _value(text):
+    if text.startswith("[") and text.endswith("]"):  # a vector: a tuple of numbers (hashable, like the others)
+        return tuple(_value(v.strip()) for v in text[1:-1].split(",") if v.strip())
     low = text.lower()
     if low in ("true", "false"):
         return low == "true"
@@ -303,6 +318,8 @@ def _toml_value(v):
         return "true" if v else "false"
     if isinstance(v, (int, float)):
         return repr(v)
+    if isinstance(v, (tuple, list)):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
     return '"' + str(v).replace('"', '\\"') + '"'
 
 
@@ -312,7 +329,8 @@ def table_text(res: dict) -> str:
     head = "  ".join(f"{k:>24}" for k in keys) + f"  {'cv RMS [m]':>11}  {'cv max [m]':>10}  health"
     rows = [head]
     for r in res["candidates"]:
-        vals = "  ".join(f"{str(r['params'][k]):>24}" for k in keys)
+        vals = "  ".join(f"{_toml_value(v) if isinstance(v, tuple) else str(v):>24}"
+                         for v in (r["params"][k] for k in keys))
         rms, mx = r.get("cv_rms_m"), r.get("cv_max_m")
         rows.append(f"{vals}  {'-' if rms is None else f'{rms:.3f}':>11}  {'-' if mx is None else f'{mx:.3f}':>10}  "
                     f"{r.get('health', 'failed: ' + r.get('error', ''))}")
