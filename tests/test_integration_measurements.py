@@ -113,6 +113,31 @@ def test_nhc_lever_arm_takes_the_constraint_at_the_wheel_point(mounting):
         assert abs((nu - nu0)[0] - 0.6 * 1.2 + 0.05 * 0.8) < 0.02
 
 
+def test_gnss_position_error_block_adds_its_estimate_and_decays_between_fixes():
+    """With a ``gnss_err`` block the prediction carries the fixes' correlated
+    error: the innovation moves by its estimate, ``H_gnss_err = I`` (checked
+    by finite differences), the compiled form stands down, and the estimate
+    is predicted by its own decay, ``exp(-dt / tau)``."""
+    from inskit.integration import GnssPositionError
+
+    lay = StateLayout(list(LAY.blocks) + [GnssPositionError(0.03, 10.0)])
+    ctx = context(layout=lay)
+    g = gnss_near(ctx)
+    m = GnssPosition(g, lever_arm_b=LEVER)
+    nu0, _, _ = m.linearize(ctx, 0)
+    ctx.aux[lay.aux_slice("gnss_err")] = [0.02, -0.01, 0.005]
+    nu, H, _ = m.linearize(ctx, 0)
+    assert np.allclose(nu - nu0, [0.02, -0.01, 0.005], atol=1e-12)
+    assert np.array_equal(H[:, lay.slice("gnss_err")], np.eye(3))
+    J = numerical_jacobian(m, ctx, 0, dict(EPS, gnss_err=1e-3))
+    scale = np.abs(J).max(axis=1, keepdims=True)
+    assert np.all(np.abs(H - J) <= 1e-6 * scale + 1e-9)
+    assert m.compiled(lay) is None and m.compiled(LAY) is not None
+    idx, F = lay.estimate_dynamics()
+    assert list(idx) == list(range(lay.aux_slice("gnss_err").start, lay.aux_slice("gnss_err").stop))
+    assert np.allclose(F, -np.eye(3) / 10.0)
+
+
 def test_gnss_velocity_has_the_lever_arm_block():
     """Review defect 1: H had no lever-arm columns (omega x l_b is in h)."""
     ctx = context()

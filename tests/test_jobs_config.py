@@ -153,6 +153,14 @@ def test_loose_keys_with_tight_coupling():
         _cfg(TIGHT, gnss={"use_velocity": True, "velocity_delay_s": 0.1})
 
 
+def test_gnss_error_tau_needs_its_sigma():
+    assert _cfg(LOOSE, gnss={"error_sigma_m": 0.03, "error_tau_s": 5.0}).gnss.error_tau_s == 5.0
+    with pytest.raises(ConfigError, match=r"field 'gnss\.error_tau_s': gnss\.error_tau_s would be ignored"):
+        _cfg(LOOSE, gnss={"error_tau_s": 5.0})
+    with pytest.raises(ConfigError, match=r"gnss\.error_sigma_m would be ignored: it describes fixes fused by"):
+        _cfg(TIGHT, gnss={"error_sigma_m": 0.03})
+
+
 def test_file_keys_without_a_file():
     with pytest.raises(ConfigError, match=r"field 'gnss\.format': gnss\.format would be ignored: it describes how "
                                           r"gnss\.file is read, and no `file` is given"):

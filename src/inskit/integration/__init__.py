@@ -17,9 +17,9 @@ References: SYSTEM.md §2 and §3; Groves 2013 ch. 14.
 """
 
 from .aiding import GnssSpeedCourse, Height, Odometer, OdometerScale
-from .blocks import (AccelBias, AccelScale, AttitudeError, GyroBias, GyroScale, HeightBias, InitialUncertainty,
-                     LeverArm, Mounting, PositionError, SensorNoise, StateBlock, TimeOffset, VelocityError,
-                     ins_blocks)
+from .blocks import (AccelBias, AccelScale, AttitudeError, GnssPositionError, GyroBias, GyroScale, HeightBias,
+                     InitialUncertainty, LeverArm, Mounting, PositionError, SensorNoise, StateBlock, TimeOffset,
+                     VelocityError, ins_blocks)
 from .engine import FilterOutput, FilterSettings, Track, run_filter
 from .layout import StateLayout
 from .measurements import (GnssPosition, GnssVelocity, Measurement, NonHolonomic, UpdateContext, ZeroVelocity,
@@ -30,7 +30,8 @@ from .uncoupled import run_uncoupled
 __all__ = [
     "GnssSpeedCourse", "Height", "HeightBias", "Odometer", "OdometerScale",
     "AccelBias", "AccelScale", "AttitudeError", "FilterOutput", "FilterSettings", "GnssPosition", "GnssVelocity",
-    "GyroBias", "GyroScale", "InitialUncertainty", "LeverArm", "Measurement", "Mounting", "NonHolonomic", "PositionError",
+    "GnssPositionError", "GyroBias", "GyroScale", "InitialUncertainty", "LeverArm", "Measurement", "Mounting",
+    "NonHolonomic", "PositionError",
     "SensorNoise", "StateBlock", "StateLayout", "TimeOffset", "Track", "UpdateContext", "VelocityError",
     "ZeroVelocity", "ins_blocks", "perturbed_context", "rts_smooth", "run_filter", "run_uncoupled",
 ]

@@ -321,6 +321,31 @@ def mounting_dcm(pitch, yaw):
     return C, d_p, d_y
 
 
+class GnssPositionError(_Named):
+    """Time-correlated error of the GNSS position fixes, north, east, down
+    [m]: a first-order Gauss-Markov process of steady-state ``sigma`` and
+    correlation time ``tau_s`` (PSD ``2 sigma^2 / tau``), its estimate
+    carried between the fixes by its own decay ``exp(-dt / tau)``.
+
+    A fix is ``p_antenna + e + w`` with ``w`` the white noise of its own
+    sigma: carrier-phase fixes wander by centimetres over seconds
+    (multipath, the residual atmosphere), which a white-noise model at 5
+    fixes a second would take as information about the INS.  Modelling the
+    correlated part as states is the standard remedy for time-correlated
+    measurement noise (state augmentation, Brown & Hwang 2012 §8.2; Groves
+    2013 §14.2.7).  :class:`.measurements.GnssPosition` finds the block by
+    its name ``"gnss_err"``: ``h = ... + e``, ``H_e = I``.
+    """
+
+    _est_names = ("gnss_err_n_m", "gnss_err_e_m", "gnss_err_d_m")
+    _sig_names = ("sigma_gnss_err_n_m", "sigma_gnss_err_e_m", "sigma_gnss_err_d_m")
+
+    def __init__(self, sigma, tau_s):
+        super().__init__("gnss_err", ("n", "e", "d"), "m", sigma, 2.0 * sigma**2 / tau_s, tau_s,
+                         estimate0=np.zeros(3), predict_estimate=True,
+                         description="time-correlated error of the GNSS position fixes")
+
+
 class Mounting(_Named):
     """Boresight (mounting) angles of the vehicle axes against the IMU body
     axes [rad], pitch and yaw: a random constant with a slow random walk of

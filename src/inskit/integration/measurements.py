@@ -209,7 +209,9 @@ class GnssPosition:
 
     with ``a = l_b + (omega x l_b) tau``.  ``l_b`` is the ``lever`` block's
     estimate when the layout holds one, else ``lever_arm_b``; the offset is
-    the ``time_offset`` block's estimate, else 0.
+    the ``time_offset`` block's estimate, else 0.  With a ``gnss_err`` block
+    (:class:`.blocks.GnssPositionError`, the fixes' time-correlated error)
+    its estimate is added to the prediction, ``H_gnss_err = I``.
 
     Parameters
     ----------
@@ -260,12 +262,16 @@ class GnssPosition:
         nu = ned_difference(ctx.lla, self.gnss.lla[row]) + cl + v_ant * tau
         if off is not None:
             H[:, lay.slice("time_offset")] = v_ant[:, None]
+        err = ctx.estimate("gnss_err")
+        if err is not None:
+            nu = nu + err
+            H[:, lay.slice("gnss_err")] = np.eye(3)
         return nu, H, np.diag(self.sigma[row] ** 2)
 
     def compiled(self, layout):
         """:meth:`linearize` in compiled form (:mod:`._updates`): per row the
-        fix and its sigmas."""
-        if not compiled_form_applies(self, GnssPosition):
+        fix and its sigmas; with a ``gnss_err`` block, the Python path."""
+        if not compiled_form_applies(self, GnssPosition) or "gnss_err" in layout:
             return None
         return U.spec(U.KIND_GNSS_POS, 3, np.column_stack([self.gnss.lla, self.sigma]), self.lever_arm_b)
 

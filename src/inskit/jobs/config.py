@@ -99,7 +99,8 @@ GNSS_RINEX_KEYS = ("obs", "nav", "systems", "mask_deg", "iono", "tropo")
 #: [gnss] keys used only when pseudoranges are fused (tight coupling)
 GNSS_TIGHT_KEYS = ("use_doppler", "pseudorange_sigma_scale", "doppler_sigma_scale", "clock_h0", "clock_h_2")
 #: [gnss] keys that describe fixes fused by loose coupling
-GNSS_LOOSE_KEYS = ("use_velocity", "velocity_delay_s", "velocity_sigma_scale", "sigma_floor_m")
+GNSS_LOOSE_KEYS = ("use_velocity", "velocity_delay_s", "velocity_sigma_scale", "sigma_floor_m", "error_sigma_m",
+                   "error_tau_s")
 #: [gnss] keys that describe how ``file`` is read
 GNSS_FILE_KEYS = ("format", "quality", "time_offset_s")
 
@@ -122,8 +123,9 @@ class GnssSection(_Strict):
     iono, tropo) and the tight-coupling keys (use_doppler, the sigma scales,
     clock_h0, clock_h_2) with loose coupling and a ``file``; the
     tight-coupling keys with loose coupling from RINEX; the loose-coupling keys
-    (use_velocity, velocity_delay_s, velocity_sigma_scale, sigma_floor_m)
-    with tight coupling; format, quality and time_offset_s without a ``file``.
+    (use_velocity, velocity_delay_s, velocity_sigma_scale, sigma_floor_m,
+    error_sigma_m, error_tau_s) with tight coupling; format, quality and
+    time_offset_s without a ``file``; error_tau_s without error_sigma_m.
     """
 
     coupling: Literal["loose", "tight"] = Field(
@@ -150,6 +152,11 @@ class GnssSection(_Strict):
                                         "sigmas")
     sigma_floor_m: float = Field(0.0, ge=0, description="loose coupling: lower bound on the fixes' position sigmas "
                                  "(0: as the file gives them)")
+    error_sigma_m: float | None = Field(None, gt=0, description="loose coupling: steady-state sigma of a "
+                                        "time-correlated (Gauss-Markov) error of the fixes, north, east, down, "
+                                        "estimated as 3 states (default: none, the fixes' errors are white)")
+    error_tau_s: float = Field(10.0, gt=0, description="loose coupling: correlation time of that error [s] "
+                               "(with error_sigma_m)")
     obs: Path | None = Field(None, description="RINEX 2/3 observation file (tight coupling, or loose coupling "
                              "on our own single-point fixes)")
     nav: Path | None = Field(None, description="RINEX 2/3 navigation file with the broadcast ephemerides")
@@ -208,6 +215,9 @@ class GnssSection(_Strict):
                                  f"{_they(bad, 'it describes', 'they describe')} fixes fused by loose coupling; "
                                  "with coupling = \"tight\" the fixes are only the reference for start-up and "
                                  "scoring (tune use_doppler and the sigma scales instead)")
+        if self.error_sigma_m is None and _changed(self, ("error_tau_s",)):
+            raise _key_error("error_tau_s", "gnss.error_tau_s would be ignored: the fixes' correlated error is "
+                             "modelled only with gnss.error_sigma_m")
         if self.file is None:
             bad = _changed(self, GNSS_FILE_KEYS)
             if bad:

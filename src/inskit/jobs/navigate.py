@@ -622,6 +622,10 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
 
         extra_blocks.append(Mounting(cfg.constraints.sigma_mounting_deg * DEG,
                                      cfg.constraints.mounting_rw_deg_sqrt_h * DEG / 60.0))
+    if cfg.gnss.error_sigma_m is not None and not tight:
+        from ..integration import GnssPositionError
+
+        extra_blocks.append(GnssPositionError(cfg.gnss.error_sigma_m, cfg.gnss.error_tau_s))
     height = None
     if cfg.height is not None:  # a barometer or a height profile, with its offset state
         from .height import height_aiding
