@@ -47,7 +47,7 @@ def test_summary_keys_contract(result):
         assert isinstance(s[k], float)
         assert isinstance(s["forward"][k], float)
     assert s["solution"] == "smoothed"
-    assert s["states"] == 23  # 21 + the two mounting states of examples/drive_0708.toml
+    assert s["states"] == 26  # 21 + the two mounting states and the three GNSS error states of examples/drive_0708.toml
 
 
 def test_no_mounting_warning_on_the_drive(drive_inputs):
