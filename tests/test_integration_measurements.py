@@ -101,7 +101,7 @@ def test_nhc_lever_arm_takes_the_constraint_at_the_wheel_point(mounting):
     ctx = context(layout=lay)
     lev = np.array([1.2, -0.3, 0.8])
     m = NonHolonomic([(0, 200)], 10.0, 0.1, lever_arm_b=lev)
-    assert m.compiled(lay) is None  # the Python path
+    assert m.compiled(lay) is not None  # compiled too (tests/test_integration_updates.py: the same nu, H, R)
     nu, H, _ = m.linearize(ctx, 0)
     J = numerical_jacobian(m, ctx, 0, EPS)
     scale = np.abs(J).max(axis=1, keepdims=True)
@@ -132,7 +132,7 @@ def test_gnss_position_error_block_adds_its_estimate_and_decays_between_fixes():
     J = numerical_jacobian(m, ctx, 0, dict(EPS, gnss_err=1e-3))
     scale = np.abs(J).max(axis=1, keepdims=True)
     assert np.all(np.abs(H - J) <= 1e-6 * scale + 1e-9)
-    assert m.compiled(lay) is None and m.compiled(LAY) is not None
+    assert m.compiled(lay) is not None and m.compiled(LAY) is not None  # compiled with the block too
     idx, F = lay.estimate_dynamics()
     assert list(idx) == list(range(lay.aux_slice("gnss_err").start, lay.aux_slice("gnss_err").stop))
     assert np.allclose(F, -np.eye(3) / 10.0)

@@ -334,3 +334,42 @@ def test_nhc_in_the_vehicles_axes_linearizes_as_its_python_plugin():
     for a, b, what in zip(got, want, ("nu", "H", "R")):
         assert np.abs(a - b).max() <= 1e-12 * max(np.abs(b).max(), 1.0), what
     assert Odometer([100.0], [14.8], 0.05).compiled(lay) is None
+
+
+@pytest.mark.parametrize("mounted", [False, True], ids=["imu-axes", "vehicle-axes"])
+@pytest.mark.parametrize("layout_kind", ["15-state", "21-state"])
+def test_nhc_with_a_lever_arm_linearizes_as_its_python_plugin(mounted, layout_kind):
+    """The constraint at the rear axle (``lever_arm_b``): the compiled NHC adds ``omega x l_b`` and the gyro
+    bias and scale-factor columns as NonHolonomic.linearize does, in the IMU's or the vehicle's axes."""
+    from inskit.integration import Mounting
+
+    blocks = ins_blocks(NOISE, scale_factors=layout_kind == "21-state") + ([Mounting()] if mounted else [])
+    lay = StateLayout(blocks)
+    ctx = full_context(lay)
+    if mounted:
+        ctx.aux[lay.aux_slice("mounting")] = [np.radians(3.5), np.radians(-1.7)]
+    m = NonHolonomic([(99.0, 101.0)], 10.0, 0.1, lever_arm_b=[0.06, -0.2, 0.79])
+    want = m.linearize(ctx, 0)
+    got = compiled_linearize(m, ctx)
+    assert np.abs(want[1][:, lay.slice("bg")]).max() > 0.1  # the lever arm's rate columns are there
+    base = NonHolonomic([(99.0, 101.0)], 10.0, 0.1).linearize(ctx, 0)
+    assert np.abs(want[0] - base[0]).max() > 2e-3  # and it moves the innovation (omega x l: 4 mm/s here)
+    for a, b, what in zip(got, want, ("nu", "H", "R")):
+        assert np.abs(a - b).max() <= 1e-12 * max(np.abs(b).max(), 1.0), what
+
+
+def test_gnss_position_with_its_correlated_error_linearizes_as_its_python_plugin():
+    """With a ``gnss_err`` block (GnssPositionError, a non-zero estimate) the compiled GNSS position adds the
+    estimate to the prediction and its identity columns, as GnssPosition.linearize does."""
+    from inskit.integration import GnssPositionError
+
+    lay = StateLayout(ins_blocks(NOISE, scale_factors=True, lever_arm=True, time_offset=True)
+                      + [GnssPositionError(0.03, 10.0)])
+    ctx = full_context(lay)
+    ctx.aux[lay.aux_slice("gnss_err")] = [0.02, -0.015, 0.04]
+    m = kinds_of(ctx.lla)[0]
+    want = m.linearize(ctx, 0)
+    got = compiled_linearize(m, ctx)
+    assert np.array_equal(want[1][:, lay.slice("gnss_err")], np.eye(3))
+    for a, b, what in zip(got, want, ("nu", "H", "R")):
+        assert np.abs(a - b).max() <= 1e-12 * max(np.abs(b).max(), 1.0), what

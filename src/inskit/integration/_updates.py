@@ -54,6 +54,7 @@ RANGE_WIDTH = 10
 # layout index array (layout_index): state and aux starts of the blocks found by name (-1 if absent)
 L_X_LEVER, L_A_LEVER, L_X_TOFF, L_A_TOFF, L_X_ODO, L_A_ODO, L_X_CLOCK, L_A_CLOCK = 0, 1, 2, 3, 4, 5, 6, 7
 L_X_MOUNT, L_A_MOUNT = 8, 9
+L_X_GERR, L_A_GERR = 10, 11
 # loop state (ctl) of run_nodes
 C_I, C_KDONE, C_IN_NODE, C_KCUR, C_NODE, C_NROW, C_NREC, C_NRECOV, C_KSTOP, C_NFLAT = 0, 1, 2, 3, 4, 5, 6, 7, 8, 9
 C_SIZE = 10
@@ -108,41 +109,42 @@ def spec(kind, k, data, par, index=None, per_row=False):
 
 def layout_index(layout):
     """int64 ``[x_lever, a_lever, x_time_offset, a_time_offset, x_odo_scale,
-    a_odo_scale, x_clock, a_clock, x_mounting, a_mounting]``: state start
+    a_odo_scale, x_clock, a_clock, x_mounting, a_mounting, x_gnss_err,
+    a_gnss_err]``: state start
     (when the layout holds the block) and aux start (when the block carries
     an estimate) of the blocks the measurements find by name; -1 if absent."""
     out = []
-    for name in ("lever", "time_offset", "odo_scale", "clock", "mounting"):
+    for name in ("lever", "time_offset", "odo_scale", "clock", "mounting", "gnss_err"):
         s, a = layout.slice(name), layout.aux_slice(name)
         out += [-1 if s is None else s.start, -1 if a is None else a.start]
     return np.array(out, dtype=np.int64)
 
 
 @njit(cache=True, error_model="numpy", no_cpython_wrapper=True)
-def _nhc_mounted(v_n, C, pitch, yaw, Sk, xm, nu, H):
-    """The non-holonomic rows in the vehicle's axes, ``v_v = C_vb C_bn v_n``
+def _nhc_mounted(v_n, v_o, C, pitch, yaw, Sk, xm, nu, H, M):
+    """The non-holonomic rows in the vehicle's axes, ``v_v = C_vb v_o`` (``v_o
+    = C_bn v_n + omega x l_b``, the body velocity at the constraint's point)
     with ``C_vb`` of :func:`.blocks.mounting_dcm` (written out: the same
     matrix and derivatives), as :meth:`.measurements.NonHolonomic.linearize`
     with a ``mounting`` block: ``H_vel = C_vn[1:3]``, ``H_att = -(C_vn [v_n
-    x])[1:3]``, ``H_mounting = [dC/dpitch v_b, dC/dyaw v_b][1:3]``."""
+    x])[1:3]``, ``H_mounting = [dC/dpitch v_o, dC/dyaw v_o][1:3]``; rows 1, 2
+    of ``C_vb`` into ``M[0:2]`` (for the lever arm's rate columns)."""
     cp, sp, cy, sy = np.cos(pitch), np.sin(pitch), np.cos(yaw), np.sin(yaw)
     Cv = np.array([[cp * cy, cp * sy, -sp], [-sy, cy, 0.0], [sp * cy, sp * sy, cp]])
     Dp = np.array([[-sp * cy, -sp * sy, -cp], [0.0, 0.0, 0.0], [cp * cy, cp * sy, -sp]])
     Dy = np.array([[-cp * sy, cp * cy, 0.0], [-cy, -sy, 0.0], [-sp * sy, sp * cy, 0.0]])
-    v_b = np.empty(3)
-    for i in range(3):
-        v_b[i] = C[0, i] * v_n[0] + C[1, i] * v_n[1] + C[2, i] * v_n[2]
     for r in range(2):
         b = r + 1
         cvn = np.empty(3)
         for j in range(3):  # C_vn[b, j] = sum_i C_vb[b, i] C_bn[i, j], C_bn[i, j] = C[j, i]
             cvn[j] = Cv[b, 0] * C[j, 0] + Cv[b, 1] * C[j, 1] + Cv[b, 2] * C[j, 2]
-        nu[r] = Cv[b, 0] * v_b[0] + Cv[b, 1] * v_b[1] + Cv[b, 2] * v_b[2]
+            M[r, j] = Cv[b, j]
+        nu[r] = Cv[b, 0] * v_o[0] + Cv[b, 1] * v_o[1] + Cv[b, 2] * v_o[2]
         for j in range(3):
             H[r, K.V0 + j] = cvn[j]
             H[r, K.T0 + j] = -(cvn[0] * Sk[0, j] + cvn[1] * Sk[1, j] + cvn[2] * Sk[2, j])
-        H[r, xm] = Dp[b, 0] * v_b[0] + Dp[b, 1] * v_b[1] + Dp[b, 2] * v_b[2]
-        H[r, xm + 1] = Dy[b, 0] * v_b[0] + Dy[b, 1] * v_b[1] + Dy[b, 2] * v_b[2]
+        H[r, xm] = Dp[b, 0] * v_o[0] + Dp[b, 1] * v_o[1] + Dp[b, 2] * v_o[2]
+        H[r, xm + 1] = Dy[b, 0] * v_o[0] + Dy[b, 1] * v_o[1] + Dy[b, 2] * v_o[2]
 
 
 # --- linearization by kind ------------------------------------------------------------
@@ -221,22 +223,40 @@ def linearize(kind, d, par, dt, lla, v_n, C, w_raw, aux, kidx, lidx, nu, H, R, v
             R[i, i] = s2
         return True
     if kind == KIND_NHC:
-        # v_b = C^T v_n; rows 1, 2: H_vel = C_bn[1:3], H_att = -(C_bn [v_n x])[1:3]
+        # v_o = C^T v_n (+ omega x l_b, par[1:4], at the constraint's point); rows 1, 2:
+        # H_vel = C_vn[1:3], H_att = -(C_vn [v_n x])[1:3], H_rate = -(C_vb [l_b x])[1:3]
         _skew_into(v_n, Sk)
         s2 = par[0] * par[0]
         xm = lidx[L_X_MOUNT]
+        for i in range(3):
+            v3[i] = C[0, i] * v_n[0] + C[1, i] * v_n[1] + C[2, i] * v_n[2]
+        lever = par.shape[0] >= 4 and (par[1] != 0.0 or par[2] != 0.0 or par[3] != 0.0)
+        if lever:
+            for i in range(3):
+                lev[i] = par[1 + i]
+            _body_rate(w_raw, aux, kidx, w, sf)
+            _cross_into(w, lev, wl)
+            for i in range(3):
+                v3[i] += wl[i]
         if xm >= 0:  # in the vehicle's axes (NonHolonomic.linearize with a mounting block)
-            _nhc_mounted(v_n, C, aux[lidx[L_A_MOUNT]], aux[lidx[L_A_MOUNT] + 1], Sk, xm, nu, H)
-            R[0, 0] = s2
-            R[1, 1] = s2
-            return True
-        for r in range(2):
-            b = r + 1
-            nu[r] = C[0, b] * v_n[0] + C[1, b] * v_n[1] + C[2, b] * v_n[2]
-            for j in range(3):
-                H[r, K.V0 + j] = C[j, b]
-                H[r, K.T0 + j] = -(C[0, b] * Sk[0, j] + C[1, b] * Sk[1, j] + C[2, b] * Sk[2, j])
-            R[r, r] = s2
+            _nhc_mounted(v_n, v3, C, aux[lidx[L_A_MOUNT]], aux[lidx[L_A_MOUNT] + 1], Sk, xm, nu, H, M)
+        else:
+            for r in range(2):
+                b = r + 1
+                nu[r] = v3[b]
+                for j in range(3):
+                    H[r, K.V0 + j] = C[j, b]
+                    H[r, K.T0 + j] = -(C[0, b] * Sk[0, j] + C[1, b] * Sk[1, j] + C[2, b] * Sk[2, j])
+                    M[r, j] = 1.0 if j == b else 0.0
+        if lever:  # M[0:2] holds rows 1, 2 of C_vb: into -(C_vb [l_b x])[1:3]
+            _skew_into(lev, Sk)
+            for r in range(2):
+                m0, m1, m2 = M[r, 0], M[r, 1], M[r, 2]
+                for j in range(3):
+                    M[r, j] = -(m0 * Sk[0, j] + m1 * Sk[1, j] + m2 * Sk[2, j])
+            _rate_columns(H, 2, M, sf, w, kidx)
+        R[0, 0] = s2
+        R[1, 1] = s2
         return True
     if kind == KIND_GNSS_POS:
         # d: lla (3), sigma (3); par: lever arm (3)
@@ -291,6 +311,11 @@ def linearize(kind, d, par, dt, lla, v_n, C, w_raw, aux, kidx, lidx, nu, H, R, v
         for i in range(3):
             nu[i] = tmp[i] + cl[i] + v_ant[i] * tau
             R[i, i] = d[3 + i] * d[3 + i]
+        xg, ag = lidx[L_X_GERR], lidx[L_A_GERR]
+        if xg >= 0 and ag >= 0:  # the fixes' time-correlated error (blocks.GnssPositionError): h = ... + e, H_e = I
+            for i in range(3):
+                nu[i] = nu[i] + aux[ag + i]
+                H[i, xg + i] = 1.0
         if atoff >= 0:
             xt = lidx[L_X_TOFF]
             for i in range(3):

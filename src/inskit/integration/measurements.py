@@ -270,8 +270,8 @@ class GnssPosition:
 
     def compiled(self, layout):
         """:meth:`linearize` in compiled form (:mod:`._updates`): per row the
-        fix and its sigmas; with a ``gnss_err`` block, the Python path."""
-        if not compiled_form_applies(self, GnssPosition) or "gnss_err" in layout:
+        fix and its sigmas (a ``gnss_err`` block found by the kernel)."""
+        if not compiled_form_applies(self, GnssPosition):
             return None
         return U.spec(U.KIND_GNSS_POS, 3, np.column_stack([self.gnss.lla, self.sigma]), self.lever_arm_b)
 
@@ -421,11 +421,11 @@ class NonHolonomic(_GridMeasurement):
         return (C_vb @ v_o)[1:3], H, np.eye(2) * self.sigma**2
 
     def compiled(self, layout):
-        """:meth:`linearize` in compiled form (:mod:`._updates`); with a
-        lever arm, the Python path (0.2 s of a 9 min drive at 10 Hz)."""
-        if not compiled_form_applies(self, NonHolonomic) or self.lever_arm_b.any():
+        """:meth:`linearize` in compiled form (:mod:`._updates`): the sigma and
+        the lever arm."""
+        if not compiled_form_applies(self, NonHolonomic):
             return None
-        return U.spec(U.KIND_NHC, 2, np.empty((len(self._t), 0)), self.sigma)
+        return U.spec(U.KIND_NHC, 2, np.empty((len(self._t), 0)), np.r_[self.sigma, self.lever_arm_b])
 
 
 def numerical_jacobian(meas, ctx: UpdateContext, row=0, steps=None):
