@@ -208,3 +208,22 @@ def test_read_solution_until_reads_the_head_only(tmp_path, kind):
         p.write_text("\n".join(lines) + "\n")
         with pytest.raises(InputError, match=r"line 6: duplicate timestamp"):
             C.read_solution(p, until_s=60.0)
+
+
+def test_a_utf8_bom_before_the_header_is_no_part_of_the_first_name(tmp_path):
+    """Windows editors save CSV with a byte-order mark: the lean path's header must not keep it in 'time_s'
+    (the GNSS reader then refused the file, 'missing column(s) time_s; found \\ufefftime_s')."""
+    gnss = ("time_s,lat_deg,lon_deg,height_m,sigma_n_m,sigma_e_m,sigma_d_m\n"
+            "0,45,7,300,0.5,0.5,1\n1,45.00001,7,300,0.5,0.5,1\n")
+    plain, bom = tmp_path / "plain.csv", tmp_path / "bom.csv"
+    plain.write_text(gnss)
+    bom.write_bytes(b"\xef\xbb\xbf" + gnss.replace("\n", "\r\n").encode())
+    assert C._header_names(bom)[0] == "time_s"
+    a, b = C.read_gnss(plain), C.read_gnss(bom)
+    assert np.array_equal(a.time, b.time) and np.array_equal(a.lla, b.lla)
+    t, dth, dv = _increments(200)
+    p = tmp_path / "imu.csv"
+    _write(p, t, dth, dv)
+    q = tmp_path / "imu_bom.csv"
+    q.write_bytes(b"\xef\xbb\xbf" + p.read_bytes())
+    assert np.array_equal(C.read_imu(q).dtheta_b, C.read_imu(p).dtheta_b)

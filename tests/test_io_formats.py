@@ -121,3 +121,16 @@ def test_the_lean_readers_of_the_real_logs_agree_with_the_pandas_way(monkeypatch
         assert sow[i] == pytest.approx(whole % 604800 + d.microseconds * 1e-6, abs=1e-9)
     with pytest.raises(InputError, match="expected YYYY/MM/DD HH:MM:SS.sss"):
         rtklib.gps_week_seconds(["2025/07/08 19:34:24.5", "2025/07/32 01:00:00.0"])
+
+
+def test_a_byte_order_mark_does_not_hide_the_format(tmp_path):
+    """A log saved by a Windows editor starts with a BOM: its header is still recognised."""
+    import gzip
+
+    p = tmp_path / "imu.csv"
+    p.write_bytes(b"\xef\xbb\xbf" + gzip.decompress(DRIVE_IMU.read_bytes())[:4000].rsplit(b"\n", 1)[0] + b"\n")
+    assert detect_imu_format(p) == "rtklibexplorer"
+    q = tmp_path / "gnss.pos"
+    q.write_bytes(b"\xef\xbb\xbf" + gzip.decompress(DRIVE_POS.read_bytes()))
+    assert detect_gnss_format(q) == "rtklib-pos"
+    assert len(io.read_gnss(q)) == 2197

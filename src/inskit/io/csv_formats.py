@@ -117,7 +117,7 @@ def _header_names(path):
     if not head.endswith(b"\n"):
         return None
     try:
-        names = head.decode().rstrip("\r\n").split(",")
+        names = head.decode("utf-8-sig").rstrip("\r\n").split(",")  # a BOM (Windows editors) is no part of a name
     except UnicodeDecodeError:
         return None
     return names if len(names) > 1 and all(n and n == n.strip() for n in names) else None

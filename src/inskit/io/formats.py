@@ -56,8 +56,9 @@ def _open(path):
     """A text handle on ``path``, gzip recognised by its first bytes."""
     with open(path, "rb") as fh:
         gz = fh.read(2) == b"\x1f\x8b"
-    return gzip.open(path, "rt", encoding="utf-8", errors="replace") if gz else open(
-        path, encoding="utf-8", errors="replace")
+    # utf-8-sig: a byte-order mark (Windows editors) is no part of the first line
+    return gzip.open(path, "rt", encoding="utf-8-sig", errors="replace") if gz else open(
+        path, encoding="utf-8-sig", errors="replace")
 
 
 def _first_lines(path, n=_PEEK_LINES) -> list:

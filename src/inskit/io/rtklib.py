@@ -75,15 +75,18 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
         raise InputError(f"{path}: no such file")
     header = None
     rows = []
-    opener = _open_text(path)
-    with opener as fh:
-        for lineno, line in enumerate(fh, start=1):
-            if line.startswith("%"):
-                if "latitude" in line:
-                    header = line[1:].split()
-                continue
-            if line.strip():
-                rows.append((lineno, line.split()))
+    try:
+        with _open_text(path) as fh:
+            for lineno, line in enumerate(fh, start=1):
+                if line.startswith("%"):
+                    if "latitude" in line:
+                        header = line[1:].split()
+                    continue
+                if line.strip():
+                    rows.append((lineno, line.split()))
+    except (EOFError, OSError) as exc:  # a truncated or damaged gzip file
+        raise InputError(f"{path}: not a readable .pos file ({str(exc).splitlines()[0]}): truncated or "
+                         "damaged?") from None
     if header is None:
         raise InputError(f"{path}: no '%  GPST latitude(deg) ...' header line: not an RTKLIB lat/lon .pos file")
     if not rows:
@@ -162,11 +165,15 @@ def _floats(text):
 
 
 def _open_text(path):
-    if str(path).endswith(".gz"):
+    """A text handle on ``path``: gzip recognised by its first bytes (not
+    its name), a byte-order mark dropped, an undecodable byte replaced."""
+    with open(path, "rb") as fh:
+        gz = fh.read(2) == b"\x1f\x8b"
+    if gz:
         import gzip
 
-        return gzip.open(path, "rt")
-    return open(path, encoding="utf-8", errors="replace")
+        return gzip.open(path, "rt", encoding="utf-8-sig", errors="replace")
+    return open(path, encoding="utf-8-sig", errors="replace")
 
 
 def mount_dcm(mount_rpy):
