@@ -293,3 +293,45 @@ def test_the_program_ends_fast_yet_runs_exit_handlers_and_keeps_its_status(tmp_p
     run = subprocess.run([sys.executable, "-m", "cProfile", "-o", str(prof), "-m", "inskit.cli", "--version"],
                          capture_output=True, text=True)
     assert run.returncode == 0 and prof.is_file() and prof.stat().st_size > 1000
+
+
+def _in_process(capsys, *args):
+    """``inskit ARGS`` through the entry point, in process: (exit code, stdout, stderr)."""
+    import warnings
+
+    from inskit.cli import main
+
+    with warnings.catch_warnings(), np.errstate():  # main() silences both for the process: not beyond here
+        try:
+            main([str(a) for a in args])
+            code = 0
+        except SystemExit as exc:
+            code = exc.code
+    out = capsys.readouterr()
+    return code, out.out, out.err
+
+
+@pytest.mark.parametrize("argv", [
+    ["simulate", "s.toml", "--out", "o", "--seed", "-1"],
+    ["schemes", "s.toml", "--outage", "1,2", "--seed", "-1"],
+    ["consistency", "s.toml", "--seed", "-1"],
+    ["gyrofree", "simulate", "source003", "--layout", "ten", "--out", "o", "--seed", "-1"],
+])
+def test_a_negative_seed_is_a_usage_error_not_a_bug(capsys, argv):
+    """It reached numpy's default_rng: 'internal error: ValueError: expected non-negative integer', exit 3."""
+    code, out, err = _in_process(capsys, *argv)
+    assert code == 2 and out == "" and "--seed" in err and "internal error" not in err, err
+
+
+def test_an_end_of_file_out_of_a_command_is_a_user_error_not_an_abort(capsys, monkeypatch):
+    """click turns an EOFError into Abort ('inskit: aborted', exit 130, as for Ctrl-C); a truncated gzip file
+    that a reader does not catch raises one, and it is the user's input, said in one line, exit 2."""
+    def truncated(*a, **k):
+        raise EOFError("Compressed file ended before the end-of-stream marker was reached")
+
+    import inskit.alignment as A
+
+    monkeypatch.setattr(A, "align_static", truncated)
+    code, out, err = _in_process(capsys, "align", __file__, "--lat", "45")
+    assert code == 2 and out == "", err
+    assert err.startswith("inskit: error: an input file ended early (Compressed file ended") and err.count("\n") == 1

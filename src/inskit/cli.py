@@ -18,6 +18,7 @@ import numpy as np
 from . import __version__
 from .cli_output import emit as _emit
 from .cli_output import log as _log
+from .cli_output import SEED
 from .errors import InputError, InskitError
 from .units import DEG
 
@@ -35,7 +36,19 @@ def _progress(total, desc):
                 disable=not sys.stderr.isatty(), leave=False)
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class _Group(click.Group):
+    """The top group: an ``EOFError`` out of a command (a truncated gzip file
+    a reader did not catch) is a user error, not click's ``Abort`` ("inskit:
+    aborted", exit 130, as for Ctrl-C)."""
+
+    def invoke(self, ctx):
+        try:
+            return super().invoke(ctx)
+        except EOFError as exc:
+            raise InputError(f"an input file ended early ({exc or 'end of file'}): truncated or damaged?") from None
+
+
+@click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="inskit")
 def cli():
     """inskit: inertial navigation and INS/GNSS integration."""
@@ -385,7 +398,7 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
 @cli.command()
 @click.argument("scenario_file", type=click.Path(dir_okay=False))
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Output folder.")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed of every random draw.")
+@click.option("--seed", type=SEED, default=0, show_default=True, help="Seed of every random draw.")
 @click.option("--force", is_flag=True, help="Overwrite files in --out.")
 @click.option("--no-plot", is_flag=True, help="Skip the scenario plot.")
 @click.option("--verify", is_flag=True, help="Also mechanize the ideal IMU (at the rate and at twice it) against the truth.")
@@ -487,7 +500,7 @@ def allan(imu_file, plot_file, toml_file, force, no_unit_check, first_row, as_js
 @cli.command()
 @click.argument("scenario_file", type=click.Path(dir_okay=False))
 @click.option("--outage", required=True, help="GNSS outage START,END in seconds of the scenario.")
-@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--seed", type=SEED, default=0, show_default=True)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def schemes(scenario_file, outage, seed, as_json):
     """Uncoupled, open-loop and closed-loop integration on one simulated run."""
@@ -615,7 +628,7 @@ def reproduce_alignment(out_dir, as_json):
               default="tactical", show_default=True, help="IMU grade of the runs (overrides the scenario's).")
 @click.option("--runs", type=int, default=50, show_default=True)
 @click.option("--duration", type=float, help="Use only the first seconds of the scenario.")
-@click.option("--seed", type=int, default=0, show_default=True)
+@click.option("--seed", type=SEED, default=0, show_default=True)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def consistency(scenario_file, grade, runs, duration, seed, as_json):
     """Monte Carlo consistency (NEES) of the closed-loop filter on a scenario."""

@@ -17,6 +17,7 @@ import click
 
 from .cli_output import emit as _emit
 from .cli_output import log as _log
+from .cli_output import SEED
 
 
 def _f(x, fmt="8.2f"):
@@ -76,7 +77,7 @@ def spp(obs, nav, reference, mask_deg, iono, tropo, systems, no_raim, out_dir, f
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Folder for the figures "
               "(and the simulated blockage drive's files).")
 @click.option("--experiment", type=click.Choice(["walk", "blockage", "all"]), default="all", show_default=True)
-@click.option("--seed", type=int, default=1, show_default=True, help="Seed of the simulated blockage drive.")
+@click.option("--seed", type=SEED, default=1, show_default=True, help="Seed of the simulated blockage drive.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def reproduce_tight(out_dir, experiment, seed, as_json):
     """Tight against loose coupling (source 000: tight coupling works with

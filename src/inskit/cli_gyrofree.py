@@ -21,6 +21,7 @@ import click
 
 from .cli_output import emit as _emit
 from .cli_output import log as _log
+from .cli_output import SEED
 
 from .errors import InputError
 
@@ -61,7 +62,7 @@ def gyrofree():
               help="Random sensing-axis misalignment, 1 sigma per component [mrad].")
 @click.option("--source-theta-deg", help="The source's misalignment angles of m1-m6 [deg], six comma-separated "
               "numbers (eq. 26-36).")
-@click.option("--seed", type=int, default=0, show_default=True, help="Seed of every random draw.")
+@click.option("--seed", type=SEED, default=0, show_default=True, help="Seed of every random draw.")
 @click.option("--force", is_flag=True, help="Overwrite files in --out.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def simulate(scenario, layout_spec, d, out_dir, rate_hz, duration, bias_ug, bias_sigma_ug, noise_ug, scale_ppm,

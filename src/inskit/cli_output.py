@@ -11,6 +11,10 @@ import click
 import numpy as np
 
 
+#: the type of every ``--seed``: NumPy seeds are integers >= 0 (a negative one was an internal error, exit 3)
+SEED = click.IntRange(min=0)
+
+
 def log(msg):
     """A log line on stderr."""
     click.echo(msg, err=True)

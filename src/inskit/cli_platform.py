@@ -18,6 +18,7 @@ import click
 
 from .cli_output import emit as _emit
 from .cli_output import log as _log
+from .cli_output import SEED
 import numpy as np
 
 from .errors import InputError
@@ -53,7 +54,7 @@ def _common(f):
                      show_default=True, help="Earth model of world and computer (sphere: R = 6378 km).")(f)
     f = click.option("--dt", type=float, default=1.0, show_default=True, help="Step of the simulation [s].")(f)
     f = click.option("--duration", type=float, help="Use only the first seconds of the scenario.")(f)
-    f = click.option("--seed", type=int, default=0, show_default=True, help="Seed of every random draw.")(f)
+    f = click.option("--seed", type=SEED, default=0, show_default=True, help="Seed of every random draw.")(f)
     f = click.option("--gyro-drift-deg-h", help="Gyro drifts x,y,z [deg/h], platform axes (default: the scenario's "
                                                 "IMU grade).")(f)
     f = click.option("--accel-bias-ug", help="Accelerometer biases x,y,z [micro-g] (default: the scenario's grade).")(f)
