@@ -19,8 +19,15 @@ def read_toml(path, kind="config"):
     path = Path(path)
     if not path.is_file():
         raise ConfigError(f"{path}: no such {kind} file")
+    raw = path.read_bytes()
     try:
-        data = tomllib.loads(path.read_text())
+        text = raw.decode("utf-8-sig")  # TOML is UTF-8; a byte-order mark (Windows editors) is dropped
+    except UnicodeDecodeError as exc:
+        line = raw[: exc.start].count(b"\n") + 1
+        raise ConfigError(f"{path}: line {line}: byte 0x{raw[exc.start]:02x} is not UTF-8; a {kind} file is UTF-8 "
+                          "text (save it as UTF-8)") from None
+    try:
+        data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: not valid TOML ({exc})") from None
     _refuse_non_finite(data, path, "")
