@@ -124,3 +124,13 @@ def test_run_once_is_picklable_and_any_map_gives_the_same_figures():
     for blk in ("pos", "vel", "att"):
         assert np.array_equal(a["anees"][blk], b["anees"][blk])
     assert np.array_equal(a["bias_normalized"], b["bias_normalized"])
+
+
+@pytest.mark.parametrize("outage", [(1.0, 1e6), (-5.0, 10.0)])
+def test_an_outage_beyond_the_scenario_is_refused(outage):
+    """`inskit schemes --outage 100,130` on a 52 s scenario was 'internal error: IndexError', exit 3."""
+    from inskit.errors import InputError
+
+    sc = load_scenario(EXAMPLES / "static.toml")
+    with pytest.raises(InputError, match=r"--outage .*: the outage must lie within the scenario .*, 0\.\."):
+        compare_schemes(sc, outage)

@@ -234,9 +234,14 @@ def compare_schemes(scenario, outage, seed=0, schemes=("uncoupled", "open", "clo
     """
     from ..simulation.scenario import build_trajectory, gnss_errors, imu_errors
 
+    from ..errors import InputError
+
     rng = np.random.default_rng(seed)
     tr = build_trajectory(scenario, rng)
     t = np.arange(0.0, tr.duration, 1.0 / scenario.imu.rate_hz)
+    if not (0.0 <= outage[0] and outage[1] <= t[-1]):  # the errors are taken at its end
+        raise InputError(f"--outage {outage[0]:g},{outage[1]:g}: the outage must lie within the scenario "
+                         f"{scenario.name!r}, 0..{t[-1]:g} s")
     gravity = scenario.earth.gravity  # the simulation's and the filters' model
     ideal = ideal_imu(tr, t, nodes=scenario.imu.quadrature_nodes, gravity=gravity)
     errs = imu_errors(scenario)
