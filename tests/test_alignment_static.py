@@ -183,3 +183,11 @@ def test_deg_s_read_as_rad_s_is_recognised_at_rest():
     assert not r["heading_usable"]
     r = align_imu(imu, lat, method="accel", grade="tactical")  # the right unit passes, with a heading
     assert r["heading_usable"] and abs(r["yaw_deg"] - 40.1) < 3 * r["yaw_sigma_deg"]
+
+
+@pytest.mark.parametrize("start", [600.0, 5000.0, float("nan")])
+def test_a_start_at_or_past_the_logs_end_is_refused(static_log, start):
+    """`inskit align --start 500` on a 120 s log was 'internal error: ValueError: cannot reshape ...', exit 3."""
+    with pytest.raises(InputError, match=r"imu\.csv: --start .* s is not before the log's end \(the log spans "
+                                         r"0\.000\.\.600\.000 s\)"):
+        align_static(static_log, np.radians(45), t_start=start)

@@ -343,6 +343,9 @@ def align_imu(imu: ImuData, lat, *, method="blend", m=None, t_start=None, t_end=
         raise InputError(f"latitude must be within (-90, 90) deg, got {np.degrees(float(lat)):g}")
     prior = bias_prior(accel_bias_sigma, gyro_bias_sigma, grade)
     a = float(imu.time[0]) if t_start is None else float(t_start)
+    if not a < float(imu.time[-1]):  # beyond the last sample (or NaN): nothing to detect the static end in
+        raise InputError(f"{name}: --start {a:g} s is not before the log's end (the log spans "
+                         f"{float(imu.time[0]):.3f}..{float(imu.time[-1]):.3f} s)")
     if t_end is None:
         b = detect_static_start(imu.slice(int(np.searchsorted(imu.time, a))))
     else:
