@@ -443,3 +443,17 @@ def test_a_streamed_run_that_cannot_write_leaves_nothing(tmp_path, monkeypatch):
         if "res" in locals():
             abort_streams(res)
     assert not [p for p in out.iterdir() if p.name.startswith((".part", "solution"))]
+
+
+@pytest.mark.parametrize("section,fmt,other", [("gnss", "inskit", "rtklib-pos"), ("imu", "inskit", "rtklibexplorer")])
+def test_a_file_of_another_format_than_configured_says_which(section, fmt, other):
+    """[gnss] format defaults to "inskit": the bundled .pos given that way was refused as 'missing column(s)
+    time_s ...' with no word of the format its header shows."""
+    from inskit.errors import InputError
+    from inskit.jobs.navigate import load_inputs
+
+    cfg = load_config(EXAMPLE, {section: {"format": fmt, "mount_rpy_deg": [0.0, 0.0, 0.0]} if section == "imu"
+                                else {"format": fmt}})
+    with pytest.raises(InputError, match=rf"missing column.*; the file looks like the '{other}' format: set "
+                                         rf"\[{section}\] format = \"{other}\" \(or --{section}-format {other}\)"):
+        load_inputs(cfg)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -281,6 +282,24 @@ def spp_fixes(raw: RawGnss) -> GnssData:
     return GnssData(t, g.lla, g.sigma_ned, g.v_n, g.sigma_v_ned)
 
 
+@contextmanager
+def _format_hint(section, path, fmt):
+    """A reader's refusal of ``path`` read as format ``fmt``, with the format
+    its header shows when that is another one (``[gnss] format`` defaults to
+    "inskit": an RTKLIB .pos given by --gnss was refused as 'missing
+    column(s) time_s ...' with no word of the format)."""
+    try:
+        yield
+    except InputError as exc:
+        from ..io.formats import detect_gnss_format, detect_imu_format
+
+        other = (detect_imu_format if section == "imu" else detect_gnss_format)(path)
+        if other is None or other == fmt:
+            raise
+        raise InputError(f"{exc}; the file looks like the {other!r} format: set [{section}] format = \"{other}\" "
+                         f"(or --{section}-format {other})") from None
+
+
 def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = None):
     """Read the IMU and GNSS files on one time base; check they overlap.
 
@@ -296,24 +315,29 @@ def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = N
         gnss = spp_fixes(raw)
     elif cfg.gnss.format == "rtklib-pos":
         gpath = cfg.resolve(cfg.gnss.file)
-        gnss, week_pos = read_pos(gpath, quality=cfg.gnss.quality, time_offset_s=cfg.gnss.time_offset_s)
+        with _format_hint("gnss", gpath, cfg.gnss.format):
+            gnss, week_pos = read_pos(gpath, quality=cfg.gnss.quality, time_offset_s=cfg.gnss.time_offset_s)
         if week0 is not None and week_pos != week0:
             raise InputError(f"{gpath.name} starts in GPS week {week_pos} but {cfg.gnss.obs} in week {week0}")
         week0 = week_pos
     else:
         gpath = cfg.resolve(cfg.gnss.file)
-        g = io.read_gnss(gpath, format="inskit")
+        with _format_hint("gnss", gpath, cfg.gnss.format):
+            g = io.read_gnss(gpath, format="inskit")
         gnss = GnssData(g.time + cfg.gnss.time_offset_s, g.lla, g.sigma_ned, g.v_n, g.sigma_v_ned)
     if cfg.gnss.height_offset_m:
         lla = gnss.lla.copy()
         lla[:, 2] += cfg.gnss.height_offset_m
         gnss = GnssData(gnss.time, lla, gnss.sigma_ned, gnss.v_n, gnss.sigma_v_ned)
     if cfg.imu.format == "rtklibexplorer":
-        imu, _ = read_rtklibexplorer_imu(ipath, week0=week0, time_offset_s=imu_off,
-                                         mount_rpy=np.radians(cfg.imu.mount_rpy_deg),
-                                         check_units=cfg.imu.check_units)
+        with _format_hint("imu", ipath, cfg.imu.format):
+            imu, _ = read_rtklibexplorer_imu(ipath, week0=week0, time_offset_s=imu_off,
+                                             mount_rpy=np.radians(cfg.imu.mount_rpy_deg),
+                                             check_units=cfg.imu.check_units)
     else:
-        raw_imu = io.read_imu(ipath, format="inskit", check_units=cfg.imu.check_units, first_row=cfg.imu.first_row)
+        with _format_hint("imu", ipath, cfg.imu.format):
+            raw_imu = io.read_imu(ipath, format="inskit", check_units=cfg.imu.check_units,
+                                  first_row=cfg.imu.first_row)
         from ..io.rtklib import mount_dcm
 
         C_bs = mount_dcm(np.radians(cfg.imu.mount_rpy_deg))
