@@ -105,3 +105,15 @@ def test_shifted_placements_keep_clear_of_the_protocol_and_the_ends():
     # an outage that would come within 5 s of the last fix is left out of that placement
     late = T.shifted_windows([(140.0, 150.0)], [], 0.0, 156.0, 7.0, 3)
     assert [len(w) for _, w in late] == [1, 1, 0]
+
+
+def test_no_room_for_a_validation_outage_names_start_after_too():
+    """On a log shorter than --start-after (60 s by default) the message told to shorten --hold or --reaid
+    only, which cannot help."""
+    from pathlib import Path
+
+    ex = Path(__file__).resolve().parents[1] / "examples"
+    with pytest.raises(ConfigError, match=r"no room for a validation outage of 10 s .* after the first 1e\+06 s of "
+                                          r"the .* s of fixes; shorten --hold, --reaid or --start-after"):
+        T.tune(ex / "drive_0708.toml", T.parse_grid(["constraints.nhc_sigma_m_s=0.1,0.3"]), hold_s=10.0,
+               start_after_s=1e6, workers=1)

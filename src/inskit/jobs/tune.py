@@ -250,10 +250,12 @@ def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60
     d_hold, d_reaid = default_spacing(protocol)
     hold_s = d_hold if hold_s is None else float(hold_s)
     reaid_s = d_reaid if reaid_s is None else float(reaid_s)
-    val = validation_windows(protocol, 0.0, float(gnss.time[-1]) - t0, hold_s, reaid_s, start_after_s)
+    span = float(gnss.time[-1]) - t0
+    val = validation_windows(protocol, 0.0, span, hold_s, reaid_s, start_after_s)
     if not val:
         raise ConfigError(f"{config_path}: no room for a validation outage of {hold_s:g} s with {reaid_s:g} s of "
-                          "aiding on each side between the protocol's outages; shorten --hold or --reaid")
+                          f"aiding on each side between the protocol's outages, after the first {start_after_s:g} s "
+                          f"of the {span:g} s of fixes; shorten --hold, --reaid or --start-after")
     cands = candidates(grid)
     for p in cands:  # a candidate the config refuses: said now, naming --grid, not halfway through the search
         try:
