@@ -457,3 +457,15 @@ def test_a_file_of_another_format_than_configured_says_which(section, fmt, other
     with pytest.raises(InputError, match=rf"missing column.*; the file looks like the '{other}' format: set "
                                          rf"\[{section}\] format = \"{other}\" \(or --{section}-format {other}\)"):
         load_inputs(cfg)
+
+
+def test_outages_that_leave_fewer_than_two_fixes_name_the_gnss_file():
+    """It said 'fewer than two GNSS fixes are left to use': no file, no count (a one-row file, or windows
+    covering every fix)."""
+    from inskit.errors import InputError
+
+    cfg = load_config(EXAMPLE, {"output": {"plots": False}, "outages": {"protocol": "windows",
+                                                                         "windows_s": [[0.0, 1e6]]}})
+    with pytest.raises(InputError, match=r"gnss_1934_sf\.pos\.gz: \d+ GNSS fix\(es\), 0 of them outside the "
+                                         r"outages; the filter needs at least two"):
+        navigate(cfg)

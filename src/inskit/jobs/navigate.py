@@ -600,7 +600,9 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     windows = outage_windows(cfg, gnss)
     used = ~withheld_mask(gnss.time, windows)
     if used.sum() < 2:
-        raise InputError("fewer than two GNSS fixes are left to use")
+        src = cfg.resolve(cfg.gnss.file if cfg.gnss.file is not None else cfg.gnss.obs)
+        raise InputError(f"{src}: {len(gnss)} GNSS fix(es), {int(used.sum())} of them outside the outages"
+                         "; the filter needs at least two")
     gnss_used = gnss.select(used)
     lever = np.asarray(cfg.gnss.lever_arm_b_m, float)
     startup = None
