@@ -93,3 +93,14 @@ def test_short_and_moving_logs_are_refused():
     with pytest.raises(InputError, match="not static"):
         allan_imu(ImuData(t, np.zeros_like(dv), dv))
 
+
+
+def test_an_irregular_log_names_its_worst_step():
+    from inskit.errors import InputError
+
+    t = np.arange(0.0, 300.0, 0.01)
+    t[15000:] += 7.5  # a gap of 7.5 s after 150 s
+    dv = np.tile([0.0, 0.0, -0.0980665], (len(t), 1))
+    with pytest.raises(InputError, match=r"regularly sampled log .*: a step of 7\.51 s at t = 149\.990 s, the "
+                                         r"median 0\.01 s\)"):
+        allan_imu(ImuData(t, np.zeros_like(dv), dv))

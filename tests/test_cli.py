@@ -335,3 +335,26 @@ def test_an_end_of_file_out_of_a_command_is_a_user_error_not_an_abort(capsys, mo
     code, out, err = _in_process(capsys, "align", __file__, "--lat", "45")
     assert code == 2 and out == "", err
     assert err.startswith("inskit: error: an input file ended early (Compressed file ended") and err.count("\n") == 1
+
+
+def test_init_from_a_file_on_another_time_base_names_both(files, tmp_path, capsys):
+    """It said 'requested times 0.000..0.000 s fall outside the solution span ...': no file, no option."""
+    sol = io.read_solution(files / "truth.csv")
+    io.write_solution(tmp_path / "late.csv", type(sol)(sol.time + 1e3, sol.lla, sol.v_n, sol.q_nb))
+    code, out, err = _in_process(capsys, "mechanize", files / "imu.csv", "--init-from", tmp_path / "late.csv",
+                                 "--out", tmp_path / "sol.csv")
+    assert code == 2 and out == "" and not (tmp_path / "sol.csv").exists()
+    assert "--init-from " in err and "late.csv: spans 1000.000..1059.990 s, but " in err, err
+    assert "imu.csv starts at 0.000 s: mismatched time bases?" in err
+
+
+def test_allan_names_the_log_it_refuses_and_two_outputs_in_one_file(files, tmp_path, capsys):
+    imu = io.read_imu(files / "imu.csv")
+    t = imu.time.copy()
+    t[3000:] += 100.0
+    io.write_imu(tmp_path / "gap.csv", type(imu)(t, imu.dtheta_b, imu.dv_b))
+    code, out, err = _in_process(capsys, "allan", tmp_path / "gap.csv")
+    assert code == 2 and out == "" and "gap.csv: the Allan deviation needs a regularly sampled log" in err, err
+    code, out, err = _in_process(capsys, "allan", files / "imu.csv", "--plot", tmp_path / "a.png",
+                                 "--toml", tmp_path / "a.png", "--force")
+    assert code == 2 and "a.png: given as both --plot and --toml" in err and not (tmp_path / "a.png").exists()

@@ -126,6 +126,9 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
         raise InputError("give either --init or --init-from, not both")
     if init_from:
         ref = io.read_solution(init_from, until_s=float(imu.time[0]))  # the rows around the start only
+        if not ref.time[0] <= imu.time[0] <= ref.time[-1]:  # said of the option and both files (a whole read then)
+            raise InputError(f"--init-from {init_from}: spans {float(ref.time[0]):.3f}..{float(ref.time[-1]):.3f} s, "
+                             f"but {imu_file} starts at {float(imu.time[0]):.3f} s: mismatched time bases?")
         init = ref.interpolate(imu.time[:1]).state(0)
     elif init_text:
         x = _parse_init(init_text)
@@ -468,13 +471,18 @@ def allan(imu_file, plot_file, toml_file, force, no_unit_check, first_row, as_js
 
     _check_plot_file(plot_file, force)
     if toml_file:
+        if plot_file and same_file(toml_file, plot_file):
+            raise InputError(f"{toml_file}: given as both --plot and --toml; choose two files")
         if same_file(toml_file, imu_file):
             raise InputError(f"{toml_file}: is the input of this command; refusing to overwrite it")
         if Path(toml_file).exists() and not force:
             raise InputError(f"{toml_file}: already exists; refusing to overwrite it (use --force)")
         check_folder_writable(Path(toml_file).resolve().parent)
     imu = io.read_imu(imu_file, check_units=not no_unit_check, first_row=first_row)
-    r, rep = allan_report(imu)
+    try:
+        r, rep = allan_report(imu)
+    except InputError as exc:  # what the log is not (regular, long, static): said of the file
+        raise InputError(f"{imu_file}: {exc}") from None
     gyro, acc = rep["gyro"], rep["accel"]
     res = {"file": imu_file, "duration_s": float(imu.time[-1] - imu.time[0]), **rep}
     if plot_file:

@@ -220,9 +220,11 @@ def allan_imu(imu: ImuData):
     [m/s^2], ``gyro_fit`` and ``accel_fit`` (lists of three AllanFit).
     """
     dt = np.diff(imu.time)
-    if np.ptp(dt) > 0.01 * np.median(dt):
-        raise InputError("the Allan deviation needs a regularly sampled log (the time steps vary by more than 1 %)")
     dtm = float(np.median(dt))
+    if np.ptp(dt) > 0.01 * dtm:
+        i = int(np.argmax(np.abs(dt - dtm)))
+        raise InputError(f"the Allan deviation needs a regularly sampled log (the time steps vary by more than 1 %: "
+                         f"a step of {dt[i]:.6g} s at t = {imu.time[i]:.3f} s, the median {dtm:.6g} s)")
     duration = float(imu.time[-1] - imu.time[0])
     if duration < MIN_DURATION_S:
         raise InputError(f"the log lasts {duration:.1f} s; an Allan deviation needs a static log of at least "
