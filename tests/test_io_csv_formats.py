@@ -227,3 +227,25 @@ def test_a_utf8_bom_before_the_header_is_no_part_of_the_first_name(tmp_path):
     q = tmp_path / "imu_bom.csv"
     q.write_bytes(b"\xef\xbb\xbf" + p.read_bytes())
     assert np.array_equal(C.read_imu(q).dtheta_b, C.read_imu(p).dtheta_b)
+
+
+@pytest.mark.parametrize("lean", [True, False])
+def test_a_column_named_twice_is_refused_not_guessed(tmp_path, lean):
+    """gnss.csv with a second lat_deg (all zeros) was read silently with the first one (the lean path; pandas
+    would have renamed the second 'lat_deg.1'): which one the user meant cannot be told."""
+    head = "time_s,lat_deg,lon_deg,height_m,sigma_n_m,sigma_e_m,sigma_d_m,lat_deg\n"
+    rows = "0,45,7,300,0.5,0.5,1,0\n1,45.00001,7,300,0.5,0.5,1,0\n" if lean else "0,45,7,300,0.5,0.5,1,0\n1,,7,300,0.5,0.5,1,0\n"
+    p = tmp_path / "gnss.csv"
+    p.write_text(head + rows)
+    with pytest.raises(InputError, match=r"gnss\.csv: the header names column 'lat_deg' twice \(columns 2 and 8\)"):
+        C.read_gnss(p)
+
+
+def test_a_semicolon_file_with_decimal_commas_gets_the_separator_hint(tmp_path):
+    """European spreadsheets: ';' between fields and ',' in the numbers; the parser's 'Expected 1 fields in
+    line 3, saw 8' came first and hid the hint."""
+    p = tmp_path / "imu.csv"
+    p.write_text("time_s;dtheta_x_rad;dtheta_y_rad;dtheta_z_rad;dv_x_m_s;dv_y_m_s;dv_z_m_s\n"
+                 "0;0;0;0;0;0;0\n0,01;0;0;0;0;0;-0,098\n0,02;0;0;0;0;0;-0,098\n")
+    with pytest.raises(InputError, match=r"imu\.csv: the header .* is one column: the file seems separated by ';'"):
+        C.read_imu(p)

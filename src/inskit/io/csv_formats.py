@@ -67,6 +67,11 @@ def read_table(path) -> tuple:
         return path, df
     with open(path, "rb") as fh:
         gz = fh.read(2) == b"\x1f\x8b"
+    head = _first_line(path)
+    if head is not None and head.replace("\t", " ").isprintable():  # a text header (not binary garbage)
+        if "," not in head and any(sep in head for sep in (";", "\t")):  # before pandas' 'Expected 1 fields'
+            _refuse_separator(path, head)
+        _refuse_repeated_names(path, head.split(","))
     import pandas as pd  # here, not at import: the lean readers and the writers need no pandas
 
     try:
@@ -79,12 +84,46 @@ def read_table(path) -> tuple:
         raise InputError(f"{path}: not a readable CSV file ({str(exc).splitlines()[0]})") from None
     df.columns = [str(c).strip() for c in df.columns]
     if len(df.columns) == 1 and any(sep in df.columns[0] for sep in (";", "\t")):
-        sep = ";" if ";" in df.columns[0] else "tab"
-        raise InputError(f"{path}: the header {df.columns[0]!r} is one column: the file seems separated by "
-                         f"{sep!r}, not by commas; convert it to comma-separated values")
+        _refuse_separator(path, df.columns[0])
     if len(df) == 0:
         raise InputError(f"{path}: has a header but no data rows")
     return path, df
+
+
+def _refuse_separator(path, header):
+    sep = ";" if ";" in header else "tab"
+    raise InputError(f"{path}: the header {header!r} is one column: the file seems separated by "
+                     f"{sep!r}, not by commas; convert it to comma-separated values")
+
+
+def _refuse_repeated_names(path, names):
+    """A header that names a column twice is refused: which of the two a
+    reader took would be a guess (pandas renamed the second 'name.1', the
+    lean path took the first)."""
+    seen = {}
+    for j, n in enumerate(n.strip() for n in names):
+        if n and n in seen:
+            raise InputError(f"{path}: the header names column '{n}' twice (columns {seen[n] + 1} and {j + 1}); "
+                             "each column needs a name of its own")
+        seen.setdefault(n, j)
+
+
+def _first_line(path):
+    """The header line of a CSV file (plain or gzip), decoded, without its
+    line end and byte-order mark; None when it cannot be read as text (the
+    parser then says what is wrong)."""
+    try:
+        if _is_gzip(path):
+            import gzip
+
+            with gzip.open(path, "rb") as fh:
+                head = fh.readline(1 << 16)
+        else:
+            with open(path, "rb") as fh:
+                head = fh.readline(1 << 16)
+        return head.decode("utf-8-sig").rstrip("\r\n")
+    except Exception:  # noqa: BLE001 (a damaged file: the parser says what is wrong)
+        return None
 
 
 def _is_gzip(path) -> bool:
@@ -120,6 +159,8 @@ def _header_names(path):
         names = head.decode("utf-8-sig").rstrip("\r\n").split(",")  # a BOM (Windows editors) is no part of a name
     except UnicodeDecodeError:
         return None
+    if ",".join(names).replace("\t", " ").isprintable():  # a text header (not binary garbage)
+        _refuse_repeated_names(path, names)
     return names if len(names) > 1 and all(n and n == n.strip() for n in names) else None
 
 
