@@ -18,3 +18,29 @@ def test_a_file_that_is_not_utf8_names_its_line(tmp_path):
     p.write_bytes(b"name = \"x\"\n# caf\xe9 (latin-1)\n")
     with pytest.raises(ConfigError, match=r"c\.toml: line 2: byte 0xe9 is not UTF-8; a config file is UTF-8"):
         read_toml(p)
+
+
+@pytest.mark.parametrize("text, field", [
+    ("[imu]\nfile = \"a.csv\"\n[gnss]\nfile = \"g.csv\"\n[noise]\ngyro_arw_deg_sqrt_h = 1e300\n",
+     "noise.gyro_arw_deg_sqrt_h"),
+    ("[imu]\nfile = \"a.csv\"\nmount_rpy_deg = [0.0, -2e20, 0.0]\n[gnss]\nfile = \"g.csv\"\n", "imu.mount_rpy_deg"),
+])
+def test_a_setting_beyond_any_meaning_is_refused_by_name(tmp_path, text, field):
+    """gyro_arw_deg_sqrt_h = 1e300 passed the model and overflowed when squared: 'internal error:
+    OverflowError', exit 3."""
+    from inskit.jobs.config import load_config
+
+    p = tmp_path / "c.toml"
+    p.write_text(text)
+    with pytest.raises(ConfigError, match=rf"c\.toml: field '{field}': .* is beyond \+-1e\+12: no setting means"):
+        load_config(p)
+
+
+def test_a_scenario_speed_beyond_any_meaning_is_refused_by_name(tmp_path):
+    from inskit.simulation.scenario import load_scenario
+
+    p = tmp_path / "s.toml"
+    p.write_text("name = \"s\"\n[start]\nlat_deg = 45\nlon_deg = 7\n[imu]\nrate_hz = 100\n[[segment]]\n"
+                 "type = \"accelerate\"\nspeed_m_s = 1e200\nduration_s = 5\n")
+    with pytest.raises(ConfigError, match=r"field 'segment\.0\.speed_m_s': .*1e\+200 is beyond"):
+        load_scenario(p)

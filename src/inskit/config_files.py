@@ -46,6 +46,23 @@ def _refuse_non_finite(node, path, where):
         raise ConfigError(f"{path}: field '{where}': {node} is not a finite number")
 
 
+#: the largest magnitude a float setting may have: none of ours means more, and a square of more overflows
+#: (gyro_arw_deg_sqrt_h = 1e300 was 'internal error: OverflowError', exit 3)
+MAX_SETTING = 1e12
+
+
+def check_magnitude(v):
+    """A pydantic after-validator for every field (``field_validator("*")``):
+    a float (or one inside a tuple or list) beyond :data:`MAX_SETTING` is
+    refused, naming the value."""
+    items = v if isinstance(v, (tuple, list)) else (v,)
+    for x in items:
+        if isinstance(x, float) and abs(x) > MAX_SETTING:
+            raise ValueError(f"{x:g} is beyond +-{MAX_SETTING:g}: no setting means a value that large (a unit or "
+                             "an exponent slipped?)")
+    return v
+
+
 def validation_message(source, exc: ValidationError):
     """``source: field 'a.b': what is wrong (and N more)``."""
     errors = exc.errors()

@@ -19,9 +19,9 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from ..config_files import read_toml, validation_message
+from ..config_files import check_magnitude, read_toml, validation_message
 from ..errors import ConfigError
 from ..types import GnssData, ImuData, NavSolution
 from ..units import DEG
@@ -33,6 +33,7 @@ from .sensors import ImuErrors, apply_imu_errors, preset
 
 class _S(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    _magnitude = field_validator("*")(check_magnitude)
 
 
 class StartSpec(_S):
