@@ -140,3 +140,16 @@ def test_write_csv_fast_path_writes_integers_exactly(tmp_path):
     p = tmp_path / "i.csv"
     write_csv(p, {"n": np.array([1234567, 2**53 + 1]), "t": np.array([1.5, 2.0])}, "%.6g")
     assert p.read_text() == "n,t\n1234567,1.5\n9007199254740993,2\n"
+
+
+def test_require_file_tells_a_folder_from_a_missing_file(tmp_path):
+    """[imu] file = "sim" (the simulation's folder) said 'sim: no such file'."""
+    from inskit.files import require_file
+
+    (tmp_path / "f.csv").write_text("x\n")
+    assert require_file(tmp_path / "f.csv") == tmp_path / "f.csv"
+    with pytest.raises(InputError, match=r": no such file$"):
+        require_file(tmp_path / "nope.csv")
+    for read in (io.read_imu, io.read_gnss, io.read_solution):
+        with pytest.raises(InputError, match=rf"{tmp_path.name}: is a folder; expected a file$"):
+            read(tmp_path)

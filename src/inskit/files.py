@@ -48,6 +48,17 @@ def check_folder_writable(folder):
     return folder
 
 
+def require_file(path) -> Path:
+    """``path`` as a Path when it names a file; else an InputError that says
+    what it is instead (missing, or a folder: 'no such file' misled)."""
+    path = Path(path)
+    if not path.is_file():
+        if path.is_dir():
+            raise InputError(f"{path}: is a folder; expected a file")
+        raise InputError(f"{path}: no such file")
+    return path
+
+
 def same_file(a, b) -> bool:
     """Do two paths name the same file (or would they, once written)?"""
     try:

@@ -16,7 +16,7 @@ import numpy as np
 
 from .. import rotations as rot
 from ..errors import InputError
-from ..files import write_csv
+from ..files import require_file, write_csv
 from ..types import GnssData, ImuData, NavSolution
 from ..units import DEG, DEG_PER_HOUR, G0
 from ..types import plain_number
@@ -43,9 +43,7 @@ def read_table(path) -> tuple:
     """Read a comma-separated table with one header line, or a Parquet file;
     gzip and Parquet data are recognised by their content whatever the file
     is called.  (In messages about a Parquet table, "line" n is row n - 2.)"""
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: no such file")
+    path = require_file(path)
     from .parquet import is_parquet
 
     if is_parquet(path):

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import ConfigError, InputError
 from ..files import CSV_DIGITS, CSV_EXPONENT_BELOW, format_column, round_significant, write_csv_fast  # noqa: F401 (re-exported)
-from ..files import arrow_array, atomic_write
+from ..files import arrow_array, atomic_write, require_file
 from ..types import NavSolution
 
 #: the first four bytes (and the last four) of every Parquet file
@@ -369,9 +369,7 @@ def read_parquet_columns(path) -> tuple[dict, dict]:
     import pyarrow as pa
     import pyarrow.parquet as pq
 
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: no such file")
+    path = require_file(path)
     try:
         table = pq.read_table(str(path))
     except (pa.ArrowException, OSError) as exc:

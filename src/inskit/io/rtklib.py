@@ -14,6 +14,7 @@ import numpy as np
 
 from .. import rotations as rot
 from ..errors import InputError
+from ..files import require_file
 from ..types import GnssData, ImuData
 from ..units import DEG, G0
 from .csv_formats import (_header_names, check_imu_units, check_time_column, lean_columns, numeric_columns, read_table,
@@ -70,9 +71,7 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
         NED: ``vd = -vu``) and their sigmas.
     week0 : int
     """
-    path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path}: no such file")
+    path = require_file(path)
     header = None
     rows = []
     try:
