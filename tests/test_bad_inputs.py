@@ -410,10 +410,19 @@ def test_output_folder_under_a_file(capsys, sim, tmp_path):
     f = tmp_path / "afile"
     f.write_text("mine\n")
     refused(run(capsys, "navigate", "--imu", sim / "imu.csv", "--gnss", sim / "gnss.csv", "--out", f / "nav",
-                "--no-plots"), str(f / "nav"), "not writable")
+                "--no-plots"), f"{f}: is a file; expected an output folder (so {f / 'nav'} cannot be made)")
     assert f.read_text() == "mine\n"
     refused(run(capsys, "mechanize", sim / "imu.csv", "--init", "45,7,300,0,0,0,0,0,0", "--out", f / "sol.csv"),
-            "not writable")
+            "is a file; expected an output folder")
+    # simulate checked its folder only once the simulation was done: '[Errno 20] Not a directory'
+    (tmp_path / "s.toml").write_text(SCENARIO)
+    refused(run(capsys, "simulate", tmp_path / "s.toml", "--out", f / "sim", "--no-plot"),
+            f"{f}: is a file; expected an output folder")
+    # a config's [output] dir that is a file: '[Errno 20] Not a directory' from listing it
+    (tmp_path / "nav.toml").write_text(f'[imu]\nfile = "{sim / "imu.csv"}"\n[gnss]\nfile = "{sim / "gnss.csv"}"\n'
+                                       f'[output]\ndir = "{f}"\n')
+    refused(run(capsys, "navigate", tmp_path / "nav.toml", "--no-plots"), f"{f}: is a file; expected an output folder")
+    assert f.read_text() == "mine\n"
 
 
 def test_unsupported_plot_extension_is_a_user_error(capsys, sim, tmp_path):

@@ -153,3 +153,13 @@ def test_require_file_tells_a_folder_from_a_missing_file(tmp_path):
     for read in (io.read_imu, io.read_gnss, io.read_solution):
         with pytest.raises(InputError, match=rf"{tmp_path.name}: is a folder; expected a file$"):
             read(tmp_path)
+
+
+def test_an_output_folder_that_is_a_file_or_under_one_is_said_to_be(tmp_path):
+    f = tmp_path / "afile"
+    f.write_text("mine\n")
+    with pytest.raises(InputError, match=r"afile: is a file; expected an output folder$"):
+        check_folder_writable(f)
+    with pytest.raises(InputError, match=r"afile: is a file; expected an output folder \(so .*afile/a/b cannot be"):
+        check_folder_writable(f / "a" / "b")
+    assert f.read_text() == "mine\n"

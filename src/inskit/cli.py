@@ -350,7 +350,7 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
     from .files import check_folder_writable, same_file
 
     target = Path(out_dir) if out_dir else (cfg.resolve(cfg.output.dir) if cfg.output.dir else Path("out") / cfg.name)
-    if target.exists() and any(target.iterdir()) and not force:
+    if target.is_dir() and any(target.iterdir()) and not force:  # a file there: check_folder_writable says so
         raise InputError(f"{target}: already holds results; refusing to overwrite them (use --force or --out)")
     for name in ("solution_forward.csv", "solution_smoothed.csv", "solution_forward.parquet",
                  "solution_smoothed.parquet", "summary.json"):
@@ -417,9 +417,12 @@ def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, f
     from .jobs.simulate import verify_ideal, write_simulation
     from .simulation.scenario import load_scenario, simulate as run_sim
 
+    from .files import check_folder_writable
+
     sc = load_scenario(scenario_file)
     if gravity:
         sc = sc.model_copy(update={"earth": sc.earth.model_copy(update={"gravity": gravity})})
+    check_folder_writable(Path(out_dir))  # before the computation, not after it ('Not a directory' then)
     t0 = time.perf_counter()
     steps = ["ideal IMU", "errors and GNSS", "files"]
     from tqdm import tqdm

@@ -38,6 +38,12 @@ def check_folder_writable(folder):
     """Create ``folder`` if needed and prove it writable with a probe file
     (before any long computation, not after it)."""
     folder = Path(folder)
+    for p in (folder, *folder.parents):  # the nearest existing one must be a folder ('File exists' misled)
+        if p.exists():
+            if not p.is_dir():
+                where = "" if p == folder else f" (so {folder} cannot be made)"
+                raise InputError(f"{p}: is a file; expected an output folder{where}")
+            break
     try:
         folder.mkdir(parents=True, exist_ok=True)
         probe = folder / f".write-probe-{os.getpid()}"
