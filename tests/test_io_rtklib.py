@@ -34,3 +34,19 @@ def test_a_truncated_gzip_pos_names_the_file(tmp_path):
     p.write_bytes(data[: len(data) // 2])
     with pytest.raises(InputError, match=r"cut\.pos\.gz: not a readable \.pos file \(.*\): truncated"):
         read_pos(p)
+
+
+@pytest.mark.parametrize("week, shown", [("2374.5", "2374.5"), ("-1", "-1")])
+def test_an_imu_log_week_that_is_no_week_number_is_refused(tmp_path, week, shown):
+    """gps_week 2374.5 was truncated to 2374 without a word."""
+    from inskit.io.rtklib import read_rtklibexplorer_imu
+
+    imu = Path(__file__).resolve().parents[1] / "data" / "drive_0708" / "imu_1934_gpst.csv.gz"
+    lines = gzip.decompress(imu.read_bytes()).decode().splitlines(True)[:400]
+    row = lines[101].split(",")
+    row[0] = week
+    lines[101] = ",".join(row)
+    p = tmp_path / "imu.csv"
+    p.write_text("".join(lines))
+    with pytest.raises(InputError, match=rf"imu\.csv: line 102: gps_week={shown}; expected a whole GPS week number"):
+        read_rtklibexplorer_imu(p)

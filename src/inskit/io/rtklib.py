@@ -219,6 +219,11 @@ def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0
         path, df = read_table(path)
         require_columns(path, df, cols)
         a = numeric_columns(path, df, cols)
+    bad = (a[:, 0] != np.floor(a[:, 0])) | (a[:, 0] < 0)
+    if bad.any():  # astype(int) would truncate 2374.5 to week 2374 without a word
+        i = int(np.argmax(bad))
+        raise InputError(f"{path}: line {i + 2}: gps_week={float(a[i, 0]):g}; expected a whole GPS week "
+                         "number >= 0")
     week = a[:, 0].astype(int)
     if week0 is None:
         week0 = int(week[0])
