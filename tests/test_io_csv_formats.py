@@ -249,3 +249,18 @@ def test_a_semicolon_file_with_decimal_commas_gets_the_separator_hint(tmp_path):
                  "0;0;0;0;0;0;0\n0,01;0;0;0;0;0;-0,098\n0,02;0;0;0;0;0;-0,098\n")
     with pytest.raises(InputError, match=r"imu\.csv: the header .* is one column: the file seems separated by ';'"):
         C.read_imu(p)
+
+
+def test_an_increment_file_with_time_in_milliseconds_is_not_told_to_rename_to_g(tmp_path):
+    """Increments under time_s in ms make a specific force 1000 times too small; the message said 'rename
+    the columns accel_*_g', which an increment file has no such column for."""
+    t, dth, dv = _increments(500)
+    p = tmp_path / "imu.csv"
+    _write(p, 1000.0 * t, dth, dv)
+    with pytest.raises(InputError, match=r"column 'dv_x_m_s': the median specific force \(dv over the time step\) "
+                                         r"is .* far below gravity: is time_s in milliseconds"):
+        C.read_imu(p)
+    dth[1:] = 57.3 * np.abs(dth[1:]) + 0.2  # degrees under a rad header, turning
+    _write(p, t, dth, dv)
+    with pytest.raises(InputError, match=r"looks like values in deg/s; rename the columns dtheta_\*_deg"):
+        C.read_imu(p)

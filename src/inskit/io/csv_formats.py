@@ -604,6 +604,12 @@ def check_units_norms(path, wn, f_norm, gcol, acol, gunit, aunit):
     rates."""
     fn = float(np.median(f_norm))
     if aunit in ("m_s2",) and fn < _ACCEL_G_LIKE:
+        if acol.startswith("dv_"):  # increments have no g unit: the step they are divided by is the suspect
+            raise InputError(
+                f"{path}: column '{acol}': the median specific force (dv over the time step) is {fn:.4g} m/s^2, "
+                "far below gravity: is time_s in milliseconds (it must be seconds), or dv not in m/s? (or pass "
+                "check_units=False / --no-unit-check)"
+            )
         raise InputError(
             f"{path}: column '{acol}': the median specific force is {fn:.4g} m/s^2, which looks like "
             "values in g; rename the columns accel_*_g (or pass check_units=False / --no-unit-check)"
@@ -615,7 +621,8 @@ def check_units_norms(path, wn, f_norm, gcol, acol, gunit, aunit):
         )
     if gunit != "rad_s":
         return
-    hint = ("rename the columns gyro_*_deg_s (or pass check_units=False / --no-unit-check); note that deg/s under "
+    hint = (f"rename the columns {'dtheta_*_deg' if gcol.startswith('dtheta_') else 'gyro_*_deg_s'} (or pass "
+            "check_units=False / --no-unit-check); note that deg/s under "
             "a rad/s header is caught only when the log turns: a static log cannot show it")
     if np.percentile(wn, 99) > _GYRO_RAD_MAX or np.median(wn) > _GYRO_RAD_MEDIAN:
         raise InputError(
