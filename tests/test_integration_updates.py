@@ -373,3 +373,18 @@ def test_gnss_position_with_its_correlated_error_linearizes_as_its_python_plugin
     assert np.array_equal(want[1][:, lay.slice("gnss_err")], np.eye(3))
     for a, b, what in zip(got, want, ("nu", "H", "R")):
         assert np.abs(a - b).max() <= 1e-12 * max(np.abs(b).max(), 1.0), what
+
+
+def test_paths_agree_with_the_nhc_lever_arm_mounting_and_the_fixes_correlated_error(drive):
+    """A whole run with the constraint at a lever arm, the mounting block and the fixes' correlated-error
+    states (drive_0708's layout): the compiled run is the Python run to rounding."""
+    from inskit.integration import GnssPositionError, Mounting
+
+    imu, truth, g = drive
+    t0, t1 = imu.time[0], imu.time[-1]
+    meas = [GnssPosition(g, lever_arm_b=(0.0, -0.05, 0.0)), ZeroVelocity([(t0, 19.0), (70.0, 83.0)], 10.0, 0.02),
+            NonHolonomic([(t0, t1)], 10.0, 0.3, lever_arm_b=(0.06, 0.0, 0.79))]
+    a, b = both(imu, truth.state(0), meas, scale_factors=True, recovery_after_s=5.0,
+                extra_blocks=[Mounting(), GnssPositionError(0.3, 10.0)])
+    assert_same_run(a, b)
+    assert a.counts["nhc"]["used"] > 1400 and a.counts["gnss_pos"]["used"] > 100
