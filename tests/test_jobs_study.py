@@ -317,3 +317,15 @@ def test_allan_example_spec_is_valid(static_log, tmp_path):
     assert scenario.name == "car.toml" and spec.outage.length_s == 60.0
     assert any(isinstance(g, AllanGrade) and g._log == (tmp_path / "out" / "static" / "imu.csv").resolve()
                for g in spec.grades)
+
+
+def test_an_outage_past_the_study_data_names_the_study_file(tmp_path):
+    """It said 'outage: it ends at 160 s, ...': no file."""
+    text = EXAMPLE.read_text().replace("runs = 50", "runs = 2").replace("duration_s = 600.0", "duration_s = 60.0")
+    text = text.replace('scenario = "car.toml"', f'scenario = "{EXAMPLE.parent / "car.toml"}"')
+    p = tmp_path / "study.toml"
+    p.write_text(text)
+    with pytest.raises(ConfigError, match=r"study\.toml: field 'outage': it ends at 260 s, after the end of the "
+                                          r"study data \(60 s\)"):
+        run_study(p, tmp_path / "out", workers=1)
+    assert not any((tmp_path / "out").iterdir())  # proved writable (made), nothing written

@@ -463,9 +463,13 @@ def _scaled(errors, k):
     return replace(errors, gyro=s(errors.gyro), accel=s(errors.accel))
 
 
-def build_cases(spec: StudySpec, scenario_path, key="") -> list[StudyCase]:
+def build_cases(spec: StudySpec, scenario_path, key="", source=None) -> list[StudyCase]:
     """The cases of a study, in a fixed order: grades (outer) x filter settings.
-    ``key`` names the shared preparation (the study's fingerprint)."""
+    ``key`` names the shared preparation (the study's fingerprint);
+    ``source``, the study file, begins the messages of its own fields."""
+    def where(key):
+        return f"{source}: field '{key}'" if source is not None else key
+
     from ..simulation.gnss import GnssErrors
     from ..simulation.scenario import build_trajectory, gnss_errors, load_scenario
 
@@ -479,13 +483,13 @@ def build_cases(spec: StudySpec, scenario_path, key="") -> list[StudyCase]:
     tr = build_trajectory(sc, np.random.default_rng(spec.seed))
     T = tr.duration if spec.duration_s is None else spec.duration_s
     if T > tr.duration:
-        raise ConfigError(f"duration_s must be within (0, {tr.duration:.0f}] s for {scenario_path.name}, "
+        raise ConfigError(f"{where('duration_s')} must be within (0, {tr.duration:.0f}] s for {scenario_path.name}, "
                           f"got {spec.duration_s}")
     outage = None
     if spec.outage is not None:
         outage = (spec.outage.start_s, spec.outage.start_s + spec.outage.length_s)
         if outage[1] >= T:
-            raise ConfigError(f"outage: it ends at {outage[1]:g} s, after the end of the study data ({T:g} s)")
+            raise ConfigError(f"{where('outage')}: it ends at {outage[1]:g} s, after the end of the study data ({T:g} s)")
     lever = tuple(float(x) for x in sc.gnss.lever_arm_b_m)
     cases = []
     for grade in spec.grades or [sc.imu.grade]:
@@ -719,7 +723,7 @@ def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None
     spec, scenario_path = load_spec(spec_path)
     out = check_folder_writable(out_dir)
     fp = fingerprint(spec, scenario_path)
-    cases = build_cases(spec, scenario_path, fp)  # every config error before anything is written
+    cases = build_cases(spec, scenario_path, fp, source=spec_path)  # every config error before anything is written
     grades = list({c.grade: c.grade_info for c in cases}.values())
     for r in grades:
         if r["source"] == "allan":
