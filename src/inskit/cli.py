@@ -132,7 +132,10 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
         init = ref.interpolate(imu.time[:1]).state(0)
     elif init_text:
         x = _parse_init(init_text)
-        init = NavState.from_euler(imu.time[0], [x[0] * DEG, x[1] * DEG, x[2]], x[3:6], np.array(x[6:9]) * DEG)
+        try:
+            init = NavState.from_euler(imu.time[0], [x[0] * DEG, x[1] * DEG, x[2]], x[3:6], np.array(x[6:9]) * DEG)
+        except InputError as exc:  # a latitude beyond the pole, a NaN: said of the option
+            raise InputError(f"--init: {exc}") from None
     else:
         raise InputError("an initial state is needed: --init ... or --init-from FILE")
     if frame != "ned" and height != "free":
