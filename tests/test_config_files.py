@@ -44,3 +44,27 @@ def test_a_scenario_speed_beyond_any_meaning_is_refused_by_name(tmp_path):
                  "type = \"accelerate\"\nspeed_m_s = 1e200\nduration_s = 5\n")
     with pytest.raises(ConfigError, match=r"field 'segment\.0\.speed_m_s': .*1e\+200 is beyond"):
         load_scenario(p)
+
+
+def test_a_misspelt_key_gets_the_nearest_known_one(tmp_path):
+    """'Extra inputs are not permitted' alone did not say what was expected."""
+    from inskit.jobs.config import load_config
+    from inskit.simulation.scenario import load_scenario
+
+    p = tmp_path / "c.toml"
+    p.write_text("[imu]\nfile = \"a.csv\"\n[gnss]\nfile = \"g.csv\"\n[constraints]\nnhc_sigma_ms = 0.3\n")
+    with pytest.raises(ConfigError, match=r"field 'constraints\.nhc_sigma_ms': Extra inputs are not permitted; did "
+                                          r"you mean 'nhc_sigma_m_s'\?$"):
+        load_config(p)
+    p.write_text("[imu]\nfile = \"a.csv\"\nzzz = 1\n[gnss]\nfile = \"g.csv\"\n")
+    with pytest.raises(ConfigError, match=r"field 'imu\.zzz': Extra inputs are not permitted; the keys here are "
+                                          r"file, format, time_offset_s"):
+        load_config(p)
+    p.write_text("[imu]\nfile = \"a.csv\"\n[gnss]\nfile = \"g.csv\"\n[nosie]\nbias_tau_s = 3\n")
+    with pytest.raises(ConfigError, match=r"field 'nosie': .*; did you mean 'noise'\?"):
+        load_config(p)
+    s = tmp_path / "s.toml"
+    s.write_text("name = \"s\"\n[start]\nlat_deg = 45\nlon_deg = 7\n[imu]\nrate_hz = 100\n[[segment]]\n"
+                 "type = \"static\"\nduraton_s = 5\n")
+    with pytest.raises(ConfigError, match=r"field 'segment\.0\.duraton_s': .*; did you mean 'duration_s'\?"):
+        load_scenario(s)

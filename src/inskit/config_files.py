@@ -63,10 +63,49 @@ def check_magnitude(v):
     return v
 
 
-def validation_message(source, exc: ValidationError):
-    """``source: field 'a.b': what is wrong (and N more)``."""
+def validation_message(source, exc: ValidationError, model=None):
+    """``source: field 'a.b': what is wrong (and N more)``; an unknown key of
+    ``model`` (the validated class) is followed by the nearest known one."""
     errors = exc.errors()
     e = errors[0]
     where = ".".join(str(x) for x in e["loc"]) or "(top level)"
     more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
-    return f"{source}: field '{where}': {e['msg']}{more}"
+    hint = ""
+    if e["type"] == "extra_forbidden" and model is not None and e["loc"]:
+        keys = _known_keys(model, e["loc"][:-1])
+        if keys:
+            import difflib
+
+            near = difflib.get_close_matches(str(e["loc"][-1]), keys, n=1, cutoff=0.6)
+            hint = f"; did you mean '{near[0]}'?" if near else f"; the keys here are {', '.join(keys)}"
+    return f"{source}: field '{where}': {e['msg']}{hint}{more}"
+
+
+def _known_keys(model, loc):
+    """The field names of the model that ``loc`` (a path of keys and list
+    indices) leads to from ``model``; None where the path is not one model
+    (a union of several)."""
+    cur = model
+    for part in loc:
+        if isinstance(part, int):  # a list item: the list's model is taken already
+            continue
+        field = cur.model_fields.get(part)
+        if field is None:
+            return None
+        cur = _model_of(field.annotation)
+        if cur is None:
+            return None
+    return list(cur.model_fields)
+
+
+def _model_of(tp):
+    """The one pydantic model inside an annotation (``X``, ``X | None``,
+    ``list[X]``), else None."""
+    import typing
+
+    from pydantic import BaseModel
+
+    if isinstance(tp, type) and issubclass(tp, BaseModel):
+        return tp
+    found = {m for m in (_model_of(a) for a in typing.get_args(tp)) if m is not None}
+    return found.pop() if len(found) == 1 else None

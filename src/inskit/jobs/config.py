@@ -816,7 +816,7 @@ def _message(source, exc: ValidationError):
     errors = exc.errors()
     e = errors[0]
     if e["type"] != _KEY_ERROR:
-        return validation_message(source, exc)
+        return validation_message(source, exc, NavigateConfig)
     where = ".".join([str(x) for x in e["loc"]] + [e["ctx"]["key"]])
     more = f" (and {len(errors) - 1} more)" if len(errors) > 1 else ""
     return f"{source}: field '{where}': {e['ctx']['text']}{more}"

@@ -264,7 +264,7 @@ def _validation_message(path, exc):
     errors = exc.errors()
     e = errors[0]
     if e["loc"][:1] != ("grades",) or len(e["loc"]) < 2:
-        return validation_message(path, exc)
+        return validation_message(path, exc, StudySpec)
 
     def where(loc):
         return ".".join(str(x) for i, x in enumerate(loc) if not (i == 2 and x in _GRADE_TAGS))

@@ -197,7 +197,7 @@ def load_scenario(path) -> Scenario:
     try:
         sc = Scenario.model_validate(data)
     except ValidationError as exc:
-        raise ConfigError(validation_message(path, exc)) from None
+        raise ConfigError(validation_message(path, exc, Scenario)) from None
     raw = sc.raw_gnss
     if raw is not None and raw.constellation.startswith("nav:"):
         nav = Path(raw.constellation[4:]).expanduser()
