@@ -117,19 +117,8 @@ def test_mechanize_height_ref_takes_a_number_or_a_height_log(files, tmp_path, ca
     the same way; a log that is neither a number nor a file is one error line.
     (In-process, through the entry point: four runs in a subprocess each would
     cost seconds of start-up.)"""
-    from inskit.cli import main
-
     def run(*args):
-        import warnings
-
-        with warnings.catch_warnings(), np.errstate():  # main() silences both for the process: not beyond here
-            try:
-                main([str(a) for a in args])
-                code = 0
-            except SystemExit as exc:
-                code = exc.code
-        out = capsys.readouterr()
-        return code, out.out, out.err
+        return _in_process(capsys, *args)
 
     t = np.arange(-1.0, 61.0, 1.0)
     (tmp_path / "h.csv").write_text("time_s,height_m\n" + "".join(f"{x},50.0\n" for x in t))

@@ -106,27 +106,47 @@ def _refuse_repeated_names(path, names):
         seen.setdefault(n, j)
 
 
-def _first_line(path):
-    """The header line of a CSV file (plain or gzip), decoded, without its
-    line end and byte-order mark; None when it cannot be read as text (the
-    parser then says what is wrong)."""
+def _first_line_bytes(path):
+    """The first line of a file (plain or gzip), its line end kept, at most
+    64 KB; None when it cannot be read (the parser then says what is
+    wrong)."""
     try:
         if _is_gzip(path):
             import gzip
 
             with gzip.open(path, "rb") as fh:
-                head = fh.readline(1 << 16)
-        else:
-            with open(path, "rb") as fh:
-                head = fh.readline(1 << 16)
-        return head.decode("utf-8-sig").rstrip("\r\n")
+                return fh.readline(1 << 16)
+        with open(path, "rb") as fh:
+            return fh.readline(1 << 16)
     except Exception:  # noqa: BLE001 (a damaged file: the parser says what is wrong)
+        return None
+
+
+def _first_line(path):
+    """The header line of a CSV file (plain or gzip), decoded, without its
+    line end and byte-order mark; None when it cannot be read as text (the
+    parser then says what is wrong)."""
+    head = _first_line_bytes(path)
+    try:
+        return None if head is None else head.decode("utf-8-sig").rstrip("\r\n")
+    except UnicodeDecodeError:
         return None
 
 
 def _is_gzip(path) -> bool:
     with open(path, "rb") as fh:
         return fh.read(2) == b"\x1f\x8b"
+
+
+def open_text(path):
+    """A text handle on ``path``: gzip recognised by its first bytes (not
+    its name), a byte-order mark (Windows editors) dropped, an undecodable
+    byte replaced."""
+    if _is_gzip(path):
+        import gzip
+
+        return gzip.open(path, "rt", encoding="utf-8-sig", errors="replace")
+    return open(path, encoding="utf-8-sig", errors="replace")
 
 
 def _header_names(path):
@@ -141,17 +161,10 @@ def _header_names(path):
             import pyarrow.parquet as pq
 
             return list(pq.ParquetFile(str(path)).schema_arrow.names)
-        if _is_gzip(path):
-            import gzip
-
-            with gzip.open(path, "rb") as fh:
-                head = fh.readline(1 << 16)
-        else:
-            with open(path, "rb") as fh:
-                head = fh.readline(1 << 16)
     except Exception:  # noqa: BLE001 (a damaged file: read_table says what is wrong)
         return None
-    if not head.endswith(b"\n"):
+    head = _first_line_bytes(path)
+    if head is None or not head.endswith(b"\n"):
         return None
     try:
         names = head.decode("utf-8-sig").rstrip("\r\n").split(",")  # a BOM (Windows editors) is no part of a name

@@ -28,8 +28,6 @@ formats.  These functions only forward: the readers do all the checking.
 
 from __future__ import annotations
 
-import gzip
-
 from ..errors import InputError
 from ..types import GnssData, ImuData
 
@@ -53,12 +51,10 @@ _PEEK_LINES = 60
 
 
 def _open(path):
-    """A text handle on ``path``, gzip recognised by its first bytes."""
-    with open(path, "rb") as fh:
-        gz = fh.read(2) == b"\x1f\x8b"
-    # utf-8-sig: a byte-order mark (Windows editors) is no part of the first line
-    return gzip.open(path, "rt", encoding="utf-8-sig", errors="replace") if gz else open(
-        path, encoding="utf-8-sig", errors="replace")
+    """A text handle on ``path`` (:func:`.csv_formats.open_text`)."""
+    from .csv_formats import open_text
+
+    return open_text(path)
 
 
 def _first_lines(path, n=_PEEK_LINES) -> list:

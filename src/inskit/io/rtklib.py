@@ -17,8 +17,8 @@ from ..errors import InputError
 from ..files import require_file
 from ..types import GnssData, ImuData
 from ..units import DEG, G0
-from .csv_formats import (_header_names, check_imu_units, check_time_column, lean_columns, numeric_columns, read_table,
-                          require_columns)
+from .csv_formats import (_header_names, check_imu_units, check_time_column, lean_columns, numeric_columns, open_text,
+                          read_table, require_columns)
 
 GPS_EPOCH = datetime(1980, 1, 6, tzinfo=timezone.utc)
 WEEK_S = 604800.0
@@ -75,7 +75,7 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
     header = None
     rows = []
     try:
-        with _open_text(path) as fh:
+        with open_text(path) as fh:
             for lineno, line in enumerate(fh, start=1):
                 if line.startswith("%"):
                     if "latitude" in line:
@@ -161,18 +161,6 @@ def _floats(text):
             except ValueError:
                 out[i] = np.nan
         return out
-
-
-def _open_text(path):
-    """A text handle on ``path``: gzip recognised by its first bytes (not
-    its name), a byte-order mark dropped, an undecodable byte replaced."""
-    with open(path, "rb") as fh:
-        gz = fh.read(2) == b"\x1f\x8b"
-    if gz:
-        import gzip
-
-        return gzip.open(path, "rt", encoding="utf-8-sig", errors="replace")
-    return open(path, encoding="utf-8-sig", errors="replace")
 
 
 def mount_dcm(mount_rpy):

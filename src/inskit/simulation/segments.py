@@ -224,8 +224,7 @@ def _state_kernel(t, c0, off, t0, T, A, end, osc, h, y, dy, yaw0, gravity, lla_o
     icpt = np.zeros(nch)            # ... and sum -A (t0 + T/2)
     val = np.empty(nch)
     der = np.empty(nch)
-    der2 = np.empty(nch)
-    integ = np.empty(nch)
+    integ = np.zeros(nch)          # only the heading rates' (channels 1, 2) are needed
     npos = y.shape[0]
     for k in range(t.shape[0]):
         tk = t[k]
@@ -239,7 +238,6 @@ def _state_kernel(t, c0, off, t0, T, A, end, osc, h, y, dy, yaw0, gravity, lla_o
                 lo[c] += 1
             v = 0.0
             d = 0.0
-            dd = 0.0
             ii = 0.0
             late = 0.0
             lslope = 0.0
@@ -252,17 +250,17 @@ def _state_kernel(t, c0, off, t0, T, A, end, osc, h, y, dy, yaw0, gravity, lla_o
                     licpt -= A[j] * (t0[j] + 0.5 * T[j])
                 else:
                     x = (tk - t0[j]) / T[j]
-                    s, ds, dds = _smooth3(x)
+                    s, ds, _ = _smooth3(x)
                     v += A[j] * s
                     d += A[j] * ds / T[j]
-                    dd += A[j] * dds / T[j] ** 2
-                    xc = min(max(x, 0.0), 1.0)
-                    ii += A[j] * T[j] * (xc**6 - 3 * xc**5 + 2.5 * xc**4)
+                    if c == 1 or c == 2:
+                        xc = min(max(x, 0.0), 1.0)
+                        ii += A[j] * T[j] * (xc**6 - 3 * xc**5 + 2.5 * xc**4)
                 j += 1
             val[c] = v + (c0[c] + (after[c] + late))
             der[c] = d
-            der2[c] = dd
-            integ[c] = c0[c] * tk + ii + ((slope[c] + lslope) * tk + (icpt[c] + licpt))
+            if c == 1 or c == 2:
+                integ[c] = c0[c] * tk + ii + ((slope[c] + lslope) * tk + (icpt[c] + licpt))
         sp_, dsp = val[0], der[0]
         rf, rb, drb = val[1], val[2], der[2]
         g, dg = val[3], der[3]
