@@ -347,3 +347,16 @@ def test_allan_names_the_log_it_refuses_and_two_outputs_in_one_file(files, tmp_p
     code, out, err = _in_process(capsys, "allan", files / "imu.csv", "--plot", tmp_path / "a.png",
                                  "--toml", tmp_path / "a.png", "--force")
     assert code == 2 and "a.png: given as both --plot and --toml" in err and not (tmp_path / "a.png").exists()
+
+
+def test_a_refused_run_leaves_no_empty_output_folder(capsys, tmp_path):
+    """`inskit navigate bad.toml --out new/dir` made new/dir before finding that an input was missing;
+    the folder it made is removed when the command fails, one already there (or not empty) stays."""
+    cfg = tmp_path / "bad.toml"
+    cfg.write_text('name = "x"\n[imu]\nfile = "nope.csv"\n[gnss]\nfile = "g.csv"\n')
+    code, _, err = _in_process(capsys, "navigate", cfg, "--out", tmp_path / "new" / "dir")
+    assert code == 2 and "no such file" in err
+    assert not (tmp_path / "new").exists()
+    (tmp_path / "kept").mkdir()
+    code, _, _ = _in_process(capsys, "navigate", cfg, "--out", tmp_path / "kept")
+    assert code == 2 and (tmp_path / "kept").is_dir()

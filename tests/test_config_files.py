@@ -68,3 +68,39 @@ def test_a_misspelt_key_gets_the_nearest_known_one(tmp_path):
                  "type = \"static\"\nduraton_s = 5\n")
     with pytest.raises(ConfigError, match=r"field 'segment\.0\.duraton_s': .*; did you mean 'duration_s'\?"):
         load_scenario(s)
+
+
+@pytest.mark.parametrize("line, field, said", [
+    ('[constraints]\nrate_hz = "10"\n', "constraints.rate_hz", r'"10" is text; this setting takes a number \(without quotes\)'),
+    ("[constraints]\nrate_hz = true\n", "constraints.rate_hz", r"true is a boolean; this setting takes a number"),
+    ("[constraints]\nzupt = 1\n", "constraints.zupt", r"1 is a number; this setting takes true or false"),
+    ('[constraints]\nnhc = "false"\n', "constraints.nhc", r'"false" is text; this setting takes true or false'),
+    ('[constraints]\nnhc_lever_arm_b_m = [0, "0", 1]\n', "constraints.nhc_lever_arm_b_m", r'"0" is text'),
+])
+def test_a_value_of_the_wrong_kind_is_refused_not_coerced(tmp_path, line, field, said):
+    """pydantic's lax mode took rate_hz = "10" as 10.0, rate_hz = true as 1.0 and nhc = "false" as False:
+    a TOML slip ran silently."""
+    from inskit.jobs.config import load_config
+
+    p = tmp_path / "c.toml"
+    p.write_text("[imu]\nfile = \"a.csv\"\n[gnss]\nfile = \"g.csv\"\n" + line)
+    with pytest.raises(ConfigError, match=rf"c\.toml: field '{field}': {said}"):
+        load_config(p)
+
+
+def test_kinds_the_annotation_admits_still_pass(tmp_path):
+    """Integers for floats, text for paths and literals, None-able and union fields stay as they were."""
+    from inskit.jobs.config import load_config
+    from inskit.simulation.scenario import load_scenario
+
+    p = tmp_path / "c.toml"
+    p.write_text("[imu]\nfile = \"a.csv\"\ntime_offset_s = 1\nmount_rpy_deg = [0, 1, 2.5]\n[gnss]\nfile = \"g.csv\"\n"
+                 "quality = [1, 2]\n[constraints]\nrate_hz = 5\nzupt = false\n"
+                 "[outages]\nprotocol = \"windows\"\nwindows_s = [[10, 20.5]]\n")
+    cfg = load_config(p)
+    assert cfg.imu.time_offset_s == 1.0 and cfg.constraints.rate_hz == 5.0 and cfg.constraints.zupt is False
+    assert [list(w) for w in cfg.outages.windows_s] == [[10.0, 20.5]]
+    p.write_text("name = \"s\"\n[start]\nlat_deg = 45\nlon_deg = 7\n[imu]\nrate_hz = 100\n[[segment]]\n"
+                 "type = \"accelerate\"\nspeed_m_s = \"5\"\nduration_s = 5\n")
+    with pytest.raises(ConfigError, match=r"field 'segment\.0\.speed_m_s': \"5\" is text"):
+        load_scenario(p)

@@ -134,3 +134,18 @@ def test_an_outage_beyond_the_scenario_is_refused(outage):
     sc = load_scenario(EXAMPLES / "static.toml")
     with pytest.raises(InputError, match=r"--outage .*: the outage must lie within the scenario .*, 0\.\."):
         compare_schemes(sc, outage)
+
+
+def test_an_early_outage_still_has_gnss_on_figures_or_says_there_are_none():
+    """`inskit schemes --outage 20,30` gave NaN for the GNSS-on RMS (the window was 60 s to the
+    outage start). GNSS on is now the time after 60 s outside the outage and its 60 s of
+    re-convergence; where the scenario leaves none the figure is None, shown as n/a."""
+    from inskit.simulation.scenario import build_trajectory
+
+    sc = load_scenario(EXAMPLES / "static.toml")
+    end = build_trajectory(sc, np.random.default_rng(0)).duration
+    rows = compare_schemes(sc, (20.0, 30.0), seed=1, schemes=("closed",))
+    assert np.isfinite(rows[0]["gnss_on_horizontal_rms_m"]) and rows[0]["gnss_on_horizontal_rms_m"] < 2.0
+    rows = compare_schemes(sc, (20.0, end - 30.0), seed=1, schemes=("closed",))
+    assert rows[0]["gnss_on_horizontal_rms_m"] is None
+    assert np.isfinite(rows[0]["outage_end_horizontal_m"])

@@ -36,10 +36,8 @@ def test_grid_parsing_and_snippet():
             T.parse_grid(bad)
 
 
-def test_tune_ranks_a_wrecked_setting_last(tmp_path):
-    """On a simulated drive, a gyro noise 300x too small (the filter then
-    trusts a drifting attitude) must score worse on the validation outages
-    than the matched setting, and the protocol's windows stay withheld."""
+def _sim_drive(tmp_path):
+    """A 240 s simulated car (examples/car.toml) and a navigate config withholding 100..110 s."""
     from inskit.simulation.scenario import load_scenario, simulate
     from inskit.jobs.simulate import write_simulation
     from pathlib import Path
@@ -52,7 +50,14 @@ def test_tune_ranks_a_wrecked_setting_last(tmp_path):
         'name = "t"\n[imu]\nfile = "imu.csv"\n[gnss]\nfile = "gnss.csv"\nlever_arm_b_m = [0.0, 0.0, -1.2]\n'
         '[noise]\ngyro_arw_deg_sqrt_h = 0.15\naccel_vrw_m_s_sqrt_h = 0.06\n'
         '[outages]\nprotocol = "windows"\nwindows_s = [[100.0, 110.0]]\n[output]\nplots = false\n')
-    res = T.tune(tmp_path / "nav.toml", T.parse_grid(["noise.gyro_bias_sigma_deg_h=10,0.01"]), hold_s=15.0,
+    return tmp_path / "nav.toml"
+
+
+def test_tune_ranks_a_wrecked_setting_last(tmp_path):
+    """On a simulated drive, a gyro noise 300x too small (the filter then
+    trusts a drifting attitude) must score worse on the validation outages
+    than the matched setting, and the protocol's windows stay withheld."""
+    res = T.tune(_sim_drive(tmp_path), T.parse_grid(["noise.gyro_bias_sigma_deg_h=10,0.01"]), hold_s=15.0,
                  reaid_s=10.0, start_after_s=70.0, workers=1)
     assert res["windows_protocol_s"] == [(100.0, 110.0)]
     assert all(b <= 100.0 - 10.0 + 1e-9 or a >= 110.0 + 10.0 - 1e-9 for a, b in res["windows_validation_s"])
@@ -60,6 +65,25 @@ def test_tune_ranks_a_wrecked_setting_last(tmp_path):
     assert ranked == [10, 0.01], res["candidates"]
     assert res["best_toml"].startswith("[noise]\ngyro_bias_sigma_deg_h = 10\n")
     json.dumps(res, allow_nan=False)
+
+
+def test_a_candidate_with_gnss_nis_out_of_band_is_ranked_after_the_consistent_ones(tmp_path):
+    """Fixes declared 30 m noisy (the simulated ones are 0.5 m horizontal,
+    1 m vertical) drive the fixes' mean NIS per degree of freedom far below
+    a third: that candidate is flagged inconsistent and ranked after the
+    matched one whatever its score; the matched one's NIS is in band (the
+    filter's noise matches the simulation's)."""
+    res = T.tune(_sim_drive(tmp_path), T.parse_grid(["gnss.sigma_floor_m=30,0"]), hold_s=15.0, reaid_s=10.0,
+                 start_after_s=70.0, workers=1)
+    by = {c["params"]["gnss.sigma_floor_m"]: c for c in res["candidates"]}
+    assert by[30]["gnss_mean_nis_per_dof"]["gnss_pos"] < 0.05 and not by[30]["consistent"]
+    assert T.NIS_BAND[0] < by[0]["gnss_mean_nis_per_dof"]["gnss_pos"] < T.NIS_BAND[1] and by[0]["consistent"]
+    assert [c["params"]["gnss.sigma_floor_m"] for c in res["candidates"]] == [0, 30]
+    assert res["best"] == {"gnss.sigma_floor_m": 0} and res["warnings"] == []
+    assert "inconsistent" in T.table_text(res)
+    one = T.tune(tmp_path / "nav.toml", T.parse_grid(["gnss.sigma_floor_m=30"]), hold_s=15.0, reaid_s=10.0,
+                 start_after_s=70.0, workers=1)
+    assert one["warnings"] and "GNSS innovations" in one["warnings"][0]
 
 
 def test_default_spacing_mimics_the_protocol():

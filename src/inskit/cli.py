@@ -17,6 +17,7 @@ import numpy as np
 
 from . import __version__
 from .cli_output import emit as _emit
+from .cli_output import FINITE, FiniteFloatRange
 from .cli_output import log as _log
 from .cli_output import SEED
 from .errors import InputError, InskitError
@@ -208,8 +209,8 @@ def _check_plot_file(plot_file, force):
 @cli.command()
 @click.argument("solution_file", type=click.Path(dir_okay=False))
 @click.argument("truth_file", type=click.Path(dir_okay=False))
-@click.option("--from", "t_from", type=float, metavar="S", help="Score from this time [s, the files' time column].")
-@click.option("--to", "t_to", type=float, metavar="S", help="Score up to this time [s, the files' time column].")
+@click.option("--from", "t_from", type=FINITE, metavar="S", help="Score from this time [s, the files' time column].")
+@click.option("--to", "t_to", type=FINITE, metavar="S", help="Score up to this time [s, the files' time column].")
 @click.option("--remove-offset", "remove_offset", is_flag=False, flag_value="window", default=None,
               metavar="[FROM:TO]", help="Estimate the constant NED position offset (mean solution minus truth) over "
               "FROM:TO [s] (alone: over the window scored), subtract it and report it.")
@@ -273,7 +274,7 @@ def bench(quick, no_cli, long_runs, as_json):
 @click.option("--gnss", "gnss_file", type=click.Path(dir_okay=False), help="GNSS file (overrides the config).")
 @click.option("--gnss-format", type=click.Choice(["inskit", "rtklib-pos"]), help="GNSS file format.")
 @click.option("--lever-arm", help="IMU-to-antenna lever arm in body axes [m]: x,y,z.")
-@click.option("--imu-time-offset", type=float, help="Seconds added to the IMU time tags.")
+@click.option("--imu-time-offset", type=FINITE, help="Seconds added to the IMU time tags.")
 @click.option("--scheme", type=click.Choice(["closed", "open", "uncoupled"]), help="Integration scheme.")
 @click.option("--outages", metavar="SPEC",
               help="GNSS outages: none, rtklibexplorer or windows:START-END[,START-END...] in seconds after the "
@@ -287,7 +288,7 @@ def bench(quick, no_cli, long_runs, as_json):
 @click.option("--output-format", type=click.Choice(["parquet", "csv", "both"]),
               help="Solution files: Parquet at every IMU epoch, CSV at --output-rate, or both (default: the "
               "config's [output] format, else both).")
-@click.option("--output-rate", type=click.FloatRange(min=0, min_open=True), metavar="HZ",
+@click.option("--output-rate", type=FiniteFloatRange(min=0, min_open=True), metavar="HZ",
               help="Rows per second of the CSV solution files (default: [output] rate_hz, else 10 Hz); a rate at "
               "or above the IMU rate writes every epoch.")
 @click.option("--stream", type=click.Choice(["auto", "on", "off"]),
@@ -408,7 +409,7 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
 @click.option("--force", is_flag=True, help="Overwrite files in --out.")
 @click.option("--no-plot", is_flag=True, help="Skip the scenario plot.")
 @click.option("--verify", is_flag=True, help="Also mechanize the ideal IMU (at the rate and at twice it) against the truth.")
-@click.option("--truth-rate", type=float, help="Rate of the truth file [Hz] (default: the IMU rate).")
+@click.option("--truth-rate", type=FINITE, help="Rate of the truth file [Hz] (default: the IMU rate).")
 @click.option("--format", "file_format", type=click.Choice(["csv", "parquet"]), default="csv", show_default=True,
               help="imu, gnss and truth files as CSV or Parquet (typed, exact, about 20x faster to write); "
               "every inskit reader takes both.")
@@ -511,6 +512,11 @@ def allan(imu_file, plot_file, toml_file, force, no_unit_check, first_row, as_js
     _emit(res, as_json, "\n".join(lines))
 
 
+def _fmt_or_na(x, fmt=".3f"):
+    """A figure, or 'n/a' where there is none (None)."""
+    return "n/a" if x is None else format(x, fmt)
+
+
 @cli.command()
 @click.argument("scenario_file", type=click.Path(dir_okay=False))
 @click.option("--outage", required=True, help="GNSS outage START,END in seconds of the scenario.")
@@ -535,22 +541,22 @@ def schemes(scenario_file, outage, seed, as_json):
     for r in rows:
         lines.append(f"{r['scheme']:<11}{r['outage_end_horizontal_m']:>10.2f}{r['outage_end_vertical_m']:>9.2f}"
                      f"{r['outage_end_velocity_m_s']:>9.3f}{r['outage_end_attitude_deg']:>9.3f}"
-                     f"{r['gnss_on_horizontal_rms_m']:>21.3f}")
+                     f"{_fmt_or_na(r['gnss_on_horizontal_rms_m']):>21}")
     _emit(res, as_json, "\n".join(lines))
 
 
 @cli.command()
 @click.argument("imu_file", type=click.Path(dir_okay=False))
-@click.option("--lat", "lat_deg", type=float, required=True, help="Latitude [deg].")
+@click.option("--lat", "lat_deg", type=FINITE, required=True, help="Latitude [deg].")
 @click.option("--method", type=click.Choice(["accel", "gyro", "blend", "fine"]), default="blend", show_default=True)
-@click.option("--m", "m_gain", type=float, help="Blending gain for --method blend (default: chosen by the GA for "
+@click.option("--m", "m_gain", type=FINITE, help="Blending gain for --method blend (default: chosen by the GA for "
               "the noise and the bias priors).")
-@click.option("--start", "t_start", type=float, help="Start of the static interval [s] (default: the log start).")
-@click.option("--end", "t_end", type=float, help="End of the static interval [s] (default: detected).")
+@click.option("--start", "t_start", type=FINITE, help="Start of the static interval [s] (default: the log start).")
+@click.option("--end", "t_end", type=FINITE, help="End of the static interval [s] (default: detected).")
 @click.option("--imu-format", type=click.Choice(["inskit", "rtklibexplorer"]), default="inskit", show_default=True)
 @click.option("--mount-rpy", help="Sensor mounting roll,pitch,yaw [deg] (see docs/formats.md).")
-@click.option("--accel-bias-ug", type=float, help="Accelerometer bias class (1 sigma) [micro-g] for the sigmas and m.")
-@click.option("--gyro-bias-deg-h", type=float, help="Gyro bias class (1 sigma) [deg/h] for the sigmas and m.")
+@click.option("--accel-bias-ug", type=FINITE, help="Accelerometer bias class (1 sigma) [micro-g] for the sigmas and m.")
+@click.option("--gyro-bias-deg-h", type=FINITE, help="Gyro bias class (1 sigma) [deg/h] for the sigmas and m.")
 @click.option("--no-unit-check", is_flag=True, help="Skip the unit-plausibility checks of the IMU reader.")
 @click.option("--first-row", type=click.Choice(["initial", "increment", "discard"]), default="initial",
               show_default=True, help="Increment files: the first row is the initial epoch (zero increments), a "
@@ -641,7 +647,7 @@ def reproduce_alignment(out_dir, as_json):
 @click.option("--grade", type=click.Choice(["navigation", "tactical", "industrial-mems", "consumer-mems"]),
               default="tactical", show_default=True, help="IMU grade of the runs (overrides the scenario's).")
 @click.option("--runs", type=int, default=50, show_default=True)
-@click.option("--duration", type=float, help="Use only the first seconds of the scenario.")
+@click.option("--duration", type=FINITE, help="Use only the first seconds of the scenario.")
 @click.option("--seed", type=SEED, default=0, show_default=True)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def consistency(scenario_file, grade, runs, duration, seed, as_json):
@@ -717,7 +723,12 @@ def main(argv=None):
     second to every command; not under a profiler or a tracer, whose report
     is written at the teardown.  In process (tests, ``main([...])``) it
     raises ``SystemExit`` as usual."""
+    from . import files
+
+    files._MADE.clear()
     code = _run(argv)
+    if code != 0:  # refused or failed: no empty output folder left behind (only empty ones go)
+        files.remove_made_folders()
     # a profiler or a tracer (cProfile, pyinstrument, coverage) writes its report at the teardown: keep it
     watched = sys.getprofile() is not None or sys.gettrace() is not None
     if argv is None and not watched and not os.environ.get("INSKIT_FULL_EXIT"):

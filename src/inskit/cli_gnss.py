@@ -16,6 +16,7 @@ from __future__ import annotations
 import click
 
 from .cli_output import emit as _emit
+from .cli_output import FINITE
 from .cli_output import log as _log
 from .cli_output import SEED
 
@@ -49,7 +50,7 @@ def _table(res):
 @click.argument("nav", type=click.Path(dir_okay=False))
 @click.option("--reference", help="Score against this ECEF position: X,Y,Z [m], or 'header' for the observation "
               "header's APPROX POSITION XYZ.")
-@click.option("--mask", "mask_deg", type=float, default=10.0, show_default=True, help="Elevation mask [deg].")
+@click.option("--mask", "mask_deg", type=FINITE, default=10.0, show_default=True, help="Elevation mask [deg].")
 @click.option("--iono", type=click.Choice(["klobuchar", "iono-free", "none"]), default="klobuchar",
               show_default=True, help="Ionosphere: broadcast Klobuchar (the nav header's coefficients, else a "
               "default set), dual-frequency iono-free code, or none.")

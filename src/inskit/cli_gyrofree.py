@@ -20,6 +20,7 @@ from __future__ import annotations
 import click
 
 from .cli_output import emit as _emit
+from .cli_output import FINITE
 from .cli_output import log as _log
 from .cli_output import SEED
 
@@ -47,18 +48,18 @@ def gyrofree():
 @gyrofree.command("simulate")
 @click.argument("scenario")
 @click.option("--layout", "layout_spec", default="ten", show_default=True, help=_LAYOUT_HELP)
-@click.option("--d", "d", type=float, default=0.1, show_default=True, help="Lever arm of ten/six [m].")
+@click.option("--d", "d", type=FINITE, default=0.1, show_default=True, help="Lever arm of ten/six [m].")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Output folder.")
-@click.option("--rate", "rate_hz", type=float, help="Sampling rate [Hz] (default 1000 for source003, else the "
+@click.option("--rate", "rate_hz", type=FINITE, help="Sampling rate [Hz] (default 1000 for source003, else the "
               "scenario's IMU rate).")
-@click.option("--duration", type=float, help="Length [s] (default 10 for source003, else the scenario's).")
-@click.option("--bias-ug", type=float, default=0.0, show_default=True, help="Bias of every accelerometer [micro-g].")
-@click.option("--bias-sigma-ug", type=float, default=0.0, show_default=True,
+@click.option("--duration", type=FINITE, help="Length [s] (default 10 for source003, else the scenario's).")
+@click.option("--bias-ug", type=FINITE, default=0.0, show_default=True, help="Bias of every accelerometer [micro-g].")
+@click.option("--bias-sigma-ug", type=FINITE, default=0.0, show_default=True,
               help="Random bias per accelerometer, 1 sigma [micro-g].")
-@click.option("--noise-ug", type=float, default=0.0, show_default=True,
+@click.option("--noise-ug", type=FINITE, default=0.0, show_default=True,
               help="White noise density [micro-g/sqrt(Hz)].")
-@click.option("--scale-ppm", type=float, default=0.0, show_default=True, help="Scale-factor error, 1 sigma [ppm].")
-@click.option("--misalignment-mrad", type=float, default=0.0, show_default=True,
+@click.option("--scale-ppm", type=FINITE, default=0.0, show_default=True, help="Scale-factor error, 1 sigma [ppm].")
+@click.option("--misalignment-mrad", type=FINITE, default=0.0, show_default=True,
               help="Random sensing-axis misalignment, 1 sigma per component [mrad].")
 @click.option("--source-theta-deg", help="The source's misalignment angles of m1-m6 [deg], six comma-separated "
               "numbers (eq. 26-36).")
@@ -87,7 +88,7 @@ def simulate(scenario, layout_spec, d, out_dir, rate_hz, duration, bias_ug, bias
 @gyrofree.command("navigate")
 @click.argument("array_file", type=click.Path(dir_okay=False))
 @click.option("--layout", "layout_spec", default="ten", show_default=True, help=_LAYOUT_HELP)
-@click.option("--d", "d", type=float, default=0.1, show_default=True, help="Lever arm of ten/six [m].")
+@click.option("--d", "d", type=FINITE, default=0.1, show_default=True, help="Lever arm of ten/six [m].")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Output folder.")
 @click.option("--solver", type=click.Choice(["auto", "closed-form", "least-squares"]), default="auto",
               show_default=True, help="auto: the closed form for the ten layout, least squares otherwise.")
@@ -99,9 +100,9 @@ def simulate(scenario, layout_spec, d, out_dir, rate_hz, duration, bias_ug, bias
 @click.option("--init", "init_text", help="Earth frames: lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg.")
 @click.option("--init-from", type=click.Path(dir_okay=False), help="Initial state (and rate) from a truth file.")
 @click.option("--omega0", help="Initial body rate p,q,r [rad/s] (its signs fix the rate's sign).")
-@click.option("--noise", "noise", type=float, default=0.0, show_default=True,
+@click.option("--noise", "noise", type=FINITE, default=0.0, show_default=True,
               help="Per-sample accelerometer noise [m/s^2] for the closed form's sign rule.")
-@click.option("--filter-noise", type=float, help="Per-sample accelerometer noise [m/s^2]: least squares with the "
+@click.option("--filter-noise", type=FINITE, help="Per-sample accelerometer noise [m/s^2]: least squares with the "
               "rate filter.")
 @click.option("--truth", "truth_file", type=click.Path(dir_okay=False), help="Truth file: add errors to the summary.")
 @click.option("--force", is_flag=True, help="Overwrite files in --out.")

@@ -15,6 +15,36 @@ import numpy as np
 SEED = click.IntRange(min=0)
 
 
+def _refuse_non_finite(param_type, value, param, ctx):
+    if isinstance(value, float) and not math.isfinite(value):
+        param_type.fail(f"{value} is not a finite number (expected one, e.g. 10 or 2.5)", param, ctx)
+    return value
+
+
+class FiniteFloat(click.types.FloatParamType):
+    """A float option that refuses nan and inf (click takes both; '--from nan' then read as a time
+    'outside the data')."""
+
+    name = "float"
+
+    def convert(self, value, param, ctx):
+        return _refuse_non_finite(self, super().convert(value, param, ctx), param, ctx)
+
+
+class FiniteFloatRange(click.FloatRange):
+    """:class:`click.FloatRange` that refuses nan and inf (nan passes click's bounds: every comparison is
+    false)."""
+
+    def convert(self, value, param, ctx):
+        v = click.types.FloatParamType.convert(self, value, param, ctx)
+        _refuse_non_finite(self, v, param, ctx)
+        return super().convert(v, param, ctx)
+
+
+#: the type of every float option
+FINITE = FiniteFloat()
+
+
 def log(msg):
     """A log line on stderr."""
     click.echo(msg, err=True)

@@ -11,6 +11,7 @@ import sys
 import click
 
 from .cli_output import emit as _emit
+from .cli_output import FiniteFloatRange
 
 
 @click.command("tune", context_settings={"help_option_names": ["-h", "--help"]})
@@ -18,13 +19,13 @@ from .cli_output import emit as _emit
 @click.option("--grid", "grids", multiple=True, required=True, metavar="SECTION.KEY=V1,V2,...",
               help="Candidate values of one config key (repeat for more keys: every combination is run), e.g. "
                    "--grid noise.bias_tau_s=300,3000 --grid constraints.nhc_sigma_m_s=0.1,0.3.")
-@click.option("--hold", "hold_s", type=click.FloatRange(min=1.0),
+@click.option("--hold", "hold_s", type=FiniteFloatRange(min=1.0),
               help="Length of each validation outage [s]  [default: the median length of the config's outages, "
                    "else 10 s]")
-@click.option("--reaid", "reaid_s", type=click.FloatRange(min=0.0),
+@click.option("--reaid", "reaid_s", type=FiniteFloatRange(min=0.0),
               help="Aiding kept before and after each validation outage [s]  [default: 10 s, less (down to 2 s) "
                    "where one validation outage would not fit between the config's outages]")
-@click.option("--start-after", "start_after_s", type=click.FloatRange(min=0.0), default=60.0, show_default=True,
+@click.option("--start-after", "start_after_s", type=FiniteFloatRange(min=0.0), default=60.0, show_default=True,
               help="No validation outage in the first seconds after the first fix (start-up).")
 @click.option("--shifts", type=click.IntRange(min=1), default=1, show_default=True,
               help="Placements of the validation outages, shifted together within the aided stretches (each "

@@ -63,6 +63,76 @@ def check_magnitude(v):
     return v
 
 
+def _leaf_kinds(tp):
+    """The scalar kinds an annotation admits: a set of 'bool', 'number',
+    'text' and 'other' (any type that is none of these, e.g. a model)."""
+    import typing
+    from pathlib import PurePath
+
+    if tp is bool:
+        return {"bool"}
+    if tp in (int, float):
+        return {"number"}
+    if tp is str or (isinstance(tp, type) and issubclass(tp, PurePath)):
+        return {"text"}
+    if tp is type(None):
+        return set()
+    origin = typing.get_origin(tp)
+    if origin is typing.Literal:
+        return {"bool" if isinstance(a, bool) else "number" if isinstance(a, (int, float)) else "text"
+                for a in typing.get_args(tp)}
+    args = [a for a in typing.get_args(tp) if a is not Ellipsis]
+    if origin is not None and args:
+        out = set()
+        for a in args:
+            out |= _leaf_kinds(a)
+        return out
+    return {"other"}
+
+
+def _kind(v):
+    if isinstance(v, bool):
+        return "bool"
+    if isinstance(v, (int, float)):
+        return "number"
+    if isinstance(v, str):
+        return "text"
+    return None
+
+
+_SAY = {"bool": "true or false", "number": "a number", "text": "text"}
+_IS = {"bool": "a boolean", "number": "a number", "text": "text"}
+
+
+def check_scalar_type(cls, v, info):
+    """A pydantic before-validator for every field (``field_validator("*",
+    mode="before")``): a TOML value of the wrong kind is refused instead of
+    coerced, e.g. ``rate_hz = "10"`` (text in quotes), ``rate_hz = true`` or
+    ``zupt = 1`` (pydantic would take them as 10.0, 1.0 and True), also inside
+    a list.  Kinds the annotation admits pass on to the field's own checks."""
+    field = cls.model_fields.get(info.field_name)
+    if field is None:
+        return v
+    kinds = _leaf_kinds(field.annotation)
+    if "other" in kinds or not kinds:
+        return v
+
+    def walk(x):
+        if isinstance(x, (list, tuple)):
+            for y in x:
+                walk(y)
+            return
+        k = _kind(x)
+        if k is not None and k not in kinds:
+            want = " or ".join(_SAY[w] for w in sorted(kinds))
+            shown = f'"{x}"' if k == "text" else ("true" if x is True else "false" if x is False else repr(x))
+            hint = " (without quotes)" if k == "text" else ""
+            raise ValueError(f"{shown} is {_IS[k]}; this setting takes {want}{hint}")
+
+    walk(v)
+    return v
+
+
 def validation_message(source, exc: ValidationError, model=None):
     """``source: field 'a.b': what is wrong (and N more)``; an unknown key of
     ``model`` (the validated class) is followed by the nearest known one."""
@@ -78,7 +148,8 @@ def validation_message(source, exc: ValidationError, model=None):
 
             near = difflib.get_close_matches(str(e["loc"][-1]), keys, n=1, cutoff=0.6)
             hint = f"; did you mean '{near[0]}'?" if near else f"; the keys here are {', '.join(keys)}"
-    return f"{source}: field '{where}': {e['msg']}{hint}{more}"
+    msg = e["msg"].removeprefix("Value error, ")
+    return f"{source}: field '{where}': {msg}{hint}{more}"
 
 
 def _known_keys(model, loc):

@@ -34,9 +34,26 @@ def atomic_write(path):
         raise
 
 
+#: the output folders :func:`check_folder_writable` made in this command (the deepest first)
+_MADE: list = []
+
+
+def remove_made_folders():
+    """Remove the folders :func:`check_folder_writable` made that are still
+    empty (the CLI calls it when a command fails: a refused input leaves no
+    empty output folder behind); forget them all."""
+    for p in list(_MADE):
+        try:
+            p.rmdir()  # only an empty folder goes
+        except OSError:
+            pass
+    _MADE.clear()
+
+
 def check_folder_writable(folder):
     """Create ``folder`` if needed and prove it writable with a probe file
-    (before any long computation, not after it)."""
+    (before any long computation, not after it).  The folders it makes are
+    remembered for :func:`remove_made_folders`."""
     folder = Path(folder)
     for p in (folder, *folder.parents):  # the nearest existing one must be a folder ('File exists' misled)
         if p.exists():
@@ -44,8 +61,10 @@ def check_folder_writable(folder):
                 where = "" if p == folder else f" (so {folder} cannot be made)"
                 raise InputError(f"{p}: is a file; expected an output folder{where}")
             break
+    missing = [p for p in (folder, *folder.parents) if not p.exists()]  # the deepest first
     try:
         folder.mkdir(parents=True, exist_ok=True)
+        _MADE.extend(p for p in missing if p not in _MADE)
         probe = folder / f".write-probe-{os.getpid()}"
         probe.write_bytes(b"")
         probe.unlink()

@@ -24,7 +24,7 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 from pydantic_core import PydanticCustomError
 
-from ..config_files import check_magnitude, read_toml, validation_message
+from ..config_files import check_magnitude, check_scalar_type, read_toml, validation_message
 from ..errors import ConfigError, InputError
 
 #: error type of a consistency rule that names its key (see :func:`_key_error`)
@@ -56,6 +56,7 @@ def _changed(model, keys):
 class _Strict(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
     _magnitude = field_validator("*")(check_magnitude)
+    _kinds = field_validator("*", mode="before")(classmethod(check_scalar_type))
 
 
 class ImuSection(_Strict):

@@ -230,7 +230,9 @@ def compare_schemes(scenario, outage, seed=0, schemes=("uncoupled", "open", "clo
 
     The IMU carries the scenario's full error model; the filters get the
     matched noise model (15 states).  Returns one row per scheme with the
-    errors at the end of the outage and the RMS horizontal error with GNSS on.
+    errors at the end of the outage and the RMS horizontal error with GNSS on
+    (after the first 60 s, outside the outage and the 60 s after it; None
+    when the scenario leaves no such time).
     """
     from ..simulation.scenario import build_trajectory, gnss_errors, imu_errors
 
@@ -264,15 +266,17 @@ def compare_schemes(scenario, outage, seed=0, schemes=("uncoupled", "open", "clo
         k_end = int(np.searchsorted(t, outage[1]))
         d = earth.lla_to_ned(sol.lla[k_end], truth.lla[k_end])
         att = rot.attitude_error(sol.C_nb[k_end], truth.C_nb[k_end])
-        on = (t < outage[0]) & (t > 60.0)
-        don = earth.lla_to_ned(sol.lla[on][::100], truth.lla[on][::100])
+        # GNSS on: after the first 60 s (start-up), outside the outage and the 60 s of re-convergence after it
+        on = (t > 60.0) & ((t < outage[0]) | (t > outage[1] + 60.0))
+        don = earth.lla_to_ned(sol.lla[on][::100], truth.lla[on][::100]) if on.any() else None
         rows.append({
             "scheme": scheme,
             "outage_end_horizontal_m": float(np.hypot(d[0], d[1])),
             "outage_end_vertical_m": float(abs(d[2])),
             "outage_end_velocity_m_s": float(np.linalg.norm(sol.v_n[k_end] - truth.v_n[k_end])),
             "outage_end_attitude_deg": float(np.degrees(np.linalg.norm(att))),
-            "gnss_on_horizontal_rms_m": float(np.sqrt(np.mean(don[:, 0] ** 2 + don[:, 1] ** 2))),
+            "gnss_on_horizontal_rms_m": (None if don is None
+                                         else float(np.sqrt(np.mean(don[:, 0] ** 2 + don[:, 1] ** 2)))),
         })
     return rows
 

@@ -67,7 +67,7 @@ from pydantic import (BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, 
 
 from .. import earth
 from .. import rotations as rot
-from ..config_files import check_magnitude, read_toml, validation_message
+from ..config_files import check_magnitude, check_scalar_type, read_toml, validation_message
 from ..errors import ConfigError, InputError
 from ..files import atomic_write, check_folder_writable, save_figure, write_text
 from ..types import ImuData
@@ -90,6 +90,7 @@ STATISTICS = ("count", "mean", "std", "min", "median", "p90", "max")
 class _M(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
     _magnitude = field_validator("*")(check_magnitude)
+    _kinds = field_validator("*", mode="before")(classmethod(check_scalar_type))
 
 
 class OutageSpec(_M):

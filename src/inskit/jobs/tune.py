@@ -13,8 +13,14 @@ stretches where the benchmark's protocol keeps GNSS on:
 3. each candidate is run with both sets of windows withheld and scored by the
    horizontal RMS of its error at the end of the validation outages, against
    the validation fixes withheld there (fixes the final run will use);
-4. the candidate with the smallest score wins; its keys are printed as a
-   TOML snippet to put into the config.
+4. the candidate with the smallest score wins among those whose run is
+   healthy and *consistent*: in one more run with only the protocol's
+   windows withheld (the run the config will make), the mean NIS per degree
+   of freedom of each GNSS measurement (fixes, velocity, pseudoranges) within
+   :data:`NIS_BAND`, the
+   band of the drive's consistency test (a setting that scores well by
+   declaring the fixes far noisier than their innovations show is not
+   chosen); its keys are printed as a TOML snippet to put into the config.
 
 With ``shifts`` > 1 each candidate runs once per placement of the validation
 outages, shifted together by up to ``reaid_s - SHIFT_MIN_REAID_S`` either
@@ -44,6 +50,12 @@ from ..errors import ConfigError
 
 #: with shifts, every shifted validation outage keeps at least this much aiding on each side [s]
 SHIFT_MIN_REAID_S = 5.0
+#: a consistent candidate's GNSS innovations: mean NIS per degree of freedom within this band (1 expected;
+#: a third to three times it, as the health verdict's bounds and tests/test_jobs_navigate.py)
+NIS_BAND = (1.0 / 3.0, 3.0)
+#: the measurements whose NIS decides consistency (the constraints' noise stands for model errors and is
+#: conservative by design: their low NIS is a warning of the health verdict, not a reason)
+GNSS_MEASUREMENTS = ("gnss_pos", "gnss_vel", "gnss_speed_course", "pseudorange", "pseudorange_rate")
 #: keys a candidate grid may vary: "section.key"
 _SECTIONS = ("imu", "gnss", "noise", "init", "constraints", "filter", "odometer", "earth", "height")
 
@@ -158,7 +170,7 @@ def _run_one(args):
     from .navigate import navigate, summary
     from ..errors import InskitError
 
-    errs, health, reasons = [], "healthy", []
+    errs, health, reasons, nis = [], "healthy", [], {}
     for windows_rel, val_rel in sets:  # one run per placement of the validation outages
         over = overrides_of(params)
         over["outages"] = {"protocol": "windows", "windows_s": [list(w) for w in windows_rel], "keep_satellites": 0}
@@ -172,10 +184,19 @@ def _run_one(args):
         if s["health"]["verdict"] != "healthy":
             health = s["health"]["verdict"]
         reasons += [r for r in s["health"].get("reasons", []) if r not in reasons]
+        if val_rel:
+            continue
+        # the run the config will make (only the protocol's windows withheld): its GNSS NIS says whether
+        # the candidate's noise is consistent (the validation runs withhold a quarter more fixes)
+        for name, m in s["health"].get("measurements", {}).items():
+            if name in GNSS_MEASUREMENTS and m.get("mean_nis") is not None and m.get("dof"):
+                nis.setdefault(name, []).append(m["mean_nis"] / m["dof"])
     errs = np.array(errs, float)
+    nis = {k: float(np.mean(v)) for k, v in nis.items()}
     return {"params": params, "cv_rms_m": float(np.sqrt(np.mean(errs ** 2))) if len(errs) else math.inf,
             "cv_max_m": float(errs.max()) if len(errs) else math.inf, "cv_outages": int(len(errs)),
-            "health": health, "health_reasons": reasons}
+            "health": health, "health_reasons": reasons, "gnss_mean_nis_per_dof": nis,
+            "consistent": all(NIS_BAND[0] <= v <= NIS_BAND[1] for v in nis.values())}
 
 
 def shifted_windows(val, protocol_rel, t_first_rel, t_last_rel, reaid_s, shifts, min_reaid_s=SHIFT_MIN_REAID_S):
@@ -270,7 +291,7 @@ def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60
     if int(shifts) < 1:
         raise ConfigError(f"shifts must be at least 1, got {shifts!r}")
     placed = shifted_windows(val, protocol, 0.0, float(gnss.time[-1]) - t0, reaid_s, int(shifts))
-    sets = [(sorted(protocol + w), w) for _, w in placed if w]
+    sets = [(sorted(protocol + w), w) for _, w in placed if w] + [(list(protocol), [])]
     jobs = [(str(config_path), p, sets) for p in cands]
     workers = workers or min(len(jobs), os.cpu_count() or 1)
     results = []
@@ -285,8 +306,10 @@ def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60
                 results.append(r)
                 if progress:
                     progress(1)
-    # healthy candidates first: a setting whose own run is unhealthy is not recommended on its score
-    ranked = sorted(results, key=lambda r: (r.get("health") != "healthy", r["cv_rms_m"], cands.index(r["params"])))
+    # healthy and consistent candidates first: a setting whose own run is unhealthy, or whose GNSS
+    # innovations say its noise is far off, is not recommended on its score
+    ranked = sorted(results, key=lambda r: (r.get("health") != "healthy", not r.get("consistent", False),
+                                            r["cv_rms_m"], cands.index(r["params"])))
     best = ranked[0]["params"]
     if not math.isfinite(ranked[0]["cv_rms_m"]):
         raise ConfigError(f"{config_path}: every candidate failed; first error: {ranked[0].get('error')}")
@@ -294,6 +317,12 @@ def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60
         raise ConfigError(f"{config_path}: no candidate gave a healthy run (the best score, "
                           f"{ranked[0]['cv_rms_m']:.3f} m, came with {ranked[0].get('health_reasons')}); "
                           "widen the grid or mend the config first")
+    warnings = []
+    if not ranked[0].get("consistent", False):
+        nis = ", ".join(f"{k} {v:.2f}" for k, v in (ranked[0].get("gnss_mean_nis_per_dof") or {}).items())
+        warnings.append(f"no healthy candidate had its GNSS innovations in band (mean NIS per degree of freedom "
+                        f"within {NIS_BAND[0]:.3g}..{NIS_BAND[1]:.3g}); the best one's: {nis}: its noise is "
+                        "off, widen the grid or mend the noise before taking it")
     for r in ranked:  # JSON has no infinity: a failed candidate has no score
         for k in ("cv_rms_m", "cv_max_m"):
             if k in r and not math.isfinite(r[k]):
@@ -302,7 +331,7 @@ def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60
             "windows_protocol_s": protocol, "windows_validation_s": val, "shifts": int(shifts),
             "windows_validation_shifted_s": [{"shift_s": d, "windows_s": w} for d, w in placed],
             "candidates": ranked,
-            "best": best, "best_toml": toml_snippet(best)}
+            "best": best, "best_toml": toml_snippet(best), "warnings": warnings}
 
 
 def toml_snippet(params: dict) -> str:
@@ -328,14 +357,19 @@ def _toml_value(v):
 def table_text(res: dict) -> str:
     """The ranking as text."""
     keys = list(res["candidates"][0]["params"])
-    head = "  ".join(f"{k:>24}" for k in keys) + f"  {'cv RMS [m]':>11}  {'cv max [m]':>10}  health"
+    head = "  ".join(f"{k:>24}" for k in keys) + f"  {'cv RMS [m]':>11}  {'cv max [m]':>10}  {'GNSS NIS/dof':>12}  health"
     rows = [head]
     for r in res["candidates"]:
         vals = "  ".join(f"{_toml_value(v) if isinstance(v, tuple) else str(v):>24}"
                          for v in (r["params"][k] for k in keys))
         rms, mx = r.get("cv_rms_m"), r.get("cv_max_m")
+        nis = r.get("gnss_mean_nis_per_dof") or {}
+        nis_txt = "/".join(f"{v:.2f}" for v in nis.values()) or "-"
+        verdict = r.get("health", "failed: " + r.get("error", ""))
+        if "health" in r and not r.get("consistent", False):
+            verdict += ", inconsistent"
         rows.append(f"{vals}  {'-' if rms is None else f'{rms:.3f}':>11}  {'-' if mx is None else f'{mx:.3f}':>10}  "
-                    f"{r.get('health', 'failed: ' + r.get('error', ''))}")
+                    f"{nis_txt:>12}  {verdict}")
     n = len(res["windows_validation_s"])
     rows.append(f"{n} validation outages of {res['hold_s']:g} s (after {res['reaid_s']:g} s of aiding) between the "
                 f"{len(res['windows_protocol_s'])} outages of the protocol, whose fixes were never used")
@@ -345,4 +379,5 @@ def table_text(res: dict) -> str:
         scored = sum(len(p["windows_s"]) for p in placed)
         rows.append(f"  run at {len(placed)} placements (shifted by {by} s): {scored} outages scored per candidate")
     rows.append("best:\n" + res["best_toml"])
+    rows += [f"warning: {w}" for w in res.get("warnings", [])]
     return "\n".join(rows)

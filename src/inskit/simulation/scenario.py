@@ -21,7 +21,7 @@ from typing import Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 
-from ..config_files import check_magnitude, read_toml, validation_message
+from ..config_files import check_magnitude, check_scalar_type, read_toml, validation_message
 from ..errors import ConfigError
 from ..types import GnssData, ImuData, NavSolution
 from ..units import DEG
@@ -34,6 +34,7 @@ from .sensors import ImuErrors, apply_imu_errors, preset
 class _S(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
     _magnitude = field_validator("*")(check_magnitude)
+    _kinds = field_validator("*", mode="before")(classmethod(check_scalar_type))
 
 
 class StartSpec(_S):
