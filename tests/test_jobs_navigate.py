@@ -469,3 +469,18 @@ def test_outages_that_leave_fewer_than_two_fixes_name_the_gnss_file():
     with pytest.raises(InputError, match=r"gnss_1934_sf\.pos\.gz: \d+ GNSS fix\(es\), 0 of them outside the "
                                          r"outages; the filter needs at least two"):
         navigate(cfg)
+
+
+def test_repeated_imu_rows_are_reported_and_warned_of_when_kept(result):
+    """The drive's 1138 re-read IMU rows (docs/formats.md): dropped by its config and said so in the
+    summary; kept, the health verdict warns and names the key that drops them."""
+    s = summary(result)
+    assert s["imu_repeated_rows"] == {"repeated_rows": 1138, "repeated_rows_fraction": pytest.approx(1138 / 54859),
+                                      "repeated_rows_dropped": True}
+    assert not [w for w in s["health"]["warnings"] if w.startswith("IMU:")]
+    cfg = load_config(EXAMPLE, {"output": {"plots": False}, "imu": {"repeated_rows": "keep"}})
+    said = []
+    kept = summary(navigate(cfg, log=said.append))
+    warn = [w for w in kept["health"]["warnings"] if w.startswith("IMU:")]
+    assert len(warn) == 1 and "1138 rows (2.1%)" in warn[0] and 'repeated_rows = "drop"' in warn[0]
+    assert any("1138 rows" in line and "kept as samples" in line for line in said)

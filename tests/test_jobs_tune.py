@@ -141,3 +141,12 @@ def test_no_room_for_a_validation_outage_names_start_after_too():
                                           r"the .* s of fixes; shorten --hold, --reaid or --start-after"):
         T.tune(ex / "drive_0708.toml", T.parse_grid(["constraints.nhc_sigma_m_s=0.1,0.3"]), hold_s=10.0,
                start_after_s=1e6, workers=1)
+
+
+def test_shifts_with_no_room_to_move_keep_the_one_placement():
+    """walk_0827: re-aiding 4.999999 s (fitted between the protocol's outages) is under the 5 s a shifted
+    placement keeps, so every one of the three placements came out empty and tune said 'every candidate
+    failed; first error: None'. With no room to move there is one placement, the validation outages as placed."""
+    protocol = [(30.0, 40.0), (60.0, 70.0), (90.0, 100.0)]
+    val = [(74.999999, 84.999999), (104.999999, 114.999999)]
+    assert T.shifted_windows(val, protocol, 0.0, 133.75, 4.999999, 3) == [(0.0, val)]

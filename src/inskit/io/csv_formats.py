@@ -353,7 +353,58 @@ def _find_triplet(df, prefix, units):
     return None
 
 
-def read_imu(path, *, check_units=True, sampled="instant", first_row="initial") -> ImuData:
+#: what to do with a row of a rate log that repeats the previous row exactly (:func:`repeated_rows`)
+REPEATED_ROWS_MODES = ("keep", "drop")
+
+
+def repeated_rows(path, t, values, mode="keep", info=None):
+    """The rows of a rate log that repeat the previous row in every sensor
+    channel, kept or dropped.
+
+    A MEMS sensor's noise makes two consecutive samples that agree in all
+    six channels to the last digit practically impossible; such a row is
+    the logger reading one sample twice (on drive_0708 every one of its
+    1138 repeats follows a short interval, 8 or 9 ms of a nominal 10).
+    Kept, the repeat is integrated as a new sample over its short interval;
+    dropped, the next real sample covers the whole span, which is what a
+    sample averaged over the preceding interval means.
+
+    Parameters
+    ----------
+    path : Path
+        For the message.
+    t : (n,) ndarray
+        Times.
+    values : (n, k) ndarray
+        The sensor channels as read (before any unit or axis change).
+    mode : {"keep", "drop"}
+    info : dict, optional
+        Filled with ``repeated_rows`` (the count), ``repeated_rows_fraction``
+        and ``repeated_rows_dropped``.
+
+    Returns
+    -------
+    keep : (n,) bool ndarray or None
+        The rows to keep (None: all of them).
+    """
+    if mode not in REPEATED_ROWS_MODES:
+        raise InputError(f"repeated_rows must be one of {', '.join(map(repr, REPEATED_ROWS_MODES))}, got {mode!r}")
+    rep = np.zeros(len(t), bool)
+    if len(t) > 1:
+        rep[1:] = np.all(values[1:] == values[:-1], axis=1)
+    n = int(rep.sum())
+    if info is not None:
+        info.update(repeated_rows=n, repeated_rows_fraction=n / max(len(t) - 1, 1),
+                    repeated_rows_dropped=bool(mode == "drop" and n))
+    if mode == "drop" and n:
+        if len(t) - n < 2:
+            raise InputError(f"{path}: {n} of {len(t)} rows repeat the previous one: fewer than two samples remain")
+        return ~rep
+    return None
+
+
+def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", repeated="keep",
+             info=None) -> ImuData:
     """Read an IMU CSV file of the inskit format (``docs/formats.md``).
 
     Columns: ``time_s`` and either rates ``gyro_{x,y,z}_{rad_s|deg_s|deg_h}``
@@ -383,6 +434,11 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial") 
         real increment, and an initial epoch one median interval earlier is
         prepended; ``"discard"``: the initial epoch, whatever it holds is
         dropped (set to zero).
+    repeated : {"keep", "drop"}
+        Rate files only: a row repeating the previous one in all six
+        channels (:func:`repeated_rows`) kept as a sample or dropped.
+    info : dict, optional
+        Filled by :func:`repeated_rows` (rate files).
 
     Returns
     -------
@@ -391,8 +447,14 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial") 
     """
     if first_row not in FIRST_ROW_MODES:
         raise InputError(f"`first_row` must be one of {', '.join(map(repr, FIRST_ROW_MODES))}, got {first_row!r}")
+    if repeated not in REPEATED_ROWS_MODES:
+        raise InputError(f"repeated_rows must be one of {', '.join(map(repr, REPEATED_ROWS_MODES))}, got "
+                         f"{repeated!r}")
     lean = _read_imu_lean(path, check_units, first_row)
     if lean is not None:
+        if repeated != "keep":
+            raise InputError(f"{path}: repeated_rows = {repeated!r} applies to rate files; this one holds increments "
+                             "(a repeated increment is not a re-read sample of a rate)")
         return lean
     path, df = read_table(path)
     require_columns(path, df, ["time_s"], f" (the inskit IMU format; {OTHER_IMU_FORMATS_HINT})")
@@ -403,8 +465,13 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial") 
     if gu and au:
         gcols = [f"gyro_{a}_{gu}" for a in AXES]
         acols = [f"accel_{a}_{au}" for a in AXES]
-        w = numeric_columns(path, df, gcols) * GYRO_UNITS[gu]
-        f = numeric_columns(path, df, acols) * ACCEL_UNITS[au]
+        w = numeric_columns(path, df, gcols)
+        f = numeric_columns(path, df, acols)
+        keep = repeated_rows(path, t, np.hstack([w, f]), repeated, info)
+        if keep is not None:
+            t, w, f = t[keep], w[keep], f[keep]
+        w = w * GYRO_UNITS[gu]
+        f = f * ACCEL_UNITS[au]
         if check_units:
             check_imu_units(path, w, f, gcols[0], acols[0], gu, au)
         if len(t) < 2:
@@ -414,6 +481,9 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial") 
                              "file holds rates, which have no first increment to lose")
         return ImuData.from_rates(t, w, f, sampled=sampled)
     if du and vu:
+        if repeated != "keep":
+            raise InputError(f"{path}: repeated_rows = {repeated!r} applies to rate files; this one holds increments "
+                             "(a repeated increment is not a re-read sample of a rate)")
         tcols = [f"dtheta_{a}_{du}" for a in AXES]
         vcols = [f"dv_{a}_{vu}" for a in AXES]
         raw = numeric_columns(path, df, tcols + vcols)

@@ -122,7 +122,7 @@ def _refuse_options(path, fmt, given: dict, fixed=None):
 
 
 def read_imu(path, format=None, *, check_units=True, sampled=None, first_row=None, week0=None,
-             time_offset_s=None, mount_rpy=None) -> ImuData:
+             time_offset_s=None, mount_rpy=None, repeated="keep", info=None) -> ImuData:
     """Read an IMU log of any format inskit knows (:data:`IMU_FORMATS`).
 
     Parameters
@@ -150,6 +150,12 @@ def read_imu(path, format=None, *, check_units=True, sampled=None, first_row=Non
     mount_rpy : (3,) radians, optional
         rtklibexplorer only: mounting rotation, body to sensor (ZYX;
         :func:`inskit.io.rtklib.mount_dcm`); default the sensor axes.
+    repeated : {"keep", "drop"}
+        Rate logs (both formats): a row repeating the previous one in all six
+        channels, a sample the logger read twice
+        (:func:`inskit.io.csv_formats.repeated_rows`), kept or dropped.
+    info : dict, optional
+        Filled with the count of such rows (``repeated_rows``, ...).
 
     Returns
     -------
@@ -174,12 +180,13 @@ def read_imu(path, format=None, *, check_units=True, sampled=None, first_row=Non
                         fixed={"sampled": "average", "first_row": "initial"})
         imu, _ = read_rtklibexplorer_imu(path, week0=week0, time_offset_s=time_offset_s or 0.0,
                                          mount_rpy=(0.0, 0.0, 0.0) if mount_rpy is None else mount_rpy,
-                                         check_units=check_units)
+                                         check_units=check_units, repeated=repeated, info=info)
         return imu
     from .csv_formats import read_imu as read_inskit
 
     _refuse_options(path, fmt, {"week0": week0, "time_offset_s": time_offset_s, "mount_rpy": mount_rpy})
-    return read_inskit(path, check_units=check_units, sampled=sampled or "instant", first_row=first_row or "initial")
+    return read_inskit(path, check_units=check_units, sampled=sampled or "instant", first_row=first_row or "initial",
+                       repeated=repeated, info=info)
 
 
 def read_gnss(path, format=None, *, quality=None, week0=None, time_offset_s=None) -> GnssData:

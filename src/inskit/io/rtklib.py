@@ -18,7 +18,7 @@ from ..files import require_file
 from ..types import GnssData, ImuData
 from ..units import DEG, G0
 from .csv_formats import (_header_names, check_imu_units, check_time_column, lean_columns, numeric_columns, open_text,
-                          read_table, require_columns)
+                          read_table, repeated_rows, require_columns)
 
 GPS_EPOCH = datetime(1980, 1, 6, tzinfo=timezone.utc)
 WEEK_S = 604800.0
@@ -175,7 +175,7 @@ def mount_dcm(mount_rpy):
 
 
 def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0.0, 0.0, 0.0),
-                            check_units=True):
+                            check_units=True, repeated="keep", info=None):
     """Read the rtklibexplorer ``imu_*_gpst.csv`` log.
 
     Columns ``gps_week, gps_sow_s, acc_{x,y,z}_g, gyro_{x,y,z}_dps,
@@ -191,6 +191,13 @@ def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0
         against GNSS velocity, -0.2 s against position).
     mount_rpy : (3,) radians
         Mounting rotation, see :func:`mount_dcm`.
+    repeated : {"keep", "drop"}
+        A row repeating the previous one in all six sensor channels (the
+        logger read one sample twice: :func:`inskit.io.csv_formats.repeated_rows`)
+        kept as a sample over its short interval, or dropped (the next sample,
+        averaged over the preceding interval, then covers the whole span).
+    info : dict, optional
+        Filled with the count of repeated rows (``repeated_rows``, ...).
 
     Returns
     -------
@@ -217,6 +224,9 @@ def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0
         week0 = int(week[0])
     t = (week - week0) * WEEK_S + a[:, 1] + time_offset_s
     check_time_column(path, t, "gps_sow_s")
+    keep = repeated_rows(path, t, a[:, 2:8], repeated, info)
+    if keep is not None:
+        t, a = t[keep], a[keep]
     C_bs = mount_dcm(mount_rpy)
     f = a[:, 2:5] * G0 @ C_bs.T
     w = a[:, 5:8] * DEG @ C_bs.T

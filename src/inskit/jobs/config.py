@@ -82,6 +82,11 @@ class ImuSection(_Strict):
         "initial epoch, zero increments; a first row that holds increments is refused, the file seems to lack its "
         "initial row), 'increment' (a real increment: an initial epoch one median interval earlier is prepended) "
         "or 'discard' (the initial epoch: its increments are dropped); docs/formats.md")
+    repeated_rows: Literal["keep", "drop"] = Field(
+        "keep", description="rate logs: a row that repeats the previous one in all six channels (the logger read "
+        "one sample twice; a noisy MEMS sensor never repeats itself to the last digit): 'keep' integrates it as a "
+        "sample over its short interval (the health verdict then warns when there are any), 'drop' leaves it out "
+        "so that the next sample covers the whole span (docs/formats.md)")
     start_s: float | None = Field(None, description="ignore IMU data before this time (IMU time scale, after "
                                   "time_offset_s; default: the first GNSS epoch)")
     gap_factor: float = Field(5.0, gt=1.0, description="an interval longer than this many median intervals is a gap")

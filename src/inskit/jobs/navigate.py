@@ -47,6 +47,7 @@ class NavigateResult:
     streams: list = None  #: solution files written during a streamed run, committed by write_outputs
     pending: object = None  #: the writer still finishing them (:func:`finish_streams`)
     truth_parts: dict = None  #: a streamed run's truth errors, segment by segment (``analysis.ErrorSummary``)
+    imu_notes: dict = None  #: what the IMU reader found (repeated rows), when navigate read the files
 
 
 def finish_streams(res: NavigateResult) -> None:
@@ -300,11 +301,13 @@ def _format_hint(section, path, fmt):
                          f"(or --{section}-format {other})") from None
 
 
-def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = None):
+def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = None, notes: dict | None = None):
     """Read the IMU and GNSS files on one time base; check they overlap.
 
     With tight coupling the fixes (``gnss.file``, else our single-point
-    solution of ``raw``) serve the start-up and the scoring only."""
+    solution of ``raw``) serve the start-up and the scoring only.
+    ``notes`` (a dict) is filled with what the IMU reader found
+    (``repeated_rows``: :func:`inskit.io.csv_formats.repeated_rows`)."""
     imu_off = cfg.imu.time_offset_s if time_offset_s is None else time_offset_s
     ipath = cfg.resolve(cfg.imu.file)
     week0 = None if raw is None else raw.week
@@ -333,11 +336,12 @@ def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = N
         with _format_hint("imu", ipath, cfg.imu.format):
             imu, _ = read_rtklibexplorer_imu(ipath, week0=week0, time_offset_s=imu_off,
                                              mount_rpy=np.radians(cfg.imu.mount_rpy_deg),
-                                             check_units=cfg.imu.check_units)
+                                             check_units=cfg.imu.check_units, repeated=cfg.imu.repeated_rows,
+                                             info=notes)
     else:
         with _format_hint("imu", ipath, cfg.imu.format):
             raw_imu = io.read_imu(ipath, format="inskit", check_units=cfg.imu.check_units,
-                                  first_row=cfg.imu.first_row)
+                                  first_row=cfg.imu.first_row, repeated=cfg.imu.repeated_rows, info=notes)
         from ..io.rtklib import mount_dcm
 
         C_bs = mount_dcm(np.radians(cfg.imu.mount_rpy_deg))
@@ -570,12 +574,18 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     t_start = time.perf_counter()
     tight = cfg.gnss.coupling == "tight"
     raw = None
+    imu_notes = {}
     if inputs is None:
         from .warm import warm_compiled_code
 
         warm_compiled_code()  # numba's own start-up, beside the reading (which pyarrow does without the GIL)
         raw = load_raw_gnss(cfg, log) if (tight or cfg.gnss.file is None) else None
-        imu, gnss = load_inputs(cfg, time_offset_s, raw)
+        imu, gnss = load_inputs(cfg, time_offset_s, raw, notes=imu_notes)
+        n_rep = imu_notes.get("repeated_rows", 0)
+        if n_rep and log:
+            log(f"IMU: {n_rep} rows ({imu_notes['repeated_rows_fraction']:.1%}) repeat the previous row in all six "
+                "channels (a sample read twice): " + ("dropped ([imu] repeated_rows = \"drop\")"
+                                                      if imu_notes["repeated_rows_dropped"] else "kept as samples"))
     else:
         imu, gnss = inputs[:2]
         raw = inputs[2] if len(inputs) > 2 else None
@@ -716,7 +726,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     score_s = score_outages(sm.solution, gnss, windows, lever, truth=truth) if sm is not None else None
     return NavigateResult(cfg, imu, gnss, windows, used, startup, settings, out, sm, score_f, score_s,
                           time.perf_counter() - t_start, measured, gaps, raw, clock_start, rate_changes, truth,
-                          streams, pending, truth_parts)
+                          streams, pending, truth_parts, imu_notes)
 
 
 def _run_streamed(cfg, imu, gnss, windows, initial, meas, settings, extra, smooth, progress, stream_dir, log,
@@ -902,6 +912,15 @@ def summary(res: NavigateResult) -> dict:
                              else "(given to navigate() in Python)")
         out["truth_errors"] = truth_errors(res, res.truth)
     out["health"] = health(fw, res.gaps or (), res.rate_changes or ())
+    notes = res.imu_notes or {}
+    if notes.get("repeated_rows"):
+        out["imu_repeated_rows"] = {k: notes[k] for k in ("repeated_rows", "repeated_rows_fraction",
+                                                          "repeated_rows_dropped")}
+        if not notes["repeated_rows_dropped"]:
+            out["health"]["warnings"].append(
+                f"IMU: {notes['repeated_rows']} rows ({notes['repeated_rows_fraction']:.1%}) repeat the previous row "
+                "in all six channels (the logger read one sample twice?), integrated as samples over their short "
+                "intervals; [imu] repeated_rows = \"drop\" leaves them out")
     from ..integration.mounting import mounting_check, mounting_summary
 
     c, odo = res.config.constraints, res.config.odometer

@@ -211,18 +211,18 @@ def shifted_windows(val, protocol_rel, t_first_rel, t_last_rel, reaid_s, shifts,
     -------
     list of (shift_s, windows)
     """
-    if shifts <= 1:
+    m = min(min_reaid_s, reaid_s)  # a validation outage placed with less aiding keeps what it was placed with
+    spread = max(0.0, reaid_s - m)
+    if shifts <= 1 or spread <= 1e-6:  # no room to move: one placement (three copies of it decided nothing more)
         return [(0.0, list(val))]
-    spread = max(0.0, reaid_s - min(min_reaid_s, reaid_s))
     out = []
     for k in range(shifts):
         d = -spread + 2.0 * spread * k / (shifts - 1)
         keep = []
         for a, b in val:
             a2, b2 = a + d, b + d
-            clear = a2 - min_reaid_s >= t_first_rel - 1e-9 and b2 + min_reaid_s <= t_last_rel + 1e-9
-            clear = clear and all(b2 + min_reaid_s <= pa + 1e-9 or a2 - min_reaid_s >= pb - 1e-9
-                                  for pa, pb in protocol_rel)
+            clear = a2 - m >= t_first_rel - 1e-9 and b2 + m <= t_last_rel + 1e-9
+            clear = clear and all(b2 + m <= pa + 1e-9 or a2 - m >= pb - 1e-9 for pa, pb in protocol_rel)
             if clear:
                 keep.append((a2, b2))
         out.append((d, keep))
@@ -291,6 +291,10 @@ def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60
     if int(shifts) < 1:
         raise ConfigError(f"shifts must be at least 1, got {shifts!r}")
     placed = shifted_windows(val, protocol, 0.0, float(gnss.time[-1]) - t0, reaid_s, int(shifts))
+    if not any(w for _, w in placed):
+        raise ConfigError(f"{config_path}: no placement of the validation outages keeps "
+                          f"{min(SHIFT_MIN_REAID_S, reaid_s):g} s of aiding on both sides; shorten --hold or "
+                          "--reaid, or use fewer --shifts")
     sets = [(sorted(protocol + w), w) for _, w in placed if w] + [(list(protocol), [])]
     jobs = [(str(config_path), p, sets) for p in cands]
     workers = workers or min(len(jobs), os.cpu_count() or 1)
