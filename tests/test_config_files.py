@@ -104,3 +104,29 @@ def test_kinds_the_annotation_admits_still_pass(tmp_path):
                  "type = \"accelerate\"\nspeed_m_s = \"5\"\nduration_s = 5\n")
     with pytest.raises(ConfigError, match=r"field 'segment\.0\.speed_m_s': \"5\" is text"):
         load_scenario(p)
+
+
+def test_a_scenario_sensor_override_table_is_checked_too(tmp_path):
+    """[imu.gyro] noise = "0.1" was 'internal error: TypeError', noise = true became 1.0 and 1e300 passed."""
+    from inskit.simulation.scenario import load_scenario
+
+    base = ("name = \"s\"\n[start]\nlat_deg = 45\nlon_deg = 7\n[imu]\nrate_hz = 100\n[imu.gyro]\n{}\n"
+            "[[segment]]\ntype = \"static\"\nduration_s = 5\n")
+    p = tmp_path / "s.toml"
+    for line, said in (('noise = "0.1"', r'noise = "0\.1": expected a number'),
+                       ("noise = true", r"noise = true: expected a number"),
+                       ('fixed_bias = ["1", 2, 3]', r'fixed_bias = "1": expected a number'),
+                       ("noise = 1e300", r"noise = 1e\+300 is beyond")):
+        p.write_text(base.format(line))
+        with pytest.raises(ConfigError, match=rf"field 'imu\.gyro': {said}"):
+            load_scenario(p)
+
+
+def test_a_literal_of_the_wrong_kind_names_its_choices(tmp_path):
+    from inskit.jobs.config import load_config
+
+    p = tmp_path / "c.toml"
+    p.write_text("[imu]\nfile = \"a.csv\"\nrepeated_rows = true\n[gnss]\nfile = \"g.csv\"\n")
+    with pytest.raises(ConfigError, match=r"field 'imu\.repeated_rows': true is a boolean; this setting takes one "
+                                          r"of \"keep\", \"drop\""):
+        load_config(p)

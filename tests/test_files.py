@@ -163,3 +163,18 @@ def test_an_output_folder_that_is_a_file_or_under_one_is_said_to_be(tmp_path):
     with pytest.raises(InputError, match=r"afile: is a file; expected an output folder \(so .*afile/a/b cannot be"):
         check_folder_writable(f / "a" / "b")
     assert f.read_text() == "mine\n"
+
+
+def test_a_folder_that_existed_is_never_taken_for_one_made_here(tmp_path, monkeypatch):
+    """'--out x/../E/new' with no x and an empty E: E looked missing (x did not exist) and was removed
+    when the command then failed."""
+    import pathlib
+
+    from inskit import files
+
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "E").mkdir()
+    files._MADE.clear()
+    files.check_folder_writable(pathlib.Path("x/../E/new"))
+    files.remove_made_folders()
+    assert (tmp_path / "E").is_dir() and not (tmp_path / "E" / "new").exists()

@@ -84,6 +84,7 @@ def test_errors_through_main_are_one_line(tmp_path):
     lines = r.stderr.strip().splitlines()
     assert lines[-1].startswith("inskit: error: layout 'six'") and "sign" in lines[-1]
     assert "Traceback" not in r.stderr
+    assert not (tmp_path / "n").exists()  # the refused run leaves no empty output folder behind
 
 
 def test_reproduce_gyrofree_json(tmp_path):

@@ -150,3 +150,20 @@ def test_shifts_with_no_room_to_move_keep_the_one_placement():
     protocol = [(30.0, 40.0), (60.0, 70.0), (90.0, 100.0)]
     val = [(74.999999, 84.999999), (104.999999, 114.999999)]
     assert T.shifted_windows(val, protocol, 0.0, 133.75, 4.999999, 3) == [(0.0, val)]
+
+
+def test_a_config_without_outages_tunes_and_an_unjudged_candidate_is_not_called_consistent(tmp_path):
+    """Review of the consistency rule: with [outages] protocol = "none" the consistency run asked for
+    protocol "windows" with no windows, which the config refuses (every such tune failed); and the
+    uncoupled scheme, which has no GNSS innovations, counted as consistent (all() of nothing) and was
+    recommended at 3.5 km over a closed loop at 1.7 m."""
+    nav = _sim_drive(tmp_path)
+    nav.write_text(nav.read_text().replace('[outages]\nprotocol = "windows"\nwindows_s = [[100.0, 110.0]]\n',
+                                           '[outages]\nprotocol = "none"\n'))
+    res = T.tune(nav, T.parse_grid(["filter.scheme=uncoupled,closed"]), hold_s=15.0, reaid_s=10.0,
+                 start_after_s=70.0, workers=1)
+    by = {c["params"]["filter.scheme"]: c for c in res["candidates"]}
+    assert res["windows_protocol_s"] == [] and by["closed"]["consistent"]
+    assert by["uncoupled"]["gnss_mean_nis_per_dof"] == {} and by["uncoupled"]["consistent"] is False
+    assert res["best"] == {"filter.scheme": "closed"}
+    assert "no GNSS NIS" in T.table_text(res)

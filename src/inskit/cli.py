@@ -73,9 +73,13 @@ def _parse_init(text):
 def _height_ref(text, imu):
     """``--height-ref``: a number [m], or a height log interpolated onto the IMU times."""
     try:
-        return float(text)
+        x = float(text)
     except ValueError:
-        pass
+        x = None
+    if x is not None:
+        if not np.isfinite(x):
+            raise InputError(f"--height-ref: {text!r} is not a finite height in metres")
+        return x
     from .jobs.height import height_profile_at
 
     if not Path(text).is_file():
@@ -529,8 +533,10 @@ def schemes(scenario_file, outage, seed, as_json):
 
     try:
         a, b = (float(x) for x in outage.split(","))
+        if not (np.isfinite(a) and np.isfinite(b)):
+            raise ValueError
     except ValueError:
-        raise InputError(f"--outage: expected START,END in seconds, got {outage!r}") from None
+        raise InputError(f"--outage: expected START,END in seconds (two finite numbers), got {outage!r}") from None
     if not b > a:
         raise InputError(f"--outage: the end ({b}) must come after the start ({a})")
     sc = load_scenario(scenario_file)
@@ -583,8 +589,11 @@ def align(imu_file, lat_deg, method, m_gain, t_start, t_end, imu_format, mount_r
     if mount_rpy:
         try:
             mount = tuple(float(x) for x in mount_rpy.split(","))
+            if not np.all(np.isfinite(mount)):
+                raise ValueError
         except ValueError:
-            raise InputError(f"--mount-rpy: expected roll,pitch,yaw in degrees, got {mount_rpy!r}") from None
+            raise InputError(f"--mount-rpy: expected roll,pitch,yaw in degrees (finite numbers), got {mount_rpy!r}") \
+                from None
         if len(mount) != 3:
             raise InputError(f"--mount-rpy: expected three numbers, got {mount_rpy!r}")
     if m_gain is not None and not 0.0 <= m_gain <= 1.0:

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import math
 import tomllib
+import typing
 from pathlib import Path
 
 from pydantic import ValidationError
@@ -90,6 +91,34 @@ def _leaf_kinds(tp):
     return {"other"}
 
 
+def _literal_choices(tp):
+    """The text values of the Literal inside an annotation (``Literal[...]``, ``Literal[...] | None``), else ()."""
+    if typing.get_origin(tp) is typing.Literal:
+        return tuple(a for a in typing.get_args(tp) if isinstance(a, str))
+    for a in typing.get_args(tp):
+        c = _literal_choices(a)
+        if c:
+            return c
+    return ()
+
+
+def _check_dict_values(v):
+    """A free-form table of numeric overrides (the scenario's ``[imu.gyro]`` and ``[imu.accel]``): every
+    value a number or a list of numbers, within :data:`MAX_SETTING`."""
+    if not isinstance(v, dict):
+        return v
+    for k, x in v.items():
+        items = x if isinstance(x, (list, tuple)) else [x]
+        for y in items:
+            kind = _kind(y)
+            if kind != "number":
+                shown = f'"{y}"' if kind == "text" else ("true" if y is True else "false" if y is False else repr(y))
+                raise ValueError(f"{k} = {shown}: expected a number (or a list of numbers)")
+            if abs(y) > MAX_SETTING:
+                raise ValueError(f"{k} = {y:g} is beyond +-{MAX_SETTING:g}: no setting means a value that large")
+    return v
+
+
 def _kind(v):
     if isinstance(v, bool):
         return "bool"
@@ -113,7 +142,10 @@ def check_scalar_type(cls, v, info):
     field = cls.model_fields.get(info.field_name)
     if field is None:
         return v
+    if field.annotation is dict or typing.get_origin(field.annotation) is dict:
+        return _check_dict_values(v)
     kinds = _leaf_kinds(field.annotation)
+    choices = _literal_choices(field.annotation)
     if "other" in kinds or not kinds:
         return v
 
@@ -125,6 +157,8 @@ def check_scalar_type(cls, v, info):
         k = _kind(x)
         if k is not None and k not in kinds:
             want = " or ".join(_SAY[w] for w in sorted(kinds))
+            if choices and kinds == {"text"}:
+                want = "one of " + ", ".join(f'"{c}"' for c in choices)
             shown = f'"{x}"' if k == "text" else ("true" if x is True else "false" if x is False else repr(x))
             hint = " (without quotes)" if k == "text" else ""
             raise ValueError(f"{shown} is {_IS[k]}; this setting takes {want}{hint}")

@@ -61,7 +61,8 @@ def check_folder_writable(folder):
                 where = "" if p == folder else f" (so {folder} cannot be made)"
                 raise InputError(f"{p}: is a file; expected an output folder{where}")
             break
-    missing = [p for p in (folder, *folder.parents) if not p.exists()]  # the deepest first
+    full = folder.resolve()  # 'x/../E/new' with no x: E exists, and must not be taken for a folder made here
+    missing = [p for p in (full, *full.parents) if not p.exists()]  # the deepest first
     try:
         folder.mkdir(parents=True, exist_ok=True)
         _MADE.extend(p for p in missing if p not in _MADE)

@@ -42,8 +42,9 @@ def _check_out(out_dir, names, overwrite):
         for n in names:
             if (out / n).exists():
                 raise InputError(f"{out / n}: already exists; refusing to overwrite it (use --force)")
-    out.mkdir(parents=True, exist_ok=True)
-    return out
+    from ..files import check_folder_writable
+
+    return check_folder_writable(out)  # made here, removed again if the command then fails
 
 
 def array_errors_from_datasheet(layout, rng, rate_hz, *, bias_ug=0.0, bias_sigma_ug=0.0, noise_ug_sqrt_hz=0.0,

@@ -231,8 +231,8 @@ def compare_schemes(scenario, outage, seed=0, schemes=("uncoupled", "open", "clo
     The IMU carries the scenario's full error model; the filters get the
     matched noise model (15 states).  Returns one row per scheme with the
     errors at the end of the outage and the RMS horizontal error with GNSS on
-    (after the first 60 s, outside the outage and the 60 s after it; None
-    when the scenario leaves no such time).
+    (after the first 60 s, outside the outage, the scenario's own outages
+    and the 60 s after each; None when the scenario leaves no such time).
     """
     from ..simulation.scenario import build_trajectory, gnss_errors, imu_errors
 
@@ -253,6 +253,18 @@ def compare_schemes(scenario, outage, seed=0, schemes=("uncoupled", "open", "clo
     truth = truth_solution(tr, t)
     init = initial or InitialUncertainty(pos_m=(1.0, 1.0, 2.0), vel_m_s=0.1, roll_pitch_rad=np.radians(0.5),
                                          yaw_rad=np.radians(2.0))
+    # GNSS on: after the first 60 s (start-up), outside every stretch without a used fix (this outage, the
+    # scenario's own outages) and the 60 s of re-convergence after each
+    gnss_on = t > 60.0
+    tu = gnss.time[use]
+    if len(tu):
+        step = float(np.median(np.diff(tu))) if len(tu) > 1 else 1.0
+        bounds = np.r_[t[0], tu, t[-1]]
+        for a, b in zip(bounds[:-1], bounds[1:]):
+            if b - a > 2.0 * step:
+                gnss_on &= ~((t > a) & (t < b + 60.0))
+    else:
+        gnss_on[:] = False
     rows = []
     lever = tuple(scenario.gnss.lever_arm_b_m)
     for scheme in schemes:
@@ -266,8 +278,8 @@ def compare_schemes(scenario, outage, seed=0, schemes=("uncoupled", "open", "clo
         k_end = int(np.searchsorted(t, outage[1]))
         d = earth.lla_to_ned(sol.lla[k_end], truth.lla[k_end])
         att = rot.attitude_error(sol.C_nb[k_end], truth.C_nb[k_end])
-        # GNSS on: after the first 60 s (start-up), outside the outage and the 60 s of re-convergence after it
-        on = (t > 60.0) & ((t < outage[0]) | (t > outage[1] + 60.0))
+        on = gnss_on
+
         don = earth.lla_to_ned(sol.lla[on][::100], truth.lla[on][::100]) if on.any() else None
         rows.append({
             "scheme": scheme,

@@ -272,7 +272,7 @@ def _validation_message(path, exc):
 
     mine = [x for x in errors if x["loc"][:2] == e["loc"][:2]]
     more = f" (and {len(errors) - len(mine)} more)" if len(errors) > len(mine) else ""
-    return f"{path}: " + "; ".join(f"field '{where(x['loc'])}': {x['msg']}" for x in mine) + more
+    return f"{path}: " + "; ".join(f"field '{where(x['loc'])}': {x['msg'].removeprefix('Value error, ')}" for x in mine) + more
 
 
 def _datasheet(errors) -> dict:

@@ -173,7 +173,8 @@ def _run_one(args):
     errs, health, reasons, nis = [], "healthy", [], {}
     for windows_rel, val_rel in sets:  # one run per placement of the validation outages
         over = overrides_of(params)
-        over["outages"] = {"protocol": "windows", "windows_s": [list(w) for w in windows_rel], "keep_satellites": 0}
+        over["outages"] = ({"protocol": "windows", "windows_s": [list(w) for w in windows_rel], "keep_satellites": 0}
+                           if windows_rel else {"protocol": "none"})  # the consistency run of a config without any
         cfg = C.load_config(config_path, over)
         try:
             s = summary(navigate(cfg))
@@ -196,7 +197,8 @@ def _run_one(args):
     return {"params": params, "cv_rms_m": float(np.sqrt(np.mean(errs ** 2))) if len(errs) else math.inf,
             "cv_max_m": float(errs.max()) if len(errs) else math.inf, "cv_outages": int(len(errs)),
             "health": health, "health_reasons": reasons, "gnss_mean_nis_per_dof": nis,
-            "consistent": all(NIS_BAND[0] <= v <= NIS_BAND[1] for v in nis.values())}
+            # no GNSS innovations (the uncoupled scheme): consistency unknown, not granted
+            "consistent": bool(nis) and all(NIS_BAND[0] <= v <= NIS_BAND[1] for v in nis.values())}
 
 
 def shifted_windows(val, protocol_rel, t_first_rel, t_last_rel, reaid_s, shifts, min_reaid_s=SHIFT_MIN_REAID_S):
@@ -296,6 +298,10 @@ def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60
                           f"{min(SHIFT_MIN_REAID_S, reaid_s):g} s of aiding on both sides; shorten --hold or "
                           "--reaid, or use fewer --shifts")
     sets = [(sorted(protocol + w), w) for _, w in placed if w] + [(list(protocol), [])]
+    notes = []
+    if int(shifts) > 1 and len(placed) == 1:
+        notes.append(f"--shifts {int(shifts)}: one placement only (re-aiding {reaid_s:g} s leaves no room to move the "
+                     f"validation outages while keeping {SHIFT_MIN_REAID_S:g} s of aiding)")
     jobs = [(str(config_path), p, sets) for p in cands]
     workers = workers or min(len(jobs), os.cpu_count() or 1)
     results = []
@@ -325,8 +331,8 @@ def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60
     if not ranked[0].get("consistent", False):
         nis = ", ".join(f"{k} {v:.2f}" for k, v in (ranked[0].get("gnss_mean_nis_per_dof") or {}).items())
         warnings.append(f"no healthy candidate had its GNSS innovations in band (mean NIS per degree of freedom "
-                        f"within {NIS_BAND[0]:.3g}..{NIS_BAND[1]:.3g}); the best one's: {nis}: its noise is "
-                        "off, widen the grid or mend the noise before taking it")
+                        f"within {NIS_BAND[0]:.3g}..{NIS_BAND[1]:.3g}); the best one's: {nis or 'none (no GNSS update)'}:"
+                        " its noise is off or unjudged, widen the grid or mend the noise before taking it")
     for r in ranked:  # JSON has no infinity: a failed candidate has no score
         for k in ("cv_rms_m", "cv_max_m"):
             if k in r and not math.isfinite(r[k]):
@@ -335,7 +341,8 @@ def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60
             "windows_protocol_s": protocol, "windows_validation_s": val, "shifts": int(shifts),
             "windows_validation_shifted_s": [{"shift_s": d, "windows_s": w} for d, w in placed],
             "candidates": ranked,
-            "best": best, "best_toml": toml_snippet(best), "warnings": warnings}
+            "best": best, "best_toml": toml_snippet(best), "warnings": notes + warnings,
+            "placements": len(placed)}
 
 
 def toml_snippet(params: dict) -> str:
@@ -371,7 +378,7 @@ def table_text(res: dict) -> str:
         nis_txt = "/".join(f"{v:.2f}" for v in nis.values()) or "-"
         verdict = r.get("health", "failed: " + r.get("error", ""))
         if "health" in r and not r.get("consistent", False):
-            verdict += ", inconsistent"
+            verdict += ", inconsistent" if nis else ", no GNSS NIS"
         rows.append(f"{vals}  {'-' if rms is None else f'{rms:.3f}':>11}  {'-' if mx is None else f'{mx:.3f}':>10}  "
                     f"{nis_txt:>12}  {verdict}")
     n = len(res["windows_validation_s"])
