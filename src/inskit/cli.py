@@ -516,11 +516,6 @@ def allan(imu_file, plot_file, toml_file, force, no_unit_check, first_row, as_js
     _emit(res, as_json, "\n".join(lines))
 
 
-def _fmt_or_na(x, fmt=".3f"):
-    """A figure, or 'n/a' where there is none (None)."""
-    return "n/a" if x is None else format(x, fmt)
-
-
 @cli.command()
 @click.argument("scenario_file", type=click.Path(dir_okay=False))
 @click.option("--outage", required=True, help="GNSS outage START,END in seconds of the scenario.")
@@ -529,6 +524,7 @@ def _fmt_or_na(x, fmt=".3f"):
 def schemes(scenario_file, outage, seed, as_json):
     """Uncoupled, open-loop and closed-loop integration on one simulated run."""
     from .jobs.montecarlo import compare_schemes
+    from .jobs.navigate import fmt_or_na
     from .simulation.scenario import load_scenario
 
     try:
@@ -547,7 +543,7 @@ def schemes(scenario_file, outage, seed, as_json):
     for r in rows:
         lines.append(f"{r['scheme']:<11}{r['outage_end_horizontal_m']:>10.2f}{r['outage_end_vertical_m']:>9.2f}"
                      f"{r['outage_end_velocity_m_s']:>9.3f}{r['outage_end_attitude_deg']:>9.3f}"
-                     f"{_fmt_or_na(r['gnss_on_horizontal_rms_m']):>21}")
+                     f"{fmt_or_na(r['gnss_on_horizontal_rms_m']):>21}")
     _emit(res, as_json, "\n".join(lines))
 
 
@@ -734,7 +730,7 @@ def main(argv=None):
     raises ``SystemExit`` as usual."""
     from . import files
 
-    files._MADE.clear()
+    files.forget_made_folders()
     code = _run(argv)
     if code != 0:  # refused or failed: no empty output folder left behind (only empty ones go)
         files.remove_made_folders()

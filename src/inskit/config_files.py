@@ -112,11 +112,19 @@ def _check_dict_values(v):
         for y in items:
             kind = _kind(y)
             if kind != "number":
-                shown = f'"{y}"' if kind == "text" else ("true" if y is True else "false" if y is False else repr(y))
-                raise ValueError(f"{k} = {shown}: expected a number (or a list of numbers)")
+                raise ValueError(f"{k} = {_shown(y)}: expected a number (or a list of numbers)")
             if abs(y) > MAX_SETTING:
                 raise ValueError(f"{k} = {y:g} is beyond +-{MAX_SETTING:g}: no setting means a value that large")
     return v
+
+
+def _shown(v):
+    """A TOML value as its file shows it: text in quotes, true/false, numbers as they are."""
+    if isinstance(v, str):
+        return f'"{v}"'
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    return repr(v)
 
 
 def _kind(v):
@@ -159,9 +167,8 @@ def check_scalar_type(cls, v, info):
             want = " or ".join(_SAY[w] for w in sorted(kinds))
             if choices and kinds == {"text"}:
                 want = "one of " + ", ".join(f'"{c}"' for c in choices)
-            shown = f'"{x}"' if k == "text" else ("true" if x is True else "false" if x is False else repr(x))
             hint = " (without quotes)" if k == "text" else ""
-            raise ValueError(f"{shown} is {_IS[k]}; this setting takes {want}{hint}")
+            raise ValueError(f"{_shown(x)} is {_IS[k]}; this setting takes {want}{hint}")
 
     walk(v)
     return v

@@ -38,6 +38,11 @@ def atomic_write(path):
 _MADE: list = []
 
 
+def forget_made_folders():
+    """Start a command afresh: no folder of an earlier one (in the same process) is removed for it."""
+    _MADE.clear()
+
+
 def remove_made_folders():
     """Remove the folders :func:`check_folder_writable` made that are still
     empty (the CLI calls it when a command fails: a refused input leaves no

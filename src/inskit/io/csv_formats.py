@@ -387,8 +387,7 @@ def repeated_rows(path, t, values, mode="keep", info=None):
     keep : (n,) bool ndarray or None
         The rows to keep (None: all of them).
     """
-    if mode not in REPEATED_ROWS_MODES:
-        raise InputError(f"repeated_rows must be one of {', '.join(map(repr, REPEATED_ROWS_MODES))}, got {mode!r}")
+    _check_repeated_mode(mode)
     rep = np.zeros(len(t), bool)
     if len(t) > 1:
         rep[1:] = np.all(values[1:] == values[:-1], axis=1)
@@ -401,6 +400,18 @@ def repeated_rows(path, t, values, mode="keep", info=None):
             raise InputError(f"{path}: {n} of {len(t)} rows repeat the previous one: fewer than two samples remain")
         return ~rep
     return None
+
+
+def _check_repeated_mode(mode):
+    if mode not in REPEATED_ROWS_MODES:
+        raise InputError(f"repeated_rows must be one of {', '.join(map(repr, REPEATED_ROWS_MODES))}, got {mode!r}")
+
+
+def _increments_keep_repeated_rows(path, mode):
+    """Increment files take only ``repeated_rows = "keep"``."""
+    if mode != "keep":
+        raise InputError(f"{path}: repeated_rows = {mode!r} applies to rate files; this one holds increments "
+                         "(a repeated increment is not a re-read sample of a rate)")
 
 
 def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", repeated="keep",
@@ -447,14 +458,10 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", 
     """
     if first_row not in FIRST_ROW_MODES:
         raise InputError(f"`first_row` must be one of {', '.join(map(repr, FIRST_ROW_MODES))}, got {first_row!r}")
-    if repeated not in REPEATED_ROWS_MODES:
-        raise InputError(f"repeated_rows must be one of {', '.join(map(repr, REPEATED_ROWS_MODES))}, got "
-                         f"{repeated!r}")
+    _check_repeated_mode(repeated)
     lean = _read_imu_lean(path, check_units, first_row)
     if lean is not None:
-        if repeated != "keep":
-            raise InputError(f"{path}: repeated_rows = {repeated!r} applies to rate files; this one holds increments "
-                             "(a repeated increment is not a re-read sample of a rate)")
+        _increments_keep_repeated_rows(path, repeated)
         return lean
     path, df = read_table(path)
     require_columns(path, df, ["time_s"], f" (the inskit IMU format; {OTHER_IMU_FORMATS_HINT})")
@@ -481,9 +488,7 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", 
                              "file holds rates, which have no first increment to lose")
         return ImuData.from_rates(t, w, f, sampled=sampled)
     if du and vu:
-        if repeated != "keep":
-            raise InputError(f"{path}: repeated_rows = {repeated!r} applies to rate files; this one holds increments "
-                             "(a repeated increment is not a re-read sample of a rate)")
+        _increments_keep_repeated_rows(path, repeated)
         tcols = [f"dtheta_{a}_{du}" for a in AXES]
         vcols = [f"dv_{a}_{vu}" for a in AXES]
         raw = numeric_columns(path, df, tcols + vcols)

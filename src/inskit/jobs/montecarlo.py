@@ -260,9 +260,8 @@ def compare_schemes(scenario, outage, seed=0, schemes=("uncoupled", "open", "clo
     if len(tu):
         step = float(np.median(np.diff(tu))) if len(tu) > 1 else 1.0
         bounds = np.r_[t[0], tu, t[-1]]
-        for a, b in zip(bounds[:-1], bounds[1:]):
-            if b - a > 2.0 * step:
-                gnss_on &= ~((t > a) & (t < b + 60.0))
+        for j in np.nonzero(np.diff(bounds) > 2.0 * step)[0]:  # the gaps only (a few), not every fix
+            gnss_on &= ~((t > bounds[j]) & (t < bounds[j + 1] + 60.0))
     else:
         gnss_on[:] = False
     rows = []
@@ -279,7 +278,6 @@ def compare_schemes(scenario, outage, seed=0, schemes=("uncoupled", "open", "clo
         d = earth.lla_to_ned(sol.lla[k_end], truth.lla[k_end])
         att = rot.attitude_error(sol.C_nb[k_end], truth.C_nb[k_end])
         on = gnss_on
-
         don = earth.lla_to_ned(sol.lla[on][::100], truth.lla[on][::100]) if on.any() else None
         rows.append({
             "scheme": scheme,

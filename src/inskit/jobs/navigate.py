@@ -1048,7 +1048,7 @@ def health(out, gaps=(), rate_changes=()) -> dict:
             "measurements": per}
 
 
-def _fmt(x, fmt=".3f"):
+def fmt_or_na(x, fmt=".3f"):
     return "n/a" if x is None else format(x, fmt)
 
 
@@ -1067,7 +1067,7 @@ def outage_table_text(s: dict) -> str:
         line = (f"{r['k']:>6} {r['start_s']:>12.2f} .. {r['end_s']:>9.2f}   {r['horizontal_m']:>13.3f} "
                 f"{r['vertical_m']:>13.3f} {r['worst_horizontal_m']:>16.3f}")
         if truth:
-            line += f" {_fmt(r.get('outage_end_h_vs_truth_m')):>14} {_fmt(r.get('outage_worst_h_vs_truth_m')):>16}"
+            line += f" {fmt_or_na(r.get('outage_end_h_vs_truth_m')):>14} {fmt_or_na(r.get('outage_worst_h_vs_truth_m')):>16}"
         lines.append(line)
     if rows:
         lines.append(f"against the withheld fixes (their noise included), {s['solution']} solution: outage-end "
@@ -1076,12 +1076,12 @@ def outage_table_text(s: dict) -> str:
                      f"worst in the outage RMS {s['outage_worst_horizontal_rms_m']:.3f} m")
     if truth and s.get("outages_vs_truth"):
         lines.append(f"against the truth, {s['solution']} solution: outage-end horizontal RMS "
-                     f"{_fmt(s['outage_end_h_vs_truth_rms_m'])} m, max {_fmt(s['outage_end_h_vs_truth_max_m'])} m (the "
+                     f"{fmt_or_na(s['outage_end_h_vs_truth_rms_m'])} m, max {fmt_or_na(s['outage_end_h_vs_truth_max_m'])} m (the "
                      f"last epoch before the next used fix); worst in the outage RMS "
-                     f"{_fmt(s['outage_worst_h_vs_truth_rms_m'])} m, max {_fmt(s['outage_worst_h_vs_truth_max_m'])} m")
+                     f"{fmt_or_na(s['outage_worst_h_vs_truth_rms_m'])} m, max {fmt_or_na(s['outage_worst_h_vs_truth_max_m'])} m")
     if truth:
-        lines.append(f"against the truth with GNSS on: horizontal RMS {_fmt(s['gnss_on_h_vs_truth_rms_m'])} m, "
-                     f"vertical RMS {_fmt(s['gnss_on_v_vs_truth_rms_m'])} m over {s['gnss_on_epochs_vs_truth']} "
+        lines.append(f"against the truth with GNSS on: horizontal RMS {fmt_or_na(s['gnss_on_h_vs_truth_rms_m'])} m, "
+                     f"vertical RMS {fmt_or_na(s['gnss_on_v_vs_truth_rms_m'])} m over {s['gnss_on_epochs_vs_truth']} "
                      "epochs")
     lines.append(f"fit to the used fixes (not an accuracy: the filter was fed them): horizontal RMS "
                  f"{s['fit_to_used_fixes_h_rms_m'] * 100:.2f} cm, vertical RMS "
@@ -1091,8 +1091,8 @@ def outage_table_text(s: dict) -> str:
         lines.append(f"forward filter for comparison, against the withheld fixes: outage-end RMS "
                      f"{f['outage_end_horizontal_rms_m']:.3f} m, worst in the outage RMS "
                      f"{f['outage_worst_horizontal_rms_m']:.3f} m"
-                     + (f"; against the truth: outage-end RMS {_fmt(f.get('outage_end_h_vs_truth_rms_m'))} m, worst "
-                        f"in the outage RMS {_fmt(f.get('outage_worst_h_vs_truth_rms_m'))} m" if truth else ""))
+                     + (f"; against the truth: outage-end RMS {fmt_or_na(f.get('outage_end_h_vs_truth_rms_m'))} m, worst "
+                        f"in the outage RMS {fmt_or_na(f.get('outage_worst_h_vs_truth_rms_m'))} m" if truth else ""))
         lines.append("(the smoother's outage-end error sits next to the used fix that follows; its worst point "
                      "inside the outage is the figure that means something)")
     counts = ", ".join(f"{k} {v['used']} used/{v['rejected']} rejected" for k, v in s["measurements"].items())

@@ -17,10 +17,10 @@ stretches where the benchmark's protocol keeps GNSS on:
    healthy and *consistent*: in one more run with only the protocol's
    windows withheld (the run the config will make), the mean NIS per degree
    of freedom of each GNSS measurement (fixes, velocity, pseudoranges) within
-   :data:`NIS_BAND`, the
-   band of the drive's consistency test (a setting that scores well by
-   declaring the fixes far noisier than their innovations show is not
-   chosen); its keys are printed as a TOML snippet to put into the config.
+   :data:`NIS_BAND`, the band of the drive's consistency test (a setting
+   that scores well by declaring the fixes far noisier than their
+   innovations show is not chosen); its keys are printed as a TOML snippet
+   to put into the config.
 
 With ``shifts`` > 1 each candidate runs once per placement of the validation
 outages, shifted together by up to ``reaid_s - SHIFT_MIN_REAID_S`` either
@@ -191,9 +191,8 @@ def _run_one(args):
         # the candidate's noise is consistent (the validation runs withhold a quarter more fixes)
         for name, m in s["health"].get("measurements", {}).items():
             if name in GNSS_MEASUREMENTS and m.get("mean_nis") is not None and m.get("dof"):
-                nis.setdefault(name, []).append(m["mean_nis"] / m["dof"])
+                nis[name] = float(m["mean_nis"] / m["dof"])
     errs = np.array(errs, float)
-    nis = {k: float(np.mean(v)) for k, v in nis.items()}
     return {"params": params, "cv_rms_m": float(np.sqrt(np.mean(errs ** 2))) if len(errs) else math.inf,
             "cv_max_m": float(errs.max()) if len(errs) else math.inf, "cv_outages": int(len(errs)),
             "health": health, "health_reasons": reasons, "gnss_mean_nis_per_dof": nis,
@@ -298,9 +297,9 @@ def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60
                           f"{min(SHIFT_MIN_REAID_S, reaid_s):g} s of aiding on both sides; shorten --hold or "
                           "--reaid, or use fewer --shifts")
     sets = [(sorted(protocol + w), w) for _, w in placed if w] + [(list(protocol), [])]
-    notes = []
+    warnings = []
     if int(shifts) > 1 and len(placed) == 1:
-        notes.append(f"--shifts {int(shifts)}: one placement only (re-aiding {reaid_s:g} s leaves no room to move the "
+        warnings.append(f"--shifts {int(shifts)}: one placement only (re-aiding {reaid_s:g} s leaves no room to move the "
                      f"validation outages while keeping {SHIFT_MIN_REAID_S:g} s of aiding)")
     jobs = [(str(config_path), p, sets) for p in cands]
     workers = workers or min(len(jobs), os.cpu_count() or 1)
@@ -327,7 +326,6 @@ def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60
         raise ConfigError(f"{config_path}: no candidate gave a healthy run (the best score, "
                           f"{ranked[0]['cv_rms_m']:.3f} m, came with {ranked[0].get('health_reasons')}); "
                           "widen the grid or mend the config first")
-    warnings = []
     if not ranked[0].get("consistent", False):
         nis = ", ".join(f"{k} {v:.2f}" for k, v in (ranked[0].get("gnss_mean_nis_per_dof") or {}).items())
         warnings.append(f"no healthy candidate had its GNSS innovations in band (mean NIS per degree of freedom "
@@ -341,7 +339,7 @@ def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60
             "windows_protocol_s": protocol, "windows_validation_s": val, "shifts": int(shifts),
             "windows_validation_shifted_s": [{"shift_s": d, "windows_s": w} for d, w in placed],
             "candidates": ranked,
-            "best": best, "best_toml": toml_snippet(best), "warnings": notes + warnings,
+            "best": best, "best_toml": toml_snippet(best), "warnings": warnings,
             "placements": len(placed)}
 
 
