@@ -352,8 +352,14 @@ def test_impossible_command_line_values(capsys, sim, tmp_path):
     refused(run(capsys, "mechanize", sim / "imu.csv", "--init", "95,7,300,0,0,0,0,0,0", "--out", out), "latitude")
     assert not out.exists()
     refused(run(capsys, "navigate", "--imu", sim / "imu.csv", "--gnss", sim / "gnss.csv", "--lever-arm", "0,0",
-                "--out", tmp_path / "nav"), "--lever-arm", "three numbers")
+                "--out", tmp_path / "nav"), "--lever-arm", "expected 3 finite")
     assert empty_or_absent(tmp_path / "nav")
+    # a non-finite number is refused by the option's name, not by the config field it would set
+    refused(run(capsys, "navigate", "--imu", sim / "imu.csv", "--gnss", sim / "gnss.csv", "--lever-arm", "nan,0,0",
+                "--out", tmp_path / "nav"), "--lever-arm", "'nan,0,0'")
+    refused(run(capsys, "mechanize", sim / "imu.csv", "--init", "45,7,300,0,0,0,0,0,inf", "--out", out),
+            "--init", "finite")
+    assert empty_or_absent(tmp_path / "nav") and not out.exists()
 
 
 # --- 11. results already there, --out equal to an input, unwritable output --------------------------------

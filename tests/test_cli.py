@@ -94,7 +94,7 @@ def test_first_row_option(tmp_path):
 
 def test_bad_init_and_overwrite(files, tmp_path):
     r = inskit("mechanize", files / "imu.csv", "--init", "45,0,0")
-    assert r.returncode == 2 and "9 comma-separated numbers" in r.stderr
+    assert r.returncode == 2 and "--init: expected 9 finite comma-separated numbers" in r.stderr
     r = inskit("mechanize", files / "imu.csv", "--init", "95,0,0,0,0,0,0,0,0")
     assert r.returncode == 2 and "--init: latitude must be within" in r.stderr  # said of the option
     out = tmp_path / "keep.csv"

@@ -79,3 +79,21 @@ def test_gimbal_lock_euler():
     C = rot.dcm_from_euler([0.3, np.pi / 2, 0.5])
     rpy = rot.euler_from_dcm(C)
     assert np.allclose(rot.dcm_from_euler(rpy), C, atol=1e-7)
+
+
+def test_quaternion_euler_shortcuts_agree_with_the_dcm_path(rng):
+    """quat_from_euler skips the normalisation and euler_from_quat the full
+    DCM: still unit quaternions with q0 >= 0, the same angles as
+    euler_from_dcm(dcm_from_quat(q)), gimbal lock and single rows included."""
+    rpy = random_rpy(rng, 2000)
+    q = rot.quat_from_euler(rpy)
+    assert np.all(q[:, 0] >= 0.0)
+    assert np.max(np.abs(np.linalg.norm(q, axis=1) - 1.0)) < 1e-15
+    q_any = q * rng.choice([-1.0, 1.0], size=(len(q), 1))  # either sign of a quaternion, one rotation
+    assert np.array_equal(rot.euler_from_quat(q_any), rot.euler_from_dcm(rot.dcm_from_quat(q_any)))
+    locked = rot.quat_from_euler(np.array([[0.3, np.pi / 2, 0.5], [-0.2, -np.pi / 2, 2.0]]))
+    e = rot.euler_from_quat(locked)
+    assert np.allclose(e, rot.euler_from_dcm(rot.dcm_from_quat(locked)), atol=1e-12)
+    assert np.allclose(rot.dcm_from_euler(e), rot.dcm_from_quat(locked), atol=1e-7)
+    assert np.array_equal(rot.euler_from_quat(q[7]), rot.euler_from_quat(q[7:8])[0])
+    assert rot.quat_from_euler(rpy[7]).shape == (4,)

@@ -56,18 +56,22 @@ def cli():
 
 
 # --- mechanize -------------------------------------------------------------------
-def _parse_init(text):
-    parts = [p for p in text.replace(" ", "").split(",") if p != ""]
-    if len(parts) != 9:
-        raise InputError(
-            f"--init needs 9 comma-separated numbers lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg; "
-            f"got {len(parts)}"
-        )
+def _numbers(option, text, n, meaning):
+    """``n`` finite numbers from the comma-separated ``text`` of ``option``
+    (``meaning`` names them, e.g. ``"x,y,z [m]"``), or an InputError that
+    names the option (not the config field it sets)."""
+    parts = [p for p in str(text).replace(" ", "").split(",") if p != ""]
     try:
         x = [float(p) for p in parts]
     except ValueError:
-        raise InputError(f"--init: not a number in {text!r}") from None
+        x = None
+    if x is None or len(x) != n or not np.all(np.isfinite(x)):
+        raise InputError(f"{option}: expected {n} finite comma-separated numbers {meaning}, got {text!r}")
     return x
+
+
+def _parse_init(text):
+    return _numbers("--init", text, 9, "lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg")
 
 
 def _height_ref(text, imu):
@@ -326,12 +330,7 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
     if gnss_format:
         over.setdefault("gnss", {})["format"] = gnss_format
     if lever_arm:
-        try:
-            la = [float(x) for x in lever_arm.split(",")]
-        except ValueError:
-            raise InputError(f"--lever-arm: expected three numbers x,y,z, got {lever_arm!r}") from None
-        if len(la) != 3:
-            raise InputError(f"--lever-arm: expected three numbers x,y,z, got {lever_arm!r}")
+        la = _numbers("--lever-arm", lever_arm, 3, "x,y,z [m]")
         over.setdefault("gnss", {})["lever_arm_b_m"] = la
     if scheme:
         over.setdefault("filter", {})["scheme"] = scheme
@@ -527,12 +526,7 @@ def schemes(scenario_file, outage, seed, as_json):
     from .jobs.navigate import fmt_or_na
     from .simulation.scenario import load_scenario
 
-    try:
-        a, b = (float(x) for x in outage.split(","))
-        if not (np.isfinite(a) and np.isfinite(b)):
-            raise ValueError
-    except ValueError:
-        raise InputError(f"--outage: expected START,END in seconds (two finite numbers), got {outage!r}") from None
+    a, b = _numbers("--outage", outage, 2, "START,END [s]")
     if not b > a:
         raise InputError(f"--outage: the end ({b}) must come after the start ({a})")
     sc = load_scenario(scenario_file)
@@ -583,15 +577,7 @@ def align(imu_file, lat_deg, method, m_gain, t_start, t_end, imu_format, mount_r
         raise InputError(f"--lat must be within [-90, 90] deg, got {lat_deg}")
     mount = (0.0, 0.0, 0.0)
     if mount_rpy:
-        try:
-            mount = tuple(float(x) for x in mount_rpy.split(","))
-            if not np.all(np.isfinite(mount)):
-                raise ValueError
-        except ValueError:
-            raise InputError(f"--mount-rpy: expected roll,pitch,yaw in degrees (finite numbers), got {mount_rpy!r}") \
-                from None
-        if len(mount) != 3:
-            raise InputError(f"--mount-rpy: expected three numbers, got {mount_rpy!r}")
+        mount = tuple(_numbers("--mount-rpy", mount_rpy, 3, "roll,pitch,yaw [deg]"))
     if m_gain is not None and not 0.0 <= m_gain <= 1.0:
         raise InputError(f"--m must be within [0, 1], got {m_gain}")
     from .units import DEG_PER_HOUR, MICRO_G

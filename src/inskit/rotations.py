@@ -232,25 +232,44 @@ def rotvec_from_dcm(C):
 
 
 def quat_from_euler(rpy):
-    """``q_nb`` from ``[roll, pitch, yaw]`` [rad] (ZYX)."""
+    """``q_nb`` from ``[roll, pitch, yaw]`` [rad] (ZYX), scalar part >= 0.
+
+    The half-angle products are a unit quaternion to rounding, so no
+    normalisation (a third of the time of an hour of truth at 100 Hz)."""
     rpy = np.asarray(rpy, dtype=float)
-    hr, hp, hy = 0.5 * rpy[..., 0], 0.5 * rpy[..., 1], 0.5 * rpy[..., 2]
-    cr, sr, cp, sp, cy, sy = np.cos(hr), np.sin(hr), np.cos(hp), np.sin(hp), np.cos(hy), np.sin(hy)
-    q = np.stack(
-        [
-            cr * cp * cy + sr * sp * sy,
-            sr * cp * cy - cr * sp * sy,
-            cr * sp * cy + sr * cp * sy,
-            cr * cp * sy - sr * sp * cy,
-        ],
-        -1,
-    )
-    return quat_normalize(q)
+    h = 0.5 * rpy
+    c, s = np.cos(h), np.sin(h)
+    cr, cp, cy = c[..., 0], c[..., 1], c[..., 2]
+    sr, sp, sy = s[..., 0], s[..., 1], s[..., 2]
+    q = np.empty(rpy.shape[:-1] + (4,))
+    q[..., 0] = cr * cp * cy + sr * sp * sy
+    q[..., 1] = sr * cp * cy - cr * sp * sy
+    q[..., 2] = cr * sp * cy + sr * cp * sy
+    q[..., 3] = cr * cp * sy - sr * sp * cy
+    q *= np.where(q[..., :1] < 0.0, -1.0, 1.0)
+    return q
 
 
 def euler_from_quat(q):
-    """``[roll, pitch, yaw]`` [rad] from ``q_nb``."""
-    return euler_from_dcm(dcm_from_quat(q))
+    """``[roll, pitch, yaw]`` [rad] from ``q_nb``: :func:`euler_from_dcm` of
+    :func:`dcm_from_quat`, from the five DCM entries it reads (the same
+    expressions, so the same numbers), the other two only at gimbal lock."""
+    q = np.asarray(q, dtype=float)
+    q0, q1, q2, q3 = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
+    c20 = 2.0 * (q1 * q3 - q0 * q2)
+    c21 = 2.0 * (q2 * q3 + q0 * q1)
+    c22 = q0 * q0 - q1 * q1 - q2 * q2 + q3 * q3
+    out = np.empty(q.shape[:-1] + (3,))
+    out[..., 0] = np.arctan2(c21, c22)
+    out[..., 1] = np.arcsin(np.clip(-c20, -1.0, 1.0))
+    out[..., 2] = np.arctan2(2.0 * (q1 * q2 + q0 * q3), q0 * q0 + q1 * q1 - q2 * q2 - q3 * q3)
+    gimbal = np.hypot(c21, c22) < 1e-12
+    if np.any(gimbal):
+        c01 = 2.0 * (q1 * q2 - q0 * q3)
+        c11 = q0 * q0 - q1 * q1 + q2 * q2 - q3 * q3
+        out[..., 0] = np.where(gimbal, 0.0, out[..., 0])
+        out[..., 2] = np.where(gimbal, np.arctan2(-c01, c11), out[..., 2])
+    return out
 
 
 def quat_rotate(q, v):

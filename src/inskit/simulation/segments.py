@@ -655,9 +655,7 @@ def _quat(rpy):
     """``q_nb`` of ZYX Euler angles, scalar part >= 0."""
     from .. import rotations as rot
 
-    q = rot.quat_from_euler(rpy)
-    q *= np.where(q[:, :1] < 0.0, -1.0, 1.0)
-    return q
+    return rot.quat_from_euler(rpy)
 
 
 def _kinematics_from_ned(t, lla, v_n, a_n, rpy, drpy, ddrpy=None):
