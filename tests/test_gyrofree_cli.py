@@ -74,6 +74,21 @@ def test_rank_deficient_layout_and_bad_inputs(tmp_path):
     assert isinstance(r.exception, InputError) and "already exists" in str(r.exception)
 
 
+def test_a_spinning_start_without_an_initial_rate_names_the_options(tmp_path):
+    """README's `gyrofree navigate out/gf/array.csv --layout ten` on the
+    source scenario (3.7 rad/s at the start) said "pass `omega0`", the Python
+    argument; the command line names its own options, and --init-from works."""
+    r = invoke(gyrofree, "simulate", "source003", "--out", tmp_path / "gf", "--rate", 200)
+    assert r.exit_code == 0, r.output
+    r = invoke(gyrofree, "navigate", tmp_path / "gf" / "array.csv", "--layout", "ten", "--out", tmp_path / "n")
+    msg = str(r.exception)
+    assert isinstance(r.exception, InputError) and "--omega0 p,q,r" in msg and "--init-from" in msg
+    assert "`omega0`" not in msg
+    r = invoke(gyrofree, "navigate", tmp_path / "gf" / "array.csv", "--layout", "ten", "--out", tmp_path / "n",
+               "--init-from", tmp_path / "gf" / "truth.csv")
+    assert r.exit_code == 0, r.output
+
+
 def test_errors_through_main_are_one_line(tmp_path):
     """Through inskit.cli.main: one line on stderr, exit 2, nothing on stdout."""
     r = inskit("gyrofree", "simulate", "source003", "--layout", "six", "--out", tmp_path / "six", "--rate", 100)

@@ -60,6 +60,20 @@ def test_scenario_sections_including_raw_gnss_are_documented():
         assert heading in text
 
 
+def test_study_file_keys_are_documented():
+    """The study keys (kind, runs, seed, duration_s, [outage], [[filter]],
+    grades and the fitted grade's table) were only in the examples' comments."""
+    from inskit.jobs.study import AllanGrade, FilterCase, OutageSpec, StudySpec
+
+    text = config_doc.render().split("## Study files (`inskit study`)", 1)[1]
+    top = [k for k, f in StudySpec.model_fields.items() if config_doc.submodel(f.annotation)[0] is None]
+    assert _section_keys(text, "### Top level") == top
+    assert _section_keys(text, "### `[outage]`") == list(OutageSpec.model_fields)
+    assert _section_keys(text, "### `[[filter]]`") == list(FilterCase.model_fields)
+    assert _section_keys(text, "### A grade fitted to a static log (`grades` entry `{allan = ...}`)") == list(
+        AllanGrade.model_fields)
+
+
 def test_rows_carry_unit_default_bounds_and_allowed_values():
     from inskit.jobs.config import GnssSection, NoiseSection, OutagesSection
 

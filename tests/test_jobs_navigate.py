@@ -484,3 +484,45 @@ def test_repeated_imu_rows_are_reported_and_warned_of_when_kept(result):
     warn = [w for w in kept["health"]["warnings"] if w.startswith("IMU:")]
     assert len(warn) == 1 and "1138 rows (2.1%)" in warn[0] and 'repeated_rows = "drop"' in warn[0]
     assert any("1138 rows" in line and "kept as samples" in line for line in said)
+
+
+def test_bias_health_rule_counts_the_in_run_process_noise(drive_inputs):
+    """The walk_0827_tight defect: a gyro bias fixed on a short static start
+    wandered by its in-run sigma over the walk and was called unhealthy
+    ("5.5 initial sigmas"), the in-run Gauss-Markov variation left out.  The
+    rule now compares the excursion with the prior at the end of the run,
+    sqrt(sigma0^2 + in-run variance accumulated): the same excursion is
+    unhealthy with no in-run noise and healthy with enough of it."""
+    import copy
+
+    from inskit.integration.blocks import GyroBias
+    from inskit.integration.layout import StateLayout
+    from inskit.jobs.navigate import HEALTH_MAX_PRIOR_SIGMAS, health
+
+    cfg, imu, gnss, clean = drive_inputs
+    out = clean.forward
+    bg = out.layout.by_role("gyro_bias")
+    dev = np.abs(out.estimate(bg.name)[-1] - bg.estimate0)
+    j = int(np.argmax(dev))
+    T = float(out.nav.time[-1] - out.nav.time[0])
+
+    def verdict(sigma0, sigma_ss, tau):
+        block = GyroBias(sigma0=sigma0, instability=sigma_ss, tau_s=tau, estimate0=bg.estimate0)
+        o = copy.copy(out)
+        o.layout = StateLayout([block if b.name == bg.name else b for b in out.layout.blocks])
+        assert np.isclose(block.prior_sigma(T)[j], np.sqrt(sigma0**2 + sigma_ss**2 * -np.expm1(-2 * T / tau)))
+        return [r for r in health(o)["reasons"] if r.startswith(f"{bg.name}_{bg.axes[j]}")]
+
+    small = dev[j] / (2 * HEALTH_MAX_PRIOR_SIGMAS)  # the excursion is 10 of these
+    assert verdict(small, small * 1e-3, 300.0)  # no in-run noise to speak of: beyond the prior
+    assert not verdict(small, 2 * dev[j], 300.0)  # an in-run sigma twice the excursion: within it
+
+
+def test_prior_sigma_of_a_random_walk_and_a_gauss_markov_block():
+    from inskit.integration.blocks import GyroBias
+
+    gm = GyroBias(sigma0=1e-4, instability=3e-4, tau_s=100.0)
+    assert np.allclose(gm.prior_sigma(0.0), 1e-4)
+    assert np.allclose(gm.prior_sigma(1e4), np.hypot(1e-4, 3e-4))  # the steady state after many tau
+    rw = GyroBias(sigma0=1e-4, instability=2e-5, tau_s=np.inf)  # instability: the random walk's root PSD
+    assert np.allclose(rw.prior_sigma(400.0), np.sqrt(1e-8 + 4e-10 * 400.0))

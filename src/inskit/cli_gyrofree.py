@@ -121,9 +121,15 @@ def navigate(array_file, layout_spec, d, out_dir, solver, sign_rule, frame, init
         raise InputError(f"--filter-noise must be > 0 m/s^2, got {filter_noise}")
     if not noise >= 0:
         raise InputError(f"--noise must be >= 0 m/s^2, got {noise}")
-    res = navigate_job(array_file, layout_spec, out_dir, d=d, solver=solver, frame=frame, init=init_text,
-                       init_from=init_from, omega0=omega0, rate_filter_noise=filter_noise, sign_rule=sign_rule,
-                       noise_sigma=noise, truth_file=truth_file, overwrite=force, log=_log)
+    from .gyrofree.solvers import InitialRateNeeded
+
+    try:
+        res = navigate_job(array_file, layout_spec, out_dir, d=d, solver=solver, frame=frame, init=init_text,
+                           init_from=init_from, omega0=omega0, rate_filter_noise=filter_noise, sign_rule=sign_rule,
+                           noise_sigma=noise, truth_file=truth_file, overwrite=force, log=_log)
+    except InitialRateNeeded as e:  # said in the options' words, not the Python argument's
+        raise InputError(f"{e.reason}; give --omega0 p,q,r [rad/s] (an approximate initial rate: only its signs "
+                         "are used) or --init-from a truth file (its first rates)") from None
     f = res["final"]
     text = f"{res['samples']} samples, solver {res['solver']}, frame {res['frame']} -> {out_dir}/"
     if "r_i_m" in f:

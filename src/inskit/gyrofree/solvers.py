@@ -137,6 +137,18 @@ class ArraySolution:
                        point_increments(self.time, self.f_b))
 
 
+
+class InitialRateNeeded(InputError):
+    """The array alone cannot start the rates: an initial body rate
+    (``omega0``) is needed.  ``reason`` is the why without the Python hint
+    (the command line adds its own options')."""
+
+    def __init__(self, reason):
+        self.reason = reason
+        super().__init__(f"{reason}; pass `omega0`, an approximate initial rate p, q, r [rad/s] (only its signs "
+                         "are used)")
+
+
 def point_increments(t, y):
     """Integrals of point samples ``y`` (``(n, 3)``) over each interval
     ``(t[k-1], t[k]]`` (row 0: zero), fourth order on uniform steps (see
@@ -279,13 +291,11 @@ def _initial_rate(omega0, W0, rest_tolerance, what):
             raise InputError(f"`omega0` must be three finite numbers p, q, r [rad/s], got {plain_number(omega0)}")
         return w
     if W0 is None:
-        raise InputError(f"{what} gets the rates by integrating angular accelerations only: pass `omega0`, the "
-                         "initial body rate [rad/s]")
+        raise InitialRateNeeded(f"{what} gets the rates by integrating angular accelerations only")
     mag = math.sqrt(max(float(W0), 0.0))
     if mag > rest_tolerance:
-        raise InputError(f"the initial rate magnitude is {mag:.4g} rad/s: the sign of the rate vector is not "
-                         "observable from accelerometers (omega and -omega give the same outputs); pass `omega0`, "
-                         "an approximate initial rate p, q, r [rad/s] (only its signs are used)")
+        raise InitialRateNeeded(f"the initial rate magnitude is {mag:.4g} rad/s: the sign of the rate vector is not "
+                                "observable from accelerometers (omega and -omega give the same outputs)")
     return np.zeros(3)
 
 

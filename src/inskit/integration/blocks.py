@@ -146,6 +146,26 @@ class StateBlock:
     def has_estimate(self) -> bool:
         return self.estimate0 is not None
 
+    def prior_sigma(self, elapsed_s):
+        """How far the quantity may have moved from ``estimate0`` after
+        ``elapsed_s`` without any measurement, per axis [unit]: the initial
+        sigma and the process noise accumulated since,
+        ``sqrt(sigma0^2 + q tau / 2 (1 - exp(-2 T / tau)))`` for a
+        Gauss-Markov block (its steady-state variance ``q tau / 2`` reached
+        after a few ``tau``), ``sqrt(sigma0^2 + q T)`` for a random walk.
+        The initial part is not let decay: a turn-on bias is a constant, the
+        model's decay describes the error of its held estimate
+        (:meth:`StateLayout.estimate_dynamics`).  Health checks compare an
+        estimate's excursion with this, not with ``sigma0`` alone (a bias
+        fixed on a 10 s static start wanders by its in-run sigma over a walk)."""
+        T = max(float(elapsed_s), 0.0)
+        q = np.asarray(self.psd, float)
+        if math.isfinite(self.tau_s):
+            walk = q * self.tau_s / 2.0 * -np.expm1(-2.0 * T / self.tau_s)
+        else:
+            walk = q * T
+        return np.sqrt(np.asarray(self.sigma0, float) ** 2 + walk)
+
     def transition(self):
         """Constant entries of F: ``[(row, column_block, column, value)]``.
 

@@ -157,10 +157,15 @@ def submodel(tp):
 def type_name(tp, optional=None) -> str:
     """The TOML type of an annotation, in words; ``optional`` (default: the
     annotation allows None) adds "(optional)"."""
+    while typing.get_origin(tp) is typing.Annotated:  # a tagged type: its base
+        tp = typing.get_args(tp)[0]
     tp, may_be_none = _strip_optional(tp)
     optional = may_be_none if optional is None else optional
     origin, args = typing.get_origin(tp), typing.get_args(tp)
-    if origin is typing.Literal:
+    if origin in (typing.Union, types.UnionType):  # several kinds (a grade: a name or a table)
+        names = list(dict.fromkeys(type_name(a, optional=False) for a in args if a is not type(None)))
+        name = " or ".join(names)
+    elif origin is typing.Literal:
         name = "string" if all(isinstance(a, str) for a in args) else "value"
     elif tp is bool:
         name = "boolean"
@@ -309,8 +314,9 @@ def render() -> str:
     """The whole of ``docs/config.md``."""
     out = ["# Configuration reference", "",
            "<!-- Generated from the pydantic models by `" + REGENERATE + "`; do not edit by hand. -->", "",
-           "Every key of the two TOML files inskit reads: the `inskit navigate` configuration "
-           "(`src/inskit/jobs/config.py`) and the `inskit simulate` scenario (`src/inskit/simulation/scenario.py`). "
+           "Every key of the three TOML files inskit reads: the `inskit navigate` configuration "
+           "(`src/inskit/jobs/config.py`), the `inskit simulate` scenario (`src/inskit/simulation/scenario.py`) "
+           "and the `inskit study` file (`src/inskit/jobs/study.py`). "
            "Units follow datasheets at this edge (degrees, deg/h, deg/sqrt(h), micro-g, ppm) and are named by the "
            "key's suffix; inside, everything is SI. Relative paths are taken relative to the file that holds them. "
            "An unknown key, a value outside its bounds, or a key that would be ignored in its context is an "
@@ -327,6 +333,16 @@ def render() -> str:
             "[examples/tc_blockage.toml](../examples/tc_blockage.toml).", "",
             _doc(Scenario) or "", "", "### Top level", ""]
     _sections(Scenario, "", out)
+    from .study import AllanGrade, StudySpec
+
+    out += ["## Study files (`inskit study`)", "",
+            "Example: [examples/study_outage_grades.toml](../examples/study_outage_grades.toml) (a sweep of "
+            "grades), [examples/study_mc_mems.toml](../examples/study_mc_mems.toml) (one Monte Carlo case), "
+            "[examples/study_allan_grades.toml](../examples/study_allan_grades.toml) (a grade fitted to a static "
+            "log).", "", _doc(StudySpec) or "", "", "### Top level", ""]
+    _sections(StudySpec, "", out)
+    out += ["### A grade fitted to a static log (`grades` entry `{allan = ...}`)", "", _doc(AllanGrade) or "", ""]
+    _sections(AllanGrade, "grades[].", out)
     text = "\n".join(out)
     text = re.sub(r"\n{3,}", "\n\n", text)
     return text.rstrip("\n") + "\n"
@@ -335,7 +351,9 @@ def render() -> str:
 def missing_meanings() -> list[str]:
     """Keys (``Model.field``) documented without a meaning: a new field needs
     a ``description=`` (or, for a scenario field, an entry here)."""
-    seen, todo, missing = set(), [NavigateConfig, Scenario], []
+    from .study import AllanGrade, StudySpec
+
+    seen, todo, missing = set(), [NavigateConfig, Scenario, StudySpec, AllanGrade], []
     while todo:
         m = todo.pop()
         if m in seen:

@@ -722,8 +722,9 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         else:
             out = run_filter(imu, initial, meas, settings, smoother=smooth, progress=progress, extra_noise=extra)
             sm = rts_smooth(out) if smooth else None
-    score_f = score_outages(out.solution, gnss, windows, lever, truth=truth)
-    score_s = score_outages(sm.solution, gnss, windows, lever, truth=truth) if sm is not None else None
+    fused = not tight  # tight coupling fuses the raw ranges: the fixes file is only a reference
+    score_f = score_outages(out.solution, gnss, windows, lever, truth=truth, fused=fused)
+    score_s = score_outages(sm.solution, gnss, windows, lever, truth=truth, fused=fused) if sm is not None else None
     return NavigateResult(cfg, imu, gnss, windows, used, startup, settings, out, sm, score_f, score_s,
                           time.perf_counter() - t_start, measured, gaps, raw, clock_start, rate_changes, truth,
                           streams, pending, truth_parts, imu_notes)
@@ -967,8 +968,11 @@ def health(out, gaps=(), rate_changes=()) -> dict:
     * a measurement's mean NIS above 3 times its degrees of freedom (the
       filter is overconfident by more than sqrt(3) in sigma; a consistent
       filter averages 1 per degree of freedom);
-    * a sensor-bias estimate (gyro, accelerometer) more than 5 initial sigmas
-      from its initial value (the filter absorbs something it does not model);
+    * a sensor-bias estimate (gyro, accelerometer) more than 5 prior sigmas
+      from its initial value, the prior being its initial sigma and the
+      in-run process noise accumulated over the run
+      (:meth:`inskit.integration.blocks.StateBlock.prior_sigma`): the filter
+      absorbs something it does not model;
     * a recovery from a lost state happened;
     * the IMU log had a gap (bridged on the last rates: the solution over it
       is an extrapolation).
@@ -977,7 +981,7 @@ def health(out, gaps=(), rate_changes=()) -> dict:
     against the local rate).
 
     *Warnings*, listed without changing the verdict: other blocks' estimates
-    beyond 5 initial sigmas (a scale factor soaking up a mounting error, say),
+    beyond 5 prior sigmas (a scale factor soaking up a mounting error, say),
     and a mean NIS below a third of the degrees of freedom (conservative
     noise, common for constraint pseudo-measurements).  :func:`summary` adds
     the warning of a mounting the constraints do not model
@@ -1030,11 +1034,15 @@ def health(out, gaps=(), rate_changes=()) -> dict:
             continue
         if b.predict_estimate:  # a clock runs away from its start by design
             continue
-        dev = np.abs(out.estimate(b.name)[-1] - b.estimate0) / b.sigma0
-        for axis, d, v in zip(b.axes, dev, out.estimate(b.name)[-1]):
+        elapsed = float(out.nav.time[-1] - out.nav.time[0])
+        prior = b.prior_sigma(elapsed)
+        dev = np.abs(out.estimate(b.name)[-1] - b.estimate0) / prior
+        for axis, d, v, s0, sp in zip(b.axes, dev, out.estimate(b.name)[-1], b.sigma0, prior):
             if d > HEALTH_MAX_PRIOR_SIGMAS:
                 unit = f" {b.unit}" if b.unit else ""
-                msg = f"{b.name}_{axis} estimate {v:.4g}{unit} is {d:.1f} initial sigmas from its start"
+                grown = "" if sp <= s0 * (1 + 1e-9) else f", with its process noise over {elapsed:.0f} s"
+                msg = (f"{b.name}_{axis} estimate {v:.4g}{unit} is {d:.1f} prior sigmas from its start (prior sigma "
+                       f"{sp:.3g}{unit}: initial {s0:.3g}{grown})")
                 (reasons if b.name in HEALTH_BIAS_BLOCKS else warnings).append(msg)
     for r in getattr(out, "recoveries", []):
         reasons.append(f"{r['measurement']}: recovered from a lost state at t = {r['t']:.2f} s after "
@@ -1083,9 +1091,14 @@ def outage_table_text(s: dict) -> str:
         lines.append(f"against the truth with GNSS on: horizontal RMS {fmt_or_na(s['gnss_on_h_vs_truth_rms_m'])} m, "
                      f"vertical RMS {fmt_or_na(s['gnss_on_v_vs_truth_rms_m'])} m over {s['gnss_on_epochs_vs_truth']} "
                      "epochs")
-    lines.append(f"fit to the used fixes (not an accuracy: the filter was fed them): horizontal RMS "
-                 f"{s['fit_to_used_fixes_h_rms_m'] * 100:.2f} cm, vertical RMS "
-                 f"{s['fit_to_used_fixes_v_rms_m'] * 100:.2f} cm over {s['fit_to_used_fixes_count']} fixes")
+    if s.get("fixes_fused", True):
+        lines.append(f"fit to the used fixes (not an accuracy: the filter was fed them): horizontal RMS "
+                     f"{s['fit_to_used_fixes_h_rms_m'] * 100:.2f} cm, vertical RMS "
+                     f"{s['fit_to_used_fixes_v_rms_m'] * 100:.2f} cm over {s['fit_to_used_fixes_count']} fixes")
+    else:
+        lines.append(f"against the reference fixes with GNSS on (never fused: an accuracy, the reference's own "
+                     f"error included): horizontal RMS {s['gnss_on_h_vs_reference_fixes_rms_m']:.3f} m, vertical "
+                     f"RMS {s['gnss_on_v_vs_reference_fixes_rms_m']:.3f} m over {s['gnss_on_reference_fixes']} fixes")
     if s["solution"] == "smoothed" and rows:
         f = s["forward"]
         lines.append(f"forward filter for comparison, against the withheld fixes: outage-end RMS "

@@ -104,7 +104,9 @@ class OutageScore:
         ``fit_to_used_fixes_h_rms_m``, ``fit_to_used_fixes_v_rms_m``,
         ``fit_to_used_fixes_count`` and the earlier names
         ``gnss_on_horizontal_rms_m``, ``gnss_on_vertical_rms_m``,
-        ``gnss_on_fixes`` (the same values).  With a truth also
+        ``gnss_on_fixes`` (the same values); ``fixes_fused`` (False: the
+        fixes are a reference the filter never saw, see :func:`score_outages`,
+        and the fit keys are ``None``).  With a truth also
         ``outage_{end,worst}_h_vs_truth_{rms,median,max}_m``,
         ``outage_{end,worst}_{v,3d}_vs_truth_rms_m``, ``outages_vs_truth`` and
         the accuracy with GNSS on, over the epochs outside the unaided spans:
@@ -202,10 +204,19 @@ def _truth_scores(sol: NavSolution, truth: NavSolution, gnss: GnssData, windows,
     return out
 
 
-def score_outages(sol: NavSolution, gnss: GnssData, windows, lever_arm_b, t0=None, truth: NavSolution | None = None):
+def score_outages(sol: NavSolution, gnss: GnssData, windows, lever_arm_b, t0=None, truth: NavSolution | None = None,
+                  fused=True):
     """Score a solution against the withheld fixes, against the used fixes
     (the fit, not an accuracy) and, when ``truth`` is given, against the
     truth (:class:`OutageScore` names every key).
+
+    With ``fused=False`` the fixes were never fed to the filter (tight
+    coupling scored on an RTK track): the figures with GNSS on are then an
+    accuracy against an independent reference, its own error included, and
+    come as ``gnss_on_h_vs_reference_fixes_rms_m``,
+    ``gnss_on_v_vs_reference_fixes_rms_m``, ``gnss_on_reference_fixes``;
+    ``fit_to_used_fixes_*`` are ``None`` (no fix was used) and
+    ``fixes_fused`` says which case it is.
 
     Parameters
     ----------
@@ -271,10 +282,14 @@ def score_outages(sol: NavSolution, gnss: GnssData, windows, lever_arm_b, t0=Non
         "gnss_on_vertical_rms_m": fit_v,
         "gnss_on_fixes": int(used.sum()),
         **_summaries(rows, "withheld_fixes"),
-        "fit_to_used_fixes_h_rms_m": fit_h,
-        "fit_to_used_fixes_v_rms_m": fit_v,
-        "fit_to_used_fixes_count": int(used.sum()),
+        "fixes_fused": bool(fused),
+        "fit_to_used_fixes_h_rms_m": fit_h if fused else None,
+        "fit_to_used_fixes_v_rms_m": fit_v if fused else None,
+        "fit_to_used_fixes_count": int(used.sum()) if fused else None,
     }
+    if not fused:
+        summary.update({"gnss_on_h_vs_reference_fixes_rms_m": fit_h, "gnss_on_v_vs_reference_fixes_rms_m": fit_v,
+                        "gnss_on_reference_fixes": int(used.sum())})
     if truth is not None:
         summary.update(_truth_scores(sol, truth, gnss, windows, rows, t0))
     return OutageScore(rows, summary)

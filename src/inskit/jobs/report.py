@@ -561,6 +561,23 @@ def _num(x, fmt=".3f", scale=1.0):
     return "n/a" if x is None else format(float(x) * scale, fmt)
 
 
+def _fit_rows(s):
+    """The GNSS-on rows of the summary table: the fit to the fixes the filter
+    was fed (not an accuracy), or, when the fixes were only a reference
+    (tight coupling), the accuracy against them."""
+    if s.get("fixes_fused", True):
+        return [("fit to the used fixes, horizontal RMS (not an accuracy)",
+                 _num(s.get("gnss_on_horizontal_rms_m"), ".2f", 100), "cm"),
+                ("fit to the used fixes, vertical RMS (not an accuracy)",
+                 _num(s.get("gnss_on_vertical_rms_m"), ".2f", 100), "cm"),
+                ("used fixes in the fit", _e(s.get("gnss_on_fixes", "n/a")), "")]
+    return [("GNSS on, horizontal RMS against the reference fixes (never fused)",
+             _num(s.get("gnss_on_h_vs_reference_fixes_rms_m")), "m"),
+            ("GNSS on, vertical RMS against the reference fixes (never fused)",
+             _num(s.get("gnss_on_v_vs_reference_fixes_rms_m")), "m"),
+            ("reference fixes", _e(s.get("gnss_on_reference_fixes", "n/a")), "")]
+
+
 def _key_table(s):
     rows = [("outage-end horizontal RMS, against the withheld fixes", _num(s.get("outage_end_horizontal_rms_m")), "m"),
             ("outage-end horizontal median, against the withheld fixes",
@@ -569,11 +586,7 @@ def _key_table(s):
             ("outage-end vertical RMS, against the withheld fixes", _num(s.get("outage_end_vertical_rms_m")), "m"),
             ("worst-in-outage horizontal RMS, against the withheld fixes",
              _num(s.get("outage_worst_horizontal_rms_m")), "m"),
-            ("fit to the used fixes, horizontal RMS (not an accuracy)",
-             _num(s.get("gnss_on_horizontal_rms_m"), ".2f", 100), "cm"),
-            ("fit to the used fixes, vertical RMS (not an accuracy)",
-             _num(s.get("gnss_on_vertical_rms_m"), ".2f", 100), "cm"),
-            ("used fixes in the fit", _e(s.get("gnss_on_fixes", "n/a")), ""),
+            *(_fit_rows(s)),
             ("outages", _e(s.get("outages", "n/a")), ""),
             ("IMU epochs", _e(s.get("epochs", "n/a")), ""),
             ("duration", _num(s.get("duration_s"), ".1f"), "s"),
