@@ -363,6 +363,33 @@ def test_impossible_command_line_values(capsys, sim, tmp_path):
 
 
 # --- 11. results already there, --out equal to an input, unwritable output --------------------------------
+def test_force_never_turns_an_input_into_an_output(capsys, sim, tmp_path):
+    """`spp OBS NAV --out D --force` with OBS = D/spp.pos replaced the
+    observations by the solution; `gyrofree navigate D/rates.csv --out D
+    --force` replaced the array by the rates.  --force lifts only the
+    refusal of an existing file, never that of an input."""
+    import gzip
+    import shutil
+
+    root = Path(__file__).resolve().parents[1]
+    d = tmp_path / "spp"
+    d.mkdir()
+    obs = d / "spp.pos"
+    with gzip.open(root / "data" / "abpo" / "abpo0080.15o.gz") as f, open(obs, "wb") as g:
+        shutil.copyfileobj(f, g)
+    size = obs.stat().st_size
+    refused(run(capsys, "spp", obs, root / "data" / "abpo" / "abpo0080.15n.gz", "--out", d, "--force"),
+            "spp.pos", "is an input of this command")
+    assert obs.stat().st_size == size
+    g = tmp_path / "gf"
+    assert run(capsys, "gyrofree", "simulate", "source003", "--out", g, "--rate", "100")[0] == 0
+    shutil.copy(g / "array.csv", g / "rates.csv")
+    before = (g / "rates.csv").read_bytes()
+    refused(run(capsys, "gyrofree", "navigate", g / "rates.csv", "--out", g, "--force", "--init-from",
+                g / "truth.csv"), "rates.csv", "is an input of this command")
+    assert (g / "rates.csv").read_bytes() == before
+
+
 def test_an_output_folder_with_results_needs_force(capsys, sim, tmp_path):
     code, _, err = navigate(capsys, sim, tmp_path)
     assert code == 0, err

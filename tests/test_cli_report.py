@@ -57,3 +57,22 @@ def test_report_not_a_run_folder(tmp_path):
     r = CliRunner().invoke(_group(), ["report", str(tmp_path)])
     assert r.exit_code != 0
     assert isinstance(r.exception, InputError) and "summary.json is missing" in str(r.exception)
+
+
+def test_report_never_overwrites_the_run_or_a_users_file(run_dir, tmp_path):
+    """`report RUN --out RUN/summary.json` replaced the run's summary with HTML
+    (every later report then failed), and any existing file was replaced
+    without a word; report had no --force."""
+    summary = (run_dir / "summary.json").read_bytes()
+    r = CliRunner().invoke(_group(), ["report", str(run_dir), "--out", str(run_dir / "summary.json"), "--force"])
+    assert isinstance(r.exception, InputError) and "is an input of this command" in str(r.exception)
+    assert (run_dir / "summary.json").read_bytes() == summary
+    mine = tmp_path / "mine.html"
+    mine.write_text("my notes")
+    r = CliRunner().invoke(_group(), ["report", str(run_dir), "--out", str(mine)])
+    assert isinstance(r.exception, InputError) and "already exists" in str(r.exception) and "--force" in str(
+        r.exception)
+    assert mine.read_text() == "my notes"
+    r = CliRunner().invoke(_group(), ["report", str(run_dir), "--out", str(mine), "--force"])
+    assert r.exit_code == 0, r.output
+    assert mine.read_text().startswith("<!DOCTYPE html>")

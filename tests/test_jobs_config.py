@@ -450,3 +450,13 @@ def test_contradictions_between_sections_are_refused_when_the_config_is_read():
 def test_outage_windows_in_the_file_follow_the_cli_rules(windows, msg):
     with pytest.raises(ConfigError, match=rf"field 'outages\.windows_s'.*{msg}"):
         _cfg(LOOSE, outages={"protocol": "windows", "windows_s": windows})
+
+
+@pytest.mark.parametrize("name", ["", "../../esc", "/tmp/abs", "a/b", ".hidden", "x y"])
+def test_a_run_name_is_a_plain_folder_name(tmp_path, name):
+    """name = "" wrote the run into out/ itself and "../../esc" outside it:
+    the default output folder is out/<name>, so the name is one folder."""
+    p = tmp_path / "c.toml"
+    p.write_text(f'name = "{name}"\n[imu]\nfile = "imu.csv"\n[gnss]\nfile = "gnss.csv"\n')
+    with pytest.raises(ConfigError, match="field 'name': .* is not a plain folder name"):
+        load_config(p)

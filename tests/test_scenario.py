@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from inskit import earth, io
+from inskit.errors import InputError
 from inskit.jobs.simulate import write_simulation
 from inskit.simulation.scenario import load_scenario, simulate
 
@@ -333,3 +334,39 @@ def test_simulate_in_one_format_does_not_leave_the_other_formats_files(tmp_path)
         write_simulation(sim, out, plot=False, file_format="parquet")
     write_simulation(sim, out, overwrite=True, plot=False, file_format="parquet")
     assert sorted(f.name for f in out.iterdir()) == ["gnss.parquet", "imu.parquet", "truth.parquet"]
+
+
+def test_a_failed_forced_run_leaves_the_folder_as_it_was(tmp_path, monkeypatch):
+    """`simulate --force` whose truth could not be written left the new
+    imu.csv and gnss.csv beside the old truth.csv of another scenario: the
+    files are now written as a set, all or none."""
+    sc = _scenario(tmp_path)
+    out = tmp_path / "o"
+    write_simulation(simulate(sc, seed=5), out, plot=False)
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+
+    def broken(path, *a, **k):
+        raise InputError(f"{path}: refusing to write latitude 90.14 deg")
+
+    monkeypatch.setattr(io, "write_solution", broken)
+    with pytest.raises(InputError, match="latitude"):
+        write_simulation(simulate(sc, seed=6), out, plot=False, overwrite=True)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # no staging folder left either
+
+
+def test_force_never_overwrites_the_scenario_or_its_navigation_file(tmp_path):
+    """A `nav:` constellation file inside --out was replaced by the run's own
+    nav.rnx under --force; the scenario itself is protected the same way."""
+    from inskit.jobs.simulate import check_simulation_outputs
+
+    sc = _scenario(tmp_path, RAW)
+    out = tmp_path / "o"
+    out.mkdir()
+    nav = out / "nav.rnx"
+    nav.write_text("the user's navigation file")
+    sc.raw_gnss.constellation = f"nav:{nav}"
+    with pytest.raises(InputError, match="is an input of this command"):
+        check_simulation_outputs(sc, out, overwrite=True, plot=False)
+    assert nav.read_text() == "the user's navigation file"
+    with pytest.raises(InputError, match="is an input of this command"):
+        check_simulation_outputs(sc, tmp_path, overwrite=True, plot=False, inputs=[tmp_path / "imu.csv"])

@@ -389,7 +389,7 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
     if with_report:
         from .jobs.report import build_report
 
-        rep = build_report(target)
+        rep = build_report(target, overwrite=True)  # the folder passed navigate's own check
         s["report"] = rep["report"]
         files.append(Path(rep["report"]))
     _log(f"wrote {len(files)} files to {target}/")
@@ -421,7 +421,7 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, file_format, gravity, as_json):
     """Simulate a scenario: IMU, GNSS and truth files plus a plot."""
-    from .jobs.simulate import verify_ideal, write_simulation
+    from .jobs.simulate import check_simulation_outputs, verify_ideal, write_simulation
     from .simulation.scenario import load_scenario, simulate as run_sim
 
     from .files import check_folder_writable
@@ -430,6 +430,8 @@ def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, f
     if gravity:
         sc = sc.model_copy(update={"earth": sc.earth.model_copy(update={"gravity": gravity})})
     check_folder_writable(Path(out_dir))  # before the computation, not after it ('Not a directory' then)
+    check_simulation_outputs(sc, Path(out_dir), overwrite=force, plot=not no_plot, file_format=file_format,
+                             inputs=[scenario_file])
     t0 = time.perf_counter()
     steps = ["ideal IMU", "errors and GNSS", "files"]
     from tqdm import tqdm
@@ -438,7 +440,8 @@ def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, f
               leave=False) as bar:
         sim = run_sim(sc, seed, truth_rate_hz=truth_rate, progress=lambda _: bar.update(1))
         bar.update(1)
-        files = write_simulation(sim, Path(out_dir), overwrite=force, plot=not no_plot, file_format=file_format)
+        files = write_simulation(sim, Path(out_dir), overwrite=force, plot=not no_plot, file_format=file_format,
+                                 inputs=[scenario_file])
         bar.update(1)
     res = {
         "scenario": sc.name, "seed": seed, "duration_s": float(sim.truth.time[-1]), "imu_epochs": len(sim.imu),

@@ -22,14 +22,15 @@ from .cli_output import emit as _emit
 @click.argument("run_dir", type=click.Path(file_okay=False))
 @click.option("--out", "out_file", type=click.Path(dir_okay=False),
               help="HTML file to write (default RUN_DIR/report.html).")
+@click.option("--force", is_flag=True, help="Overwrite the HTML file if it exists.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON summary object on stdout.")
-def report(run_dir, out_file, as_json):
+def report(run_dir, out_file, force, as_json):
     """One self-contained HTML page (plotly inlined, works offline) of a
     navigate run folder: health, key figures, track, sigmas, innovations,
     sensor estimates, outages and the configuration used."""
     from .jobs.report import build_report
 
-    res = build_report(run_dir, out_file)
+    res = build_report(run_dir, out_file, overwrite=force)
     _emit(res, as_json, table=f"report: {res['report']} ({res['bytes'] / 1e6:.2f} MB, plots: "
                               f"{', '.join(res['plots'])}; {res['seconds']:.2f} s)")
 

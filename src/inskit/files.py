@@ -34,6 +34,42 @@ def atomic_write(path):
         raise
 
 
+@contextmanager
+def staged_files(folder):
+    """Write a set of files whole or not at all: yield ``stage(path)``, which
+    maps each final path (in ``folder``) to its place in a hidden staging
+    folder beside them; when the block completes every staged file is moved
+    to its final name (``os.replace``, same file system), on any error or
+    interrupt the staging folder goes and the files already in ``folder``
+    are left as they were (a failed ``--force`` run does not leave new files
+    beside old ones of another run)."""
+    import shutil
+    import tempfile
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=".staging-", dir=folder))
+    staged = {}
+
+    def stage(path):
+        path = Path(path)
+        staged[path] = tmp / path.name
+        return staged[path]
+
+    try:
+        yield stage
+        for final, part in staged.items():
+            if part.exists():
+                os.replace(part, final)
+    except OSError as exc:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise InputError(f"{folder}: the results could not be written ({exc.strerror or exc})") from None
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    shutil.rmtree(tmp, ignore_errors=True)
+
+
 #: the output folders :func:`check_folder_writable` made in this command (the deepest first)
 _MADE: list = []
 
@@ -88,6 +124,25 @@ def require_file(path) -> Path:
             raise InputError(f"{path}: is a folder; expected a file")
         raise InputError(f"{path}: no such file")
     return path
+
+
+def check_outputs(outputs, inputs=(), overwrite=False, option="--force"):
+    """Refuse, before any work, to write where it would destroy something:
+    an output that is one of the command's ``inputs`` (never, whatever
+    ``overwrite`` says: the run would replace what it reads), or one that
+    exists when ``overwrite`` is false (the user's file: ``option`` lifts
+    that).  ``None`` entries of either list are skipped.  Every command that
+    writes files calls this on the whole list of what it will write."""
+    ins = [Path(i) for i in inputs if i is not None]
+    for out in outputs:
+        if out is None:
+            continue
+        for inp in ins:
+            if same_file(out, inp):
+                raise InputError(f"{out}: is an input of this command; refusing to overwrite it (choose another "
+                                 "output)")
+        if Path(out).exists() and not overwrite:
+            raise InputError(f"{out}: already exists; refusing to overwrite it (use {option})")
 
 
 def same_file(a, b) -> bool:

@@ -706,7 +706,8 @@ class HeightSection(_Strict):
 class NavigateConfig(_Strict):
     """The whole ``inskit navigate`` configuration."""
 
-    name: str = Field("run", description="name of the run (the default output folder is out/<name>)")
+    name: str = Field("run", description="name of the run (the default output folder is out/<name>): letters, "
+                      "digits, '.', '_', '-' and '+', not starting with '.'", max_length=100)
     imu: ImuSection = Field(..., description="the IMU log")
     gnss: GnssSection = Field(..., description="the GNSS input")
     noise: NoiseSection = Field(NoiseSection(), description="sensor noise of the filter")
@@ -722,6 +723,16 @@ class NavigateConfig(_Strict):
                                          "(optional)")
     base_dir: Path = Field(Path("."), description="(set by the loader, not a key of the file) the folder "
                            "relative paths are taken from: the config file's")
+
+    @field_validator("name")
+    @classmethod
+    def _name_is_a_folder_name(cls, v):
+        import re
+
+        if not re.fullmatch(r"[A-Za-z0-9_+-][A-Za-z0-9._+-]*", v):
+            raise ValueError(f"{v!r} is not a plain folder name (the default output folder is out/<name>): use "
+                             "letters, digits, '.', '_', '-' and '+', no path separators, not starting with '.'")
+        return v
 
     @model_validator(mode="after")
     def _mounting_needs_a_vehicle_constraint(self):

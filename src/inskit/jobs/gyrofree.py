@@ -36,13 +36,14 @@ def layout_from_spec(spec, d=0.1):
     return read_layout(p)
 
 
-def _check_out(out_dir, names, overwrite):
+def _check_out(out_dir, names, overwrite, inputs=()):
+    """Refuse outputs that are inputs or (without ``overwrite``) exist
+    (:func:`inskit.files.check_outputs`); make the folder."""
+    from ..files import check_folder_writable, check_outputs
+
     out = Path(out_dir)
-    if not overwrite:
-        for n in names:
-            if (out / n).exists():
-                raise InputError(f"{out / n}: already exists; refusing to overwrite it (use --force)")
-    from ..files import check_folder_writable
+    check_outputs([out / n for n in names], [i for i in inputs if i not in (None, "ten", "six", SOURCE_SCENARIO)],
+                  overwrite)
 
     return check_folder_writable(out)  # made here, removed again if the command then fails
 
@@ -111,7 +112,7 @@ def simulate_job(scenario, layout_spec, out_dir, *, d=0.1, rate_hz=None, duratio
     log = log or (lambda s: None)
     t0 = time.perf_counter()
     layout = layout_from_spec(layout_spec, d)
-    out = _check_out(out_dir, ["array.csv", "layout.csv", "truth.csv"], overwrite)
+    out = _check_out(out_dir, ["array.csv", "layout.csv", "truth.csv"], overwrite, [scenario, layout_spec])
     rng = np.random.default_rng(seed)
     if scenario == SOURCE_SCENARIO:
         rate = 1000.0 if rate_hz is None else float(rate_hz)
@@ -241,7 +242,7 @@ def navigate_job(array_file, layout_spec, out_dir, *, d=0.1, solver="auto", fram
     if init and init_from:
         raise InputError("give either --init or --init-from, not both")
     layout = layout_from_spec(layout_spec, d)
-    out = _check_out(out_dir, ["rates.csv", "solution.csv"], overwrite)
+    out = _check_out(out_dir, ["rates.csv", "solution.csv"], overwrite, [array_file, layout_spec, init_from, truth_file])
     data = read_array(array_file, layout)
     log(f"gyrofree navigate: {len(data)} samples, layout {layout.label}")
     w0 = None if omega0 is None else _parse_vector(omega0, 3, "--omega0")

@@ -582,7 +582,7 @@ def simulate_job(scenario_file, out_dir, *, kind="semi-analytical", earth_model=
         raise InputError(f"--kind must be one of {', '.join(KINDS)}, got {kind!r}")
     out = Path(out_dir)
     files = [out / "solution.csv", out / "truth.csv"]
-    _refuse(files, overwrite)
+    _refuse(files, overwrite, scenario_file)
     sc, truth, errors, rng = _scenario_setup(scenario_file, dt=dt, earth_model=earth_model, seed=seed,
                                              gyro_drift_deg_h=gyro_drift_deg_h, accel_bias_ug=accel_bias_ug,
                                              duration=duration)
@@ -620,7 +620,7 @@ def integrate_job(scenario_file, out_dir, *, scheme="closed", estimator="kalman"
     log = log or _log_default
     out = Path(out_dir)
     files = [out / "solution.csv", out / "ins.csv", out / "truth.csv", out / "estimates.csv"]
-    _refuse(files, overwrite)
+    _refuse(files, overwrite, scenario_file)
     sc, truth, errors, rng = _scenario_setup(scenario_file, dt=dt, earth_model=earth_model, seed=seed,
                                              gyro_drift_deg_h=gyro_drift_deg_h, accel_bias_ug=accel_bias_ug,
                                              duration=duration)
@@ -654,12 +654,10 @@ def integrate_job(scenario_file, out_dir, *, scheme="closed", estimator="kalman"
             "files": [str(f) for f in files]}
 
 
-def _refuse(files, overwrite):
-    if overwrite:
-        return
-    for f in files:
-        if Path(f).exists():
-            raise InputError(f"{f}: already exists; refusing to overwrite it (use --force)")
+def _refuse(files, overwrite, scenario_file=None):
+    from ..files import check_outputs
+
+    check_outputs(files, [scenario_file], overwrite)
 
 
 def _write_estimates(path, run):

@@ -683,7 +683,7 @@ def _header(run):
             + "</header>")
 
 
-def build_report(run_dir, out=None):
+def build_report(run_dir, out=None, overwrite=False):
     """Write the HTML report of a navigate run folder.
 
     Parameters
@@ -693,6 +693,10 @@ def build_report(run_dir, out=None):
         ``solution_forward.csv``).
     out : path, optional
         The HTML file (default ``run_dir/report.html``), written atomically.
+        Never one of the run's own files (``summary.json``, the solutions
+        ...); an existing file only with ``overwrite``.
+    overwrite : bool
+        Replace an existing ``out`` (``--force``).
 
     Returns
     -------
@@ -709,8 +713,11 @@ def build_report(run_dir, out=None):
     import plotly.graph_objects as go
     from plotly.subplots import make_subplots
 
+    from ..files import check_outputs
+
     run = _Run(run_dir)
     out = Path(out) if out is not None else run.dir / "report.html"
+    check_outputs([out], [p for p in run.dir.iterdir() if p.is_file() and p.suffix.lower() != ".html"], overwrite)
     figs = [("track", "Track", *_fig_track(run, go), False),
             ("sigmas", "Position, velocity and attitude sigmas", *_fig_sigmas(run, go, make_subplots), True),
             ("innovations", "Innovations", *_fig_innovations(run, go, make_subplots), True),

@@ -15,7 +15,7 @@ from ..simulation.imu import ideal_imu, truth_solution
 from ..simulation.scenario import Scenario, Simulation, build_trajectory
 
 
-def write_simulation(sim: Simulation, out_dir, *, overwrite=False, plot=True, file_format="csv"):
+def write_simulation(sim: Simulation, out_dir, *, overwrite=False, plot=True, file_format="csv", inputs=()):
     """Write ``imu.csv`` (increments), ``gnss.csv``, ``truth.csv`` and a plot
     (``.parquet`` instead with ``file_format="parquet"``).
 
@@ -24,34 +24,33 @@ def write_simulation(sim: Simulation, out_dir, *, overwrite=False, plot=True, fi
     CSV files is GPS seconds of week (the scenario's start second of week
     plus scenario time), the time scale of the RINEX epochs, as in a real
     receiver and IMU log.  Without raw GNSS the times are scenario seconds.
+
+    ``inputs`` (the scenario file; a ``nav:`` constellation's file is added
+    here) are never overwritten, ``--force`` or not.  The files are written
+    whole or not at all, as a set (:func:`inskit.files.staged_files`): a
+    failure leaves the folder as it was.
     """
+    from ..files import staged_files
+
     out = Path(out_dir)
-    if file_format not in ("csv", "parquet"):
-        raise InputError(f"file_format must be 'csv' or 'parquet', got {file_format!r}")
-    files = [out / f"{n}.{file_format}" for n in ("imu", "gnss", "truth")]
-    if sim.raw is not None:
-        files += [out / "obs.rnx", out / "nav.rnx", out / "raw_truth.csv"]
-    other = [out / f"{n}.{'csv' if file_format == 'parquet' else 'parquet'}" for n in ("imu", "gnss", "truth")]
-    stale = [f for f in other if f.exists()]  # left beside the new files they would pass for this run's
-    if not overwrite:
-        for f in files + stale:
-            if f.exists():
-                raise InputError(f"{f}: already exists; refusing to overwrite it (use --force)")
-    out.mkdir(parents=True, exist_ok=True)
-    for f in stale:  # --force: an earlier run in the other format goes, not only the files of this one
-        f.unlink()
+    files, stale = check_simulation_outputs(sim.scenario, out, overwrite=overwrite, plot=plot,
+                                            file_format=file_format, inputs=inputs)
     imu, gnss, truth = sim.imu, sim.gnss, sim.truth
     if sim.raw is not None:
         sow0 = raw_start_sow(sim)
         imu = dataclasses.replace(imu, time=imu.time + sow0)
         gnss = dataclasses.replace(gnss, time=gnss.time + sow0)
         truth = dataclasses.replace(truth, time=truth.time + sow0)
-    _write_together([(io.write_imu, files[0], imu), (io.write_gnss, files[1], gnss),
-                     (io.write_solution, files[2], truth)])
-    if sim.raw is not None:
-        _write_raw(sim, files[3], files[4], files[5])
-    if plot:
-        files.append(_plot(sim, out / "scenario.png"))
+    with staged_files(out) as stage:
+        _write_together([(io.write_imu, stage(files[0]), imu), (io.write_gnss, stage(files[1]), gnss),
+                         (io.write_solution, stage(files[2]), truth)])
+        if sim.raw is not None:
+            _write_raw(sim, stage(files[3]), stage(files[4]), stage(files[5]))
+        if plot:
+            _plot(sim, stage(out / "scenario.png"))
+            files.append(out / "scenario.png")
+    for f in stale:  # --force: an earlier run in the other format goes, not only the files of this one
+        f.unlink()
     return files
 
 
@@ -66,6 +65,31 @@ def _write_together(jobs):
         futures = [pool.submit(write, path, data, overwrite=True) for write, path, data in jobs]
     for f in futures:
         f.result()
+
+
+def check_simulation_outputs(sc, out_dir, *, overwrite=False, plot=True, file_format="csv", inputs=()):
+    """Refuse, before the simulation runs, the outputs of
+    :func:`write_simulation` that would overwrite an input (the scenario, a
+    ``nav:`` constellation's file) or, without ``overwrite``, an existing
+    file.  Returns ``(files, stale)``: the data files to write and those of
+    the other format to remove once they are written."""
+    from ..files import check_outputs
+
+    out = Path(out_dir)
+    if file_format not in ("csv", "parquet"):
+        raise InputError(f"file_format must be 'csv' or 'parquet', got {file_format!r}")
+    files = [out / f"{n}.{file_format}" for n in ("imu", "gnss", "truth")]
+    raw_cfg = getattr(sc, "raw_gnss", None)
+    raw_on = raw_cfg is not None and raw_cfg.enabled
+    if raw_on:
+        files += [out / "obs.rnx", out / "nav.rnx", out / "raw_truth.csv"]
+    other = [out / f"{n}.{'csv' if file_format == 'parquet' else 'parquet'}" for n in ("imu", "gnss", "truth")]
+    stale = [f for f in other if f.exists()]  # left beside the new files they would pass for this run's
+    inputs = list(inputs)
+    if raw_cfg is not None and raw_cfg.constellation.startswith("nav:"):
+        inputs.append(raw_cfg.constellation[4:])
+    check_outputs(files + stale + ([out / "scenario.png"] if plot else []), inputs, overwrite)
+    return files, stale
 
 
 def raw_start_sow(sim: Simulation) -> float:

@@ -85,12 +85,11 @@ def _check_options(mask_deg, iono, tropo):
         raise ConfigError(f"--mask must be an elevation in [-5, 90) deg, got {mask_deg}")
 
 
-def _refuse(out, overwrite):
+def _refuse(out, overwrite, inputs=()):
+    from ..files import check_outputs
+
     files = [out / f for f in FILES]
-    if not overwrite:
-        for f in files:
-            if f.exists():
-                raise InputError(f"{f}: already exists; refusing to overwrite it (use --force)")
+    check_outputs(files, inputs, overwrite)
     return files
 
 
@@ -162,7 +161,7 @@ def run_spp(obs_path, nav_path, *, reference=None, mask_deg=10.0, iono="klobucha
     files = []
     if out is not None:
         out = Path(out)
-        files = _refuse(out, overwrite)
+        files = _refuse(out, overwrite, [obs_path, nav_path])
         check_folder_writable(out)
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as read_warnings:
