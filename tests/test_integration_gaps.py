@@ -93,3 +93,27 @@ def test_a_change_of_rate_is_reported_and_not_taken_for_gaps():
     assert len(ch) == 1
     c = ch[0]
     assert abs(c.rate_before_hz - 200.0) < 1 and abs(c.rate_after_hz - 20.0) < 0.5 and 59.0 < c.t_s < 64.0
+
+
+def test_a_gap_of_minutes_is_refused_by_row(turn_with_gap, capsys, tmp_path):
+    """A GPS week rollover the time column missed (604800 s) was bridged
+    (mechanize warned, then failed 'within 0.1 deg of a pole'): a gap beyond
+    MAX_GAP_S is refused, naming the row, by navigate and mechanize."""
+    from inskit import io
+    from inskit.cli import main
+    from inskit.errors import InputError
+    from inskit.integration.gaps import MAX_GAP_S, refuse_long_gaps
+
+    tr, t, gappy, gnss, truth = turn_with_gap
+    refuse_long_gaps(find_gaps(gappy))  # 10 s: bridged, not refused
+    late = gappy.time.copy()
+    k = 5000
+    late[k:] += 604800.0
+    broken = ImuData(late, gappy.dtheta_b, gappy.dv_b)
+    with pytest.raises(InputError, match=f"a gap of 60480.*before row {k} .*at most {MAX_GAP_S:g} s"):
+        refuse_long_gaps(find_gaps(broken), "log.csv")
+    io.write_imu(tmp_path / "imu.csv", broken)
+    io.write_solution(tmp_path / "truth.csv", truth)
+    with pytest.raises(SystemExit) as e:
+        main(["mechanize", str(tmp_path / "imu.csv"), "--init-from", str(tmp_path / "truth.csv")])
+    assert e.value.code == 2 and f"before row {k}" in capsys.readouterr().err

@@ -452,7 +452,7 @@ def test_outage_windows_in_the_file_follow_the_cli_rules(windows, msg):
         _cfg(LOOSE, outages={"protocol": "windows", "windows_s": windows})
 
 
-@pytest.mark.parametrize("name", ["", "../../esc", "/tmp/abs", "a/b", ".hidden", "x y"])
+@pytest.mark.parametrize("name", ["", "../../esc", "/tmp/abs", "a/b", ".hidden", " lead", "c:d"])
 def test_a_run_name_is_a_plain_folder_name(tmp_path, name):
     """name = "" wrote the run into out/ itself and "../../esc" outside it:
     the default output folder is out/<name>, so the name is one folder."""

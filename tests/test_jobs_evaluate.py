@@ -104,3 +104,30 @@ def test_per_epoch_file_refusals(files, tmp_path):
         evaluate(files / "sol.csv", files / "truth.csv", per_epoch_file=tmp_path / "e.txt")
     with pytest.raises(InputError, match=r"is an input of this run"):
         evaluate(files / "sol.csv", files / "truth.csv", per_epoch_file=files / "sol.csv", force=True)
+
+
+def test_a_gap_in_the_truth_is_not_interpolated_across(files, tmp_path):
+    """60 s of a truth removed used to be bridged by linear interpolation (a
+    turn became a chord: 41 m of RMS error read as 65 m).  The epochs inside
+    the gap are left unscored and said so; a truth of part of the run
+    likewise."""
+    from inskit import analysis
+
+    truth = io.read_solution(files / "truth.csv")
+    keep = (truth.time < 100.0) | (truth.time >= 160.0)
+    cut = NavSolution(truth.time[keep], truth.lla[keep], truth.v_n[keep], truth.q_nb[keep])
+    io.write_solution(tmp_path / "gap.csv", cut)
+    s = evaluate(files / "sol.csv", tmp_path / "gap.csv")
+    c = s["truth_coverage"]
+    assert c["truth_gaps"] == [[pytest.approx(99.9), pytest.approx(160.0)]]
+    assert c["epochs_in_truth_gaps"] == 600 and s["epochs"] == c["epochs_scored"] == 3000 - 600
+    assert any("gap(s) of the truth" in w for w in s["warnings"]) and "warning: scored 2400 of 3000" in \
+        summary_text(s)
+    short = NavSolution(truth.time[:100], truth.lla[:100], truth.v_n[:100], truth.q_nb[:100])
+    io.write_solution(tmp_path / "short.csv", short)
+    s = evaluate(files / "sol.csv", tmp_path / "short.csv")
+    assert s["epochs"] == 100 and any("2900 of 3000 solution epochs lie outside the truth's span" in w
+                                      for w in s["warnings"])
+    assert evaluate(files / "sol.csv", files / "truth.csv")["warnings"] == []
+    # an epoch on a truth sample at the edge of a gap is still scored (nothing is interpolated there)
+    assert analysis.truth_covers(np.array([99.9, 100.0, 160.0]), cut.time).tolist() == [True, False, True]

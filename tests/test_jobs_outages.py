@@ -240,3 +240,57 @@ def test_a_streamed_run_scores_every_row_against_the_truth(drive, tmp_path, monk
             for f in ("rms", "max", "final"):
                 assert b[k][f] == pytest.approx(a[k][f], rel=1e-12, abs=1e-15), (label, k, f)
     assert s_s["outage_table"] == s_w["outage_table"]
+
+
+def test_a_gap_in_the_gnss_data_is_free_inertial_not_gnss_on(constructed):
+    """GNSS that ended at 45 s of a 107 s run gave a healthy verdict and a
+    'GNSS on' RMS against the truth that counted the 62 s of free-inertial
+    coasting.  A stretch without any fix (protocol outages aside: their fixes
+    exist, withheld) is found, and left out of the GNSS-on figures."""
+    from inskit.jobs.outages import gnss_data_gaps
+
+    sol, truth, gnss, windows, noise, drift = constructed
+    assert gnss_data_gaps(gnss.time, 0.0, 60.0) == []  # the withheld 20..30 s is the protocol's, not a gap
+    early = gnss.select(gnss.time <= 40.0)
+    assert gnss_data_gaps(early.time, 0.0, 60.0) == [(40.0, 60.0)]
+    assert gnss_data_gaps(early.time, -10.0, 60.0) == [(-10.0, 0.0), (40.0, 60.0)]
+    assert gnss_data_gaps(np.r_[early.time, 50.0], 0.0, 50.0) == [(40.0, 50.0)]
+    # a solution that drifts after the last fix: the drift does not enter the GNSS-on figure
+    t = sol.time
+    away = np.where(t > 40.0, 0.5 * (t - 40.0) ** 2, 0.0)
+    coast = NavSolution(t, earth.ned_to_lla(np.column_stack([away, 0 * t, 0 * t]), sol.lla), sol.v_n, sol.q_nb)
+    s_all = score_outages(coast, gnss, windows, LEVER_B, truth=truth).summary
+    s_early = score_outages(coast, early, windows, LEVER_B, truth=truth).summary
+    assert s_all["gnss_on_h_vs_truth_rms_m"] > 10.0  # the fixes were there: the drift is an error with GNSS on
+    assert s_early["gnss_on_h_vs_truth_rms_m"] < 0.2
+    assert s_early["gnss_on_epochs_vs_truth"] < s_all["gnss_on_epochs_vs_truth"] - 1900
+
+
+def test_navigate_warns_of_gnss_gaps_and_of_fixes_outside_the_imu_log(drive):
+    from inskit.jobs.navigate import gnss_coverage_warnings
+
+    res, d = drive
+    assert gnss_coverage_warnings(res.gnss.time, res.imu.time) == []  # the protocol's outages are no gap
+    t = res.gnss.time
+    w = gnss_coverage_warnings(t[t <= t[0] + 40.0], res.imu.time)
+    assert len(w) == 1 and "after the last fix; not an outage of the protocol" in w[0] and "free-inertial" in w[0]
+    w = gnss_coverage_warnings(t, res.imu.time[res.imu.time <= t[0] + 40.0])
+    assert len(w) == 1 and "fixes lie outside the IMU log's span" in w[0]
+
+
+def test_the_start_up_looks_only_at_fixes_inside_the_imu_log(drive, tmp_path):
+    """An IMU log of 20 s beside 128 s of fixes claimed 'static for 31 s'
+    from the fixes after the IMU had ended; the start-up now sees only the
+    fixes inside the IMU's span and says so when that is why it fails."""
+    from inskit.errors import InputError
+    from inskit.jobs.config import config_from_dict
+    from inskit.jobs.navigate import navigate
+
+    res, d = drive
+    imu = io.read_imu(d / "imu.csv")
+    io.write_imu(tmp_path / "imu.csv", imu.slice(0, int(np.searchsorted(imu.time, imu.time[0] + 20.0))))
+    (tmp_path / "gnss.csv").write_bytes((d / "gnss.csv").read_bytes())
+    cfg = config_from_dict({"imu": {"file": "imu.csv"}, "gnss": {"file": "gnss.csv", "lever_arm_b_m": [0, 0, -1]},
+                            "output": {"plots": False}}, base_dir=tmp_path, source="short")
+    with pytest.raises(InputError, match=r"inside the IMU log's span .*fixes lie outside it"):
+        navigate(cfg)

@@ -155,12 +155,13 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
     if height_ref is not None and height == "free":
         raise InputError("--height-ref would be ignored with --height free; use --height hold or aid")
     href = None if height == "free" else (init.lla[2] if height_ref is None else _height_ref(height_ref, imu))
-    from .integration.gaps import find_gaps, find_rate_changes
+    from .integration.gaps import find_gaps, find_rate_changes, refuse_long_gaps
 
     for ch in find_rate_changes(imu):
         _log(f"warning: {imu_file}: the sampling rate changes from {ch.rate_before_hz:.4g} Hz to "
              f"{ch.rate_after_hz:.4g} Hz near t = {ch.t_s:.3f} s (row {ch.row})")
     gaps = find_gaps(imu)
+    refuse_long_gaps(gaps, str(imu_file))
     for g in gaps:
         _log(f"warning: {imu_file}: a gap of {g.length_s:.3f} s at t = {g.start_s:.3f} s (row {g.row}); the "
              "mechanization integrates one sample's increments over it")

@@ -89,6 +89,24 @@ def find_gaps(imu: ImuData, factor=5.0):
     return [ImuGap(int(k), float(imu.time[k - 1]), float(dt[k - 1])) for k in rows]
 
 
+#: the longest IMU gap a run goes across [s]: beyond it the log is broken (a week rollover, two logs in one file)
+MAX_GAP_S = 60.0
+
+
+def refuse_long_gaps(gaps, name="the IMU log", limit=MAX_GAP_S):
+    """Raise an InputError naming the row of the first gap longer than
+    ``limit`` [s]: coasting (or bridging) on one sample's rates over minutes
+    is no navigation, and a gap of a GPS week (a rollover the time column
+    missed) would be bridged by tens of millions of rows."""
+    from ..errors import InputError
+
+    for g in gaps:
+        if g.length_s > limit:
+            raise InputError(f"{name}: a gap of {g.length_s:.3f} s in the time column before row {g.row} "
+                             f"(t = {g.start_s:.3f} s); at most {limit:g} s is gone across: split the log there, "
+                             "or fix its time column (a GPS week rollover?)")
+
+
 def bridge_gaps(imu: ImuData, gaps):
     """Fill each gap with rows at the local interval that carry the previous
     sample's rate and specific force (the last row keeps its own sample).

@@ -706,8 +706,8 @@ class HeightSection(_Strict):
 class NavigateConfig(_Strict):
     """The whole ``inskit navigate`` configuration."""
 
-    name: str = Field("run", description="name of the run (the default output folder is out/<name>): letters, "
-                      "digits, '.', '_', '-' and '+', not starting with '.'", max_length=100)
+    name: str = Field("run", description="name of the run (the default output folder is out/<name>): one folder "
+                      "name, without '/', '\\' or ':', not starting with '.'", max_length=100)
     imu: ImuSection = Field(..., description="the IMU log")
     gnss: GnssSection = Field(..., description="the GNSS input")
     noise: NoiseSection = Field(NoiseSection(), description="sensor noise of the filter")
@@ -729,9 +729,9 @@ class NavigateConfig(_Strict):
     def _name_is_a_folder_name(cls, v):
         import re
 
-        if not re.fullmatch(r"[A-Za-z0-9_+-][A-Za-z0-9._+-]*", v):
-            raise ValueError(f"{v!r} is not a plain folder name (the default output folder is out/<name>): use "
-                             "letters, digits, '.', '_', '-' and '+', no path separators, not starting with '.'")
+        if not v.strip() or v != v.strip() or v.startswith(".") or re.search(r"[/\\:\x00-\x1f]", v):
+            raise ValueError(f"{v!r} is not a plain folder name (the default output folder is out/<name>): no path "
+                             "separators ('/', '\\', ':'), not empty, not starting with '.' or a space")
         return v
 
     @model_validator(mode="after")

@@ -124,6 +124,7 @@ def evaluate(solution_file, truth_file, *, t_from=None, t_to=None, remove_offset
     sol = io.read_solution(solution_file)
     truth = io.read_solution(truth_file)
     full = analysis.nav_error(sol, truth)
+    cover = analysis.truth_coverage(sol.time, truth.time)
     err = analysis.restrict(full, t_from, t_to, name="--from/--to")
     offset = None
     if remove_offset is not None:
@@ -136,6 +137,8 @@ def evaluate(solution_file, truth_file, *, t_from=None, t_to=None, remove_offset
     s["truth_file"] = str(truth_file)
     s["window"] = {"from_s": t_from, "to_s": t_to}
     s["offset_removed"] = offset.summary() if offset is not None else None
+    s["truth_coverage"] = cover
+    s["warnings"] = coverage_warnings(cover, truth.time)
     if per_epoch_file is not None:
         meta = {"solution": str(solution_file), "truth": str(truth_file), "window": s["window"],
                 "offset_removed": s["offset_removed"]}
@@ -147,6 +150,26 @@ def evaluate(solution_file, truth_file, *, t_from=None, t_to=None, remove_offset
         analysis.plot_errors(err, plot_file, title=title)
         s["plot"] = str(plot_file)
     return s
+
+
+def coverage_warnings(cover: dict, truth_time) -> list[str]:
+    """What a truth left unscored (:func:`inskit.analysis.truth_coverage`),
+    in words: epochs outside its span, epochs inside its gaps."""
+    out = []
+    n, done = cover["epochs"], cover["epochs_scored"]
+    if cover["epochs_outside_truth_span"]:
+        out.append(f"{cover['epochs_outside_truth_span']} of {n} solution epochs lie outside the truth's span "
+                   f"({float(truth_time[0]):.3f}..{float(truth_time[-1]):.3f} s) and are not scored")
+    gaps = cover["truth_gaps"]
+    if cover["epochs_in_truth_gaps"]:
+        longest = max(gaps, key=lambda g: g[1] - g[0])
+        out.append(f"{cover['epochs_in_truth_gaps']} solution epochs fall in {len(gaps)} gap(s) of the truth longer "
+                   f"than {cover['truth_gap_limit_s']:.3g} s (5 of its sampling intervals; the longest "
+                   f"{longest[0]:.3f}..{longest[1]:.3f} s) and are not scored: the truth is not interpolated "
+                   "across them")
+    if out:
+        out.append(f"scored {done} of {n} solution epochs")
+    return out
 
 
 SUMMARY_ROWS = (("north_m", "m"), ("east_m", "m"), ("down_m", "m"), ("horizontal_m", "m"), ("3d_m", "m"),
@@ -162,6 +185,8 @@ def summary_text(s: dict) -> str:
         lines.append(f"{k:<14}{v['rms']:>12.4g}{v['max']:>12.4g}{v['final']:>12.4g}  {u}")
     lines.append(f"{s['epochs']} epochs over {s['duration_s']:.1f} s "
                  f"({s['first_epoch_s']:.3f}..{s['last_epoch_s']:.3f} s)")
+    for w in s.get("warnings", []):
+        lines.append(f"warning: {w}")
     o = s.get("offset_removed")
     if o:
         lines.append(f"constant offset removed (mean over {o['from_s']:.3f}..{o['to_s']:.3f} s, {o['epochs']} epochs): "

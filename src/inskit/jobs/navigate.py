@@ -569,7 +569,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     holds the kept rows only (:func:`stream_keep_rows`, the summary says how
     many) and :func:`write_outputs` commits the files.
     """
-    from ..integration.gaps import bridge_gaps, find_gaps, find_rate_changes, gap_process_noise
+    from ..integration.gaps import bridge_gaps, find_gaps, find_rate_changes, gap_process_noise, refuse_long_gaps
 
     t_start = time.perf_counter()
     tight = cfg.gnss.coupling == "tight"
@@ -595,6 +595,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         raise InputError("gnss.use_velocity and gnss.sigma_floor_m describe fixes fused by loose coupling; with "
                          "tight coupling the fixes are only the reference (use use_doppler and the sigma scales)")
     gaps = find_gaps(imu, cfg.imu.gap_factor)
+    refuse_long_gaps(gaps, str(cfg.resolve(cfg.imu.file)) if cfg.imu.file else "the IMU log")
     rate_changes = find_rate_changes(imu)
     for c in rate_changes:
         if log:
@@ -623,12 +624,25 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         from .noise import turn_on_sigmas
 
         i = cfg.init
-        startup = auto_startup(imu, gnss_used, lever, mode=i.mode, min_static_s=i.min_static_s,
-                               heading_speed_m_s=i.heading_speed_m_s, course_average_s=i.course_average_s,
-                               level_window_s=i.level_window_s,
-                               yaw_guess=None if i.yaw_deg is None else i.yaw_deg * DEG,
-                               gyro_bias_sigma=turn_on_sigmas(cfg)[0], accel_bias_sigma=turn_on_sigmas(cfg)[1],
-                               floors={k: getattr(i, k) for k in STARTUP_SIGMAS})
+        span = (gnss_used.time >= imu.time[0] - 1.0) & (gnss_used.time <= imu.time[-1])
+        if span.sum() < 2:
+            raise InputError(f"{cfg.resolve(cfg.imu.file) if cfg.imu.file else 'the IMU log'}: the IMU log "
+                             f"({imu.time[0]:.3f}..{imu.time[-1]:.3f} s) overlaps {int(span.sum())} used GNSS "
+                             "fix(es); the start-up needs the fixes while the IMU runs (mismatched time bases, "
+                             "or logs of different runs?)")
+        try:  # the start-up sees only the fixes while the IMU runs (a short IMU log claimed a static start it lacked)
+            startup = auto_startup(imu, gnss_used if span.all() else gnss_used.select(span), lever, mode=i.mode,
+                                   min_static_s=i.min_static_s, heading_speed_m_s=i.heading_speed_m_s,
+                                   course_average_s=i.course_average_s, level_window_s=i.level_window_s,
+                                   yaw_guess=None if i.yaw_deg is None else i.yaw_deg * DEG,
+                                   gyro_bias_sigma=turn_on_sigmas(cfg)[0], accel_bias_sigma=turn_on_sigmas(cfg)[1],
+                                   floors={k: getattr(i, k) for k in STARTUP_SIGMAS})
+        except InputError as e:
+            if span.all():
+                raise
+            raise InputError(f"{e} (the start-up looks only at the {int(span.sum())} fixes inside the IMU log's span "
+                             f"{imu.time[0]:.3f}..{imu.time[-1]:.3f} s; {int((~span).sum())} fixes lie outside it)"
+                             ) from None
         initial = startup.state
         sig = dict(startup.sigma or {})
         bank_on = (cfg.filter.scheme != "uncoupled"
@@ -830,6 +844,27 @@ def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, lo
     return float(r.x), sorted(evals)
 
 
+def gnss_coverage_warnings(fix_time, imu_time) -> list[str]:
+    """The stretches of the IMU's span without GNSS fixes that no outage
+    protocol asked for (:func:`.outages.gnss_data_gaps`: the solution is
+    free-inertial there) and the fixes outside the IMU's span (not used), in
+    words; empty when the logs cover each other."""
+    from .outages import gnss_data_gaps
+
+    t0, t1 = float(imu_time[0]), float(imu_time[-1])
+    out = []
+    for a, b in gnss_data_gaps(fix_time, t0, t1):
+        where = ("before the first fix" if a == t0 else "after the last fix" if b == t1 else "between two fixes")
+        out.append(f"GNSS: no fix over {a:.3f}..{b:.3f} s ({b - a:.1f} s, {where}; not an outage of the protocol): "
+                   "the solution there is free-inertial")
+    ft = np.asarray(fix_time, float)
+    outside = int(((ft < t0 - 1e-6) | (ft > t1 + 1e-6)).sum())
+    if outside:
+        out.append(f"GNSS: {outside} of {len(ft)} fixes lie outside the IMU log's span ({t0:.3f}..{t1:.3f} s) "
+                   "and are not used")
+    return out
+
+
 def truth_errors(res: NavigateResult, truth: NavSolution) -> dict:
     """Errors of the forward (and smoothed) solution against a truth file,
     summarised (:func:`inskit.analysis.summarize`) over every row (a
@@ -913,6 +948,14 @@ def summary(res: NavigateResult) -> dict:
                              else "(given to navigate() in Python)")
         out["truth_errors"] = truth_errors(res, res.truth)
     out["health"] = health(fw, res.gaps or (), res.rate_changes or ())
+    out["health"]["warnings"] += gnss_coverage_warnings(res.gnss.time, res.imu.time)
+    if res.truth is not None:  # what the truth could not score, said (not silently left out)
+        from .. import analysis
+        from .evaluate import coverage_warnings
+
+        cover = analysis.truth_coverage(res.imu.time, res.truth.time)
+        out["truth_coverage"] = cover
+        out["health"]["warnings"] += [f"truth: {w}" for w in coverage_warnings(cover, res.truth.time)]
     notes = res.imu_notes or {}
     if notes.get("repeated_rows"):
         out["imu_repeated_rows"] = {k: notes[k] for k in ("repeated_rows", "repeated_rows_fraction",

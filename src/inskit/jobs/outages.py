@@ -156,6 +156,30 @@ def unaided_spans(gnss: GnssData, windows, used=None):
     return spans
 
 
+#: a stretch without any fix (used or withheld) longer than this many median fix intervals is a gap in the GNSS data
+GNSS_GAP_FACTOR = 5.0
+#: ... and at least this long [s] (a 10 Hz receiver's second without fixes is not worth a warning)
+GNSS_GAP_MIN_S = 2.0
+
+
+def gnss_data_gaps(fix_time, t_start, t_end):
+    """Stretches of ``[t_start, t_end]`` (the IMU's span) without any GNSS
+    fix, protocol outages aside (their fixes are in ``fix_time``, only
+    withheld): ``[(from, to)]`` [s] longer than ``GNSS_GAP_FACTOR`` median
+    fix intervals and ``GNSS_GAP_MIN_S``, including a start before the first
+    fix and an end after the last.  The solution there is free-inertial
+    although no outage was asked for."""
+    tf = np.asarray(fix_time, float)
+    tf = tf[(tf >= t_start) & (tf <= t_end)]
+    if len(tf) == 0:
+        return [(float(t_start), float(t_end))]
+    step = float(np.median(np.diff(tf))) if len(tf) > 1 else 1.0
+    limit = max(GNSS_GAP_FACTOR * step, GNSS_GAP_MIN_S)
+    edges = np.concatenate([[t_start], tf, [t_end]])
+    d = np.diff(edges)
+    return [(float(edges[i]), float(edges[i + 1])) for i in np.nonzero(d > limit)[0]]
+
+
 def _truth_scores(sol: NavSolution, truth: NavSolution, gnss: GnssData, windows, rows, t0):
     """Add the truth keys to ``rows`` (in place); return the summary keys.
 
@@ -197,6 +221,8 @@ def _truth_scores(sol: NavSolution, truth: NavSolution, gnss: GnssData, windows,
         e, w = idx[-1], idx[int(np.argmax(h[idx]))]
         r.update(zip(keys, (float(h[e]), float(v[e]), float(d3[e]), float(err.time[e] - t0),
                             float(h[w]), float(v[idx].max()), float(d3[idx].max()), float(err.time[w] - t0))))
+    for a, b in gnss_data_gaps(gnss.time, float(sol.time[0]), float(sol.time[-1])):  # free-inertial, unasked
+        off |= (err.time > a) & (err.time <= b) if a > sol.time[0] else (err.time < b)
     on = ~off
     out = {"outages_vs_truth": n_scored, **_summaries(rows, "truth"),
            "gnss_on_h_vs_truth_rms_m": _rms(h[on]), "gnss_on_v_vs_truth_rms_m": _rms(v[on]),
