@@ -174,6 +174,23 @@ def test_parquet_reader_validates_rows(tmp_path):
         io.read_solution(tmp_path / "short.parquet")
 
 
+def test_narrow_floats_for_times_and_geodetic_angles_are_refused(tmp_path):
+    """lat_deg and lon_deg as float32 were read (0.21 m of 'error' in
+    evaluate came from the dtype alone); a float32 height or velocity loses
+    nothing that matters and is read."""
+    import pyarrow as pa
+
+    cols = P.solution_columns(solution(n=20))
+    for name in ("lat_deg", "time_s"):
+        table = pa.table({k: pa.array(v, type=pa.float32() if k == name else pa.float64()) for k, v in cols.items()})
+        pq.write_table(table, tmp_path / f"{name}.parquet")
+        with pytest.raises(InputError, match=rf"{name}\.parquet: column '{name}' holds float; expected float64"):
+            io.read_solution(tmp_path / f"{name}.parquet")
+    table = pa.table({k: pa.array(v, type=pa.float32() if k == "height_m" else pa.float64()) for k, v in cols.items()})
+    pq.write_table(table, tmp_path / "h.parquet")
+    assert len(io.read_solution(tmp_path / "h.parquet")) == 20
+
+
 def test_nan_is_refused_with_column_and_row(tmp_path):
     sol = solution(n=30)
     sol.extra["sigma_n_m"][12] = np.nan

@@ -526,3 +526,28 @@ def test_prior_sigma_of_a_random_walk_and_a_gauss_markov_block():
     assert np.allclose(gm.prior_sigma(1e4), np.hypot(1e-4, 3e-4))  # the steady state after many tau
     rw = GyroBias(sigma0=1e-4, instability=2e-5, tau_s=np.inf)  # instability: the random walk's root PSD
     assert np.allclose(rw.prior_sigma(400.0), np.sqrt(1e-8 + 4e-10 * 400.0))
+
+
+def test_an_odometer_in_the_wrong_unit_is_refused_by_its_speed():
+    """An odometer in km/h under an m/s header made the filter reject the
+    GNSS (60 consecutive rejections, blamed on the fixes) and end 1.6 km off:
+    its speed is checked against the track's first; a scale error of
+    per cent is left to the scale-factor state."""
+    from inskit import earth
+    from inskit.errors import InputError
+    from inskit.jobs.navigate import check_odometer_speed
+    from inskit.types import GnssData
+
+    t = np.arange(0.0, 120.0, 1.0)
+    speed = np.where(t < 20.0, 0.0, 12.0)  # 20 s at rest, then 12 m/s north
+    north = np.cumsum(speed)
+    ref = np.array([np.radians(45.0), np.radians(7.0), 100.0])
+    lla = earth.ned_to_lla(np.column_stack([north, 0 * t, 0 * t]), ref)
+    gnss = GnssData(t, lla, np.full((len(t), 3), 0.02))
+    to = np.arange(0.0, 120.0, 0.1)
+    v = np.interp(to, t - 0.5, speed)
+    check_odometer_speed("odo.csv", to, v * 1.03, gnss)  # 3 % scale: the filter's to estimate
+    with pytest.raises(InputError, match=r"odo\.csv: the odometer speed is 3\.6 times .*km/h read as m/s"):
+        check_odometer_speed("odo.csv", to, v * 3.6, gnss)
+    with pytest.raises(InputError, match=r"2\.24 times .*mph"):
+        check_odometer_speed("odo.csv", to, v * 2.237, gnss)

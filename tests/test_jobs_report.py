@@ -192,3 +192,15 @@ def test_envelope_keeps_extremes_and_gaps():
     k = int(np.nanargmax(v))
     assert abs(x0 + k * dx - t[54_321]) <= 2 * dx  # drawn within a bin of its time
     assert np.isnan(v[int((310 - x0) / dx)])  # a gap in the data stays a gap
+
+
+def test_an_innovations_file_cut_mid_row_is_refused(run_dir, tmp_path):
+    """innovations.csv cut short (head -c 3000) was plotted without a word."""
+    d = tmp_path / "cut"
+    d.mkdir()
+    for f in ("summary.json", "solution_forward.csv"):
+        shutil.copy(run_dir / f, d / f)
+    (d / "innovations.csv").write_bytes((run_dir / "innovations.csv").read_bytes()[:3000])
+    with pytest.raises(InputError, match=r"innovations\.csv: line \d+: empty field.*cut short"):
+        build_report(d, tmp_path / "cut.html")
+    assert not (tmp_path / "cut.html").exists()

@@ -128,3 +128,15 @@ def test_reproduce_full(tmp_path):
     g = {(o["filter"], o["scheme"]): o["growth_m"] for o in res["outage"]}
     assert g["first-order", "closed"] < 0.5 * g["first-order", "open"]
     assert g["second-order", "closed"] < 0.5 * g["second-order", "open"]
+
+
+def test_integrate_without_any_fix_is_refused(tmp_path):
+    """outages_s covering the whole run gave "fixes": 0, an RMS and exit 0:
+    an integration with nothing to integrate with."""
+    from inskit.errors import ConfigError
+
+    p = tmp_path / "blind.toml"
+    p.write_text(SCENARIO.replace("outages_s = [[1200.0, 1500.0]]", "outages_s = [[-1.0, 5000.0]]"))
+    with pytest.raises(ConfigError, match=r"blind\.toml: no GNSS fix reaches the filter .*outages_s"):
+        run(platform, ["integrate", p, "--out", tmp_path / "o", "--no-plots"])
+    assert not (tmp_path / "o" / "solution.csv").exists()

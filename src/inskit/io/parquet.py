@@ -383,9 +383,17 @@ def read_parquet_columns(path) -> tuple[dict, dict]:
     for name, col in zip(table.column_names, table.columns):
         if not (pa.types.is_floating(col.type) or pa.types.is_integer(col.type)):
             raise InputError(f"{path}: column '{name}' holds {col.type}; expected numbers (float64)")
+        if pa.types.is_floating(col.type) and col.type.bit_width < 64 and name.split("_")[0] in _WIDE:
+            raise InputError(f"{path}: column '{name}' holds {col.type}; expected float64 (a {col.type} "
+                             f"{'time' if name.startswith('time') else 'latitude or longitude'} has a resolution of "
+                             "metres or tens of milliseconds: the file lost precision when it was written)")
         cols[name] = _column_values(col)
     meta.setdefault("units", {k: column_unit(k) for k in cols})
     return cols, meta
+
+
+#: columns (by their name's first word) whose values need all of float64: times and geodetic angles
+_WIDE = ("time", "lat", "lon")
 
 
 def read_metadata(path) -> dict:

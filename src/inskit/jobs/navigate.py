@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import io
+from .. import earth, io
 from ..alignment.coarse import Startup, static_intervals
 from ..errors import InputError
 from ..files import write_text
@@ -367,9 +367,50 @@ def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = N
     return imu.slice(k0), gnss
 
 
-def odometer_measurement(cfg: NavigateConfig, imu: ImuData):
+#: odometer speed / GNSS track speed outside this band (median while moving) is a unit or scale mistake
+ODOMETER_SPEED_RATIO = (0.8, 1.25)
+
+
+def check_odometer_speed(path, t, v, gnss: GnssData, min_speed_m_s=2.0):
+    """Refuse an odometer log whose speed is not the GNSS track's: the
+    median ratio of odometer speed to the speed of the fixes (differenced
+    positions, interpolated to the odometer times) while both say the
+    vehicle moves faster than ``min_speed_m_s``, outside
+    :data:`ODOMETER_SPEED_RATIO` (3.6: km/h under an m/s header; 2.24: mph;
+    the filter then rejected the GNSS and blamed it).  A scale error of a
+    few per cent is the scale-factor state's to estimate, not refused.
+    Silent when the track gives fewer than 10 such moments."""
+    if len(gnss.time) < 3:
+        return
+    p = earth.lla_to_ned(gnss.lla, gnss.lla[0])
+    tm = 0.5 * (gnss.time[1:] + gnss.time[:-1])
+    dt = np.diff(gnss.time)
+    ok = dt > 0
+    sp = np.hypot(*(np.diff(p[:, :2], axis=0)[ok] / dt[ok, None]).T)
+    tm = tm[ok]
+    inside = (t >= tm[0]) & (t <= tm[-1])
+    if inside.sum() < 10:
+        return
+    g = np.interp(t[inside], tm, sp)
+    o = np.abs(np.asarray(v, float)[inside])
+    moving = (g > min_speed_m_s) & (o > 0.5 * min_speed_m_s)
+    if moving.sum() < 10:
+        return
+    r = float(np.median(o[moving] / g[moving]))
+    lo, hi = ODOMETER_SPEED_RATIO
+    if not lo <= r <= hi:
+        hint = (" (km/h read as m/s?)" if abs(r - 3.6) < 0.4 else " (mph read as m/s?)" if abs(r - 2.237) < 0.25
+                else " (m/s read as km/h?)" if abs(r - 1 / 3.6) < 0.05 else "")
+        raise InputError(f"{path}: the odometer speed is {r:.3g} times the GNSS track's speed (median over "
+                         f"{int(moving.sum())} moments while moving){hint}; expected {lo:g}..{hi:g} (a scale error "
+                         "within it is estimated): the speed column must be m/s")
+
+
+def odometer_measurement(cfg: NavigateConfig, imu: ImuData, gnss: GnssData | None = None):
     """The odometer plug-in over the ``[odometer]`` log, thinned to
-    ``rate_hz``; refuses a log that does not overlap the IMU's."""
+    ``rate_hz``; refuses a log that does not overlap the IMU's, or whose
+    speed is not the GNSS track's (:func:`check_odometer_speed`, with
+    ``gnss`` the fixes used)."""
     from ..integration import Odometer
 
     o = cfg.odometer
@@ -382,6 +423,8 @@ def odometer_measurement(cfg: NavigateConfig, imu: ImuData):
     if o.rate_hz is not None and len(t) > 1:
         keep = np.r_[True, np.diff(np.floor(t * o.rate_hz)) > 0]
         t, v = t[keep], v[keep]
+    if gnss is not None:
+        check_odometer_speed(path.name, t, v, gnss)
     return Odometer(t, v, o.sigma_m_s, lever_arm_b=o.lever_arm_b_m, with_nhc=o.with_nhc,
                     nhc_sigma_m_s=o.nhc_sigma_m_s)
 
@@ -662,7 +705,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     clock_start = None
     extra_blocks, odo = [], None
     if cfg.odometer is not None:
-        odo = odometer_measurement(cfg, imu)
+        odo = odometer_measurement(cfg, imu, gnss_used)
         if cfg.odometer.estimate_scale:
             from ..integration import OdometerScale
 

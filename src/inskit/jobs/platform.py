@@ -27,7 +27,7 @@ import numpy as np
 
 from ..files import save_figure, write_csv
 from .. import analysis, earth, io
-from ..errors import InputError
+from ..errors import ConfigError, InputError
 from ..platform import design as D
 from ..platform import error_model as em
 from ..platform.integrated import (
@@ -632,6 +632,10 @@ def integrate_job(scenario_file, out_dir, *, scheme="closed", estimator="kalman"
     sig_v = g.velocity_sigma_m_s if g.velocity_sigma_m_s > 0 else 0.1
     sns = simulate_sns(truth, sigma_lat=sig_h / rn, sigma_lon=sig_h / (re * math.cos(lat0)), sigma_v=sig_v,
                        every=every, outages=[tuple(o) for o in g.outages_s], rng=rng)
+    if not np.any(sns.available):
+        raise ConfigError(f"{scenario_file}: no GNSS fix reaches the filter ([gnss] outages_s = "
+                          f"{[list(o) for o in g.outages_s]} cover the whole run of {truth.time[-1]:.0f} s): nothing "
+                          "to integrate with (the free platform is `inskit platform simulate`)")
     log(f"platform integrate: {sc.name}, {scheme} loop, {estimator}, fix every {every * dt:g} s")
     kt = KalmanTuning(sigma_position=sig_h / rn, sigma_velocity=max(sig_v, 0.1))
     run = integrate_platform(truth, sns, scheme=scheme, estimator=estimator, errors=errors, kalman=kt,

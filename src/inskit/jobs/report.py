@@ -176,6 +176,11 @@ def read_innovations(path):
     missing = [c for c in need if c not in df.columns]
     if missing:
         raise InputError(f"{path}: line 1: missing column(s) {', '.join(missing)}; expected {', '.join(need)}")
+    blank = df[need].isna().any(axis=1).to_numpy()
+    if blank.any():  # a file cut short (a copy interrupted, a disk filled) or edited: not plotted as if whole
+        i = int(np.argmax(blank))
+        raise InputError(f"{path}: line {i + 2}: empty field(s) in {', '.join(c for c in need if pd.isna(df[c].iloc[i]))}"
+                         f"{' (the file ends mid-row: cut short?)' if i == len(df) - 1 else ''}")
     out = {}
     for name, g in df.groupby("measurement", sort=False):
         out[str(name)] = {c: g[c].to_numpy(float) for c in ("t", "row", "nu", "sigma", "accepted")}
