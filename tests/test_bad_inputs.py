@@ -339,6 +339,22 @@ def test_impossible_navigate_configuration(capsys, sim, tmp_path, text, needles)
     ("lat_deg = 45", "lat_deg = 95", ["field 'start.lat_deg'", "less than or equal to 90"]),
     ("white_h_m = 0.5", "white_h_m = -0.5", ["field 'gnss.white_h_m'", "greater than or equal to 0"]),
     ("rate_hz = 100", "rate_hz = nan", ["field 'imu.rate_hz'", "not a finite number"]),
+    # a key its segment type would ignore, both of a pair, a speed change the wrong way, a climb that is none
+    ('type = "cruise"\nduration_s = 20', 'type = "cruise"\nduration_s = 20\nradius_m = 5',
+     ["segment 4 (cruise): radius_m is not a key of a cruise segment", "takes duration_s"]),
+    ("radius_m = 30", "radius_m = 30\nrate_deg_s = 1", ["segment 3 (turn): give rate_deg_s or radius_m, not both"]),
+    ('type = "accelerate"', 'type = "decelerate"',
+     ["segment 2 (decelerate): speed_m_s 10 is not below the current speed 0 m/s"]),
+    ('type = "cruise"\nduration_s = 20', 'type = "climb"\nangle_deg = 200\nduration_s = 20',
+     ["segment 4 (climb): angle_deg 200", "|angle_deg| must be below 90"]),
+    # an outage window that is none; motion faster than the IMU samples
+    ("white_v_m = 1.0", "white_v_m = 1.0\noutages_s = [[20, 10]]",
+     ["field 'gnss.outages_s'", "window 1 [20, 10] ends before it starts"]),
+    ('type = "cruise"\nduration_s = 20', 'type = "coning"\namplitude_deg = 1\nfrequency_hz = 200\nduration_s = 2',
+     ["segment 4 (coning): frequency_hz 200 Hz is at or above the Nyquist frequency", "imu.rate_hz 100"]),
+    ('[[segment]]\ntype = "static"', ('[[vibration]]\ntarget = "down"\namplitude = 0.001\nfrequency_hz = 60\n'
+                                      '[[segment]]\ntype = "static"'),
+     ["vibration 1 (down, sinusoidal): frequency_hz 60 Hz", "Nyquist"]),
 ])
 def test_impossible_scenario(capsys, tmp_path, old, new, needles):
     sc = tmp_path / "s.toml"

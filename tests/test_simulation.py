@@ -83,3 +83,41 @@ def test_segment_trajectory_continues_smoothly_just_before_time_zero():
     d = earth.lla_to_ned(k.lla, k.lla[2])
     np.testing.assert_allclose(d, k.v_n[2] * t[:, None], atol=1e-7)   # jerk term (w^3 A t^3 / 6) 3e-8 m
     assert np.isfinite(k.C_nb).all()
+
+
+@pytest.mark.parametrize("nodes", [1, 2, 3])
+def test_the_increment_error_of_a_sinusoid_is_the_quadratures(nodes):
+    """sinusoid_increment_error is what ideal_imu's quadrature does to a vibration: the increments of a
+    heave at f differ from exact ones (12 nodes) by that fraction, at every sample and phase."""
+    from inskit.simulation.imu import sinusoid_increment_error
+    from inskit.simulation.segments import SegmentTrajectory
+
+    rate = 100.0
+    for ratio in (0.1234, 0.3123, 0.4567):
+        tr = SegmentTrajectory((np.radians(40.0), 0.0, 100.0))
+        tr.static(5.0).vibration("down", 1e-4, ratio * rate)
+        t = np.arange(0.0, 5.0, 1.0 / rate)
+        exact = ideal_imu(tr, t, nodes=12).dv_b[1:, 2]
+        got = ideal_imu(tr, t, nodes=nodes).dv_b[1:, 2]
+        osc = exact - np.median(exact)  # the vibration's part (gravity is integrated exactly)
+        err = sinusoid_increment_error(nodes, ratio)
+        assert np.abs(got - exact).max() == pytest.approx(err * np.abs(osc).max(), rel=0.02)
+
+
+def test_the_highest_frequency_an_imu_takes():
+    """From 3 nodes the Nyquist frequency (exclusive) binds, below it the 0.1 % of the quadrature."""
+    from inskit.simulation.imu import INCREMENT_TOLERANCE, max_oscillation_hz, sinusoid_increment_error
+
+    for n in range(3, 13):
+        assert max_oscillation_hz(100.0, n) == (50.0, False, "nyquist")
+        assert sinusoid_increment_error(n, 0.5) <= INCREMENT_TOLERANCE
+    for n, lim in ((1, 2.4648), (2, 22.574)):
+        f, inclusive, reason = max_oscillation_hz(100.0, n)
+        assert (f, inclusive, reason) == (pytest.approx(lim, abs=1e-3), True, "quadrature")
+        assert sinusoid_increment_error(n, f / 100.0) <= INCREMENT_TOLERANCE * (1 + 1e-9)
+        assert sinusoid_increment_error(n, f / 99.0) > INCREMENT_TOLERANCE
+        assert max_oscillation_hz(400.0, n)[0] == pytest.approx(4 * f)
+    r = np.linspace(1e-3, 0.5, 500)
+    for n in range(1, 13):  # the bisection's premise: the error grows with the frequency below Nyquist
+        e = np.array([sinusoid_increment_error(n, x) for x in r])
+        assert (np.diff(e) >= -1e-15).all()

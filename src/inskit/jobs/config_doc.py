@@ -29,7 +29,7 @@ from pydantic_core import PydanticUndefined
 
 from ..errors import InputError
 from ..files import write_text
-from ..simulation.scenario import Scenario
+from ..simulation.scenario import Scenario, segment_keys_text
 from .config import INTERNAL_KEYS, NavigateConfig
 
 #: the file this module generates, relative to the repository root
@@ -95,22 +95,20 @@ SCENARIO_MEANINGS = {
     "GnssSpec.outlier_probability": "probability that a fix is an outlier",
     "GnssSpec.outlier_sigma_m": "sigma of the error added to an outlier fix per axis",
     "VibrationSpec.target": "what vibrates: an attitude angle, or the down position",
-    "VibrationSpec.frequency_hz": "sinusoidal: the frequency; random: the band centre (band 0.5-1.5 x unless "
-                                  "band_hz is given)",
+    "VibrationSpec.frequency_hz": "sinusoidal: the frequency (required); random: the band centre (the band "
+                                  "0.5-1.5 x it), or give band_hz instead",
     "VibrationSpec.kind": "sinusoidal (amplitude = peak) or random (band-limited, amplitude = RMS; needs a seed)",
-    "VibrationSpec.band_hz": "random: the [low, high] frequency band",
-    "SegmentSpec.type": "the manoeuvre; each needs its keys: static, cruise (duration_s); accelerate, decelerate "
-                        "(speed_m_s, duration_s); turn, banked-turn (angle_deg and rate_deg_s or radius_m); climb, "
-                        "descend (angle_deg, duration_s); pitch, roll (amplitude_deg, duration_s); coning "
-                        "(amplitude_deg, frequency_hz, duration_s); figure-eight (radius_m)",
+    "VibrationSpec.band_hz": "random: the [low, high] frequency band (instead of frequency_hz)",
+    "SegmentSpec.type": "the manoeuvre; each takes exactly its keys (and repeat): " + segment_keys_text(),
     "SegmentSpec.duration_s": "length of the segment",
-    "SegmentSpec.speed_m_s": "accelerate, decelerate: the speed at the segment's end",
-    "SegmentSpec.angle_deg": "turn: heading change (negative: to the left); climb, descend: flight-path angle "
-                             "(its sign is ignored: climb goes up, descend down)",
+    "SegmentSpec.speed_m_s": "accelerate, decelerate: the speed at the segment's end (above the current speed "
+                             "for accelerate, below it for decelerate)",
+    "SegmentSpec.angle_deg": "turn: heading change (negative: to the left); climb, descend: flight-path angle, "
+                             "|angle_deg| < 90 (its sign is ignored: climb goes up, descend down)",
     "SegmentSpec.rate_deg_s": "turn: heading rate",
     "SegmentSpec.radius_m": "turn, figure-eight: turn radius (at the current speed)",
     "SegmentSpec.amplitude_deg": "pitch, roll: the angle reached and left again; coning: the half-angle",
-    "SegmentSpec.frequency_hz": "coning: the coning frequency",
+    "SegmentSpec.frequency_hz": "coning: the coning frequency (below the IMU's Nyquist frequency, imu.rate_hz / 2)",
     "SegmentSpec.repeat": "how many times the segment is repeated",
 }
 
@@ -121,6 +119,15 @@ SECTION_RULES = {
                       "2374, 243240 s of week, the day of the drive_0708 log); the scenario must end inside that "
                       "GPS week.",
     "BlockageSpec": "Rules: end_s after start_s.",
+    "GnssSpec": "Rules: every outages_s window [start, end] has 0 <= start < end.",
+    "VibrationSpec": "Rules: a sinusoidal vibration takes frequency_hz, a random one frequency_hz or band_hz "
+                     "(0 < low < high), not both. Its highest frequency (a random one's top of the band) must be "
+                     "below the IMU's Nyquist frequency, imu.rate_hz / 2 (with imu.quadrature_nodes 1 or 2 lower "
+                     "still: where their increments stay within 0.1 %).",
+    "SegmentSpec": "Rules: each type takes exactly its keys, listed under type (a key its type would ignore is an "
+                   "error): turns take rate_deg_s or radius_m, not both; accelerate must speed up and decelerate "
+                   "slow down; climb and descend take |angle_deg| < 90; a coning frequency must be below the IMU's "
+                   "Nyquist frequency, imu.rate_hz / 2 (with imu.quadrature_nodes 1 or 2 lower still).",
 }
 
 #: units of keys whose name carries none (keys: "Model.field")

@@ -13,20 +13,21 @@ RINEX 3 files and puts every CSV time column on GPS seconds of week.
 
 from __future__ import annotations
 
+import typing
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
 from typing import Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 
 from ..config_files import check_magnitude, check_scalar_type, read_toml, validation_message
 from ..errors import ConfigError
 from ..types import GnssData, ImuData, NavSolution
 from ..units import DEG
 from .gnss import GnssErrors, simulate_gnss
-from .imu import ideal_imu, truth_solution
+from .imu import INCREMENT_TOLERANCE, ideal_imu, max_oscillation_hz, truth_solution
 from .segments import SegmentTrajectory
 from .sensors import ImuErrors, apply_imu_errors, preset
 
@@ -80,13 +81,30 @@ class GnssSpec(_S):
     outlier_probability: float = Field(0.0, ge=0, le=1)
     outlier_sigma_m: float = Field(30.0, ge=0)
 
+    @field_validator("outages_s")
+    @classmethod
+    def _windows(cls, v):
+        for k, (a, b) in enumerate(v, start=1):
+            if not b > a:
+                what = "is empty (it ends where it starts)" if b == a else "ends before it starts"
+                raise ValueError(f"window {k} [{a:g}, {b:g}] {what}; give [start, end] with end > start")
+            if a < 0:
+                raise ValueError(f"window {k} [{a:g}, {b:g}] starts before the scenario (time 0)")
+        return v
+
 
 class VibrationSpec(_S):
     target: Literal["roll", "pitch", "yaw", "down"]
     amplitude: float = Field(..., description="deg for attitude, m for 'down'")
-    frequency_hz: float = Field(..., gt=0)
+    frequency_hz: float | None = Field(None, gt=0)
     kind: Literal["sinusoidal", "random"] = "sinusoidal"
     band_hz: tuple[float, float] | None = None
+
+    def top_hz(self):
+        """``(the highest frequency of the vibration [Hz], the key that sets it)``."""
+        if self.kind == "random" and self.band_hz is not None:
+            return self.band_hz[1], "band_hz"
+        return (1.5 if self.kind == "random" else 1.0) * self.frequency_hz, "frequency_hz"
 
 
 class SegmentSpec(_S):
@@ -100,6 +118,61 @@ class SegmentSpec(_S):
     amplitude_deg: float | None = None
     frequency_hz: float | None = Field(None, gt=0)
     repeat: int = Field(1, ge=1)
+
+
+@dataclass(frozen=True)
+class SegmentRule:
+    """The keys one segment type takes: all of ``needs`` and exactly one of
+    ``one_of`` (besides ``type`` and ``repeat``, which every segment takes)."""
+
+    needs: tuple[str, ...]
+    one_of: tuple[str, ...] = ()
+    note: str = ""
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        return self.needs + self.one_of
+
+    def takes(self) -> str:
+        """The keys in words: ``angle_deg and one of rate_deg_s, radius_m``."""
+        parts = [", ".join(self.needs)] if self.needs else []
+        if self.one_of:
+            parts.append("one of " + ", ".join(self.one_of))
+        return " and ".join(parts)
+
+
+_TURN = SegmentRule(("angle_deg",), ("rate_deg_s", "radius_m"),
+                    note="its length follows from the angle and the rate, or the radius and the speed")
+_CLIMB = SegmentRule(("angle_deg", "duration_s"), note="|angle_deg| < 90")
+
+#: The keys of each segment type: the one table that :func:`check_segment` and the
+#: generated docs/config.md read.  A key outside its type's rule would be ignored, so it is
+#: refused; ``type`` and ``repeat`` (:data:`SEGMENT_COMMON_KEYS`) go with every type.
+SEGMENT_RULES: dict[str, SegmentRule] = {
+    "static": SegmentRule(("duration_s",)),
+    "accelerate": SegmentRule(("speed_m_s", "duration_s"), note="to a speed above the current one"),
+    "decelerate": SegmentRule(("speed_m_s", "duration_s"), note="to a speed below the current one"),
+    "cruise": SegmentRule(("duration_s",)),
+    "turn": _TURN,
+    "banked-turn": _TURN,
+    "climb": _CLIMB,
+    "descend": _CLIMB,
+    "pitch": SegmentRule(("amplitude_deg", "duration_s")),
+    "roll": SegmentRule(("amplitude_deg", "duration_s")),
+    "coning": SegmentRule(("amplitude_deg", "frequency_hz", "duration_s"),
+                          note="frequency_hz below the IMU's Nyquist frequency"),
+    "figure-eight": SegmentRule(("radius_m",), note="two full turns: its length follows from the radius and the "
+                                "speed"),
+}
+SEGMENT_COMMON_KEYS = ("type", "repeat")
+
+
+def segment_keys_text() -> str:
+    """The types and their keys in words (types with the same keys together), for docs/config.md."""
+    groups: dict[SegmentRule, list[str]] = {}
+    for t, rule in SEGMENT_RULES.items():
+        groups.setdefault(SegmentRule(rule.needs, rule.one_of), []).append(t)
+    return "; ".join(f"{', '.join(ts)} ({rule.takes()})" for rule, ts in groups.items())
 
 
 #: Default start of raw GNSS scenarios: GPS week 2374, 243240 s of week = Tuesday
@@ -189,6 +262,13 @@ class Scenario(_S):
     vibration: list[VibrationSpec] = Field(default_factory=list)
     segment: list[SegmentSpec]
     earth: EarthSpec = Field(EarthSpec(), description="Earth model (gravity) of the simulation")
+    #: the file the scenario was read from (:func:`load_scenario`): the start of its error messages
+    _source: str | None = PrivateAttr(None)
+
+
+_SEGMENT_TYPES = typing.get_args(SegmentSpec.model_fields["type"].annotation)
+assert set(SEGMENT_RULES) == set(_SEGMENT_TYPES), "SEGMENT_RULES must cover every segment type"
+assert all(k in SegmentSpec.model_fields for r in SEGMENT_RULES.values() for k in r.keys + SEGMENT_COMMON_KEYS)
 
 
 def load_scenario(path) -> Scenario:
@@ -199,6 +279,8 @@ def load_scenario(path) -> Scenario:
         sc = Scenario.model_validate(data)
     except ValidationError as exc:
         raise ConfigError(validation_message(path, exc, Scenario)) from None
+    sc._source = str(path)
+    check_scenario(sc)
     raw = sc.raw_gnss
     if raw is not None and raw.constellation.startswith("nav:"):
         nav = Path(raw.constellation[4:]).expanduser()
@@ -208,55 +290,156 @@ def load_scenario(path) -> Scenario:
     return sc
 
 
-def _need(seg, i, *names):
-    for n in names:
-        if getattr(seg, n) is None:
-            raise ConfigError(f"segment {i} ({seg.type}) needs {n}")
+def _where(sc: Scenario) -> str:
+    return f"{sc._source}: " if sc._source else ""
+
+
+def check_segment(seg: SegmentSpec, i: int, imu: ImuSpec, where: str = "") -> None:
+    """Refuse a ``[[segment]]`` (number ``i``, from 1) that gives a key its
+    type would ignore, lacks one it needs, gives both of a pair it takes one
+    of (:data:`SEGMENT_RULES`), or asks what its type cannot do: a climb or
+    descent at ``|angle_deg| >= 90`` (straight up, then backwards and upside
+    down), coning faster than the IMU samples (:func:`check_frequency`).
+    ``where`` begins the messages (the file)."""
+    t = seg.type
+    rule = SEGMENT_RULES[t]
+    name = f"{where}segment {i} ({t})"
+    takes = f"a {t} segment takes {rule.takes()} and repeat" + (f" ({rule.note})" if rule.note else "")
+    given = [k for k in SegmentSpec.model_fields if k in seg.model_fields_set and getattr(seg, k) is not None]
+    extra = [k for k in given if k not in rule.keys + SEGMENT_COMMON_KEYS]
+    if extra:
+        keys = ", ".join(extra)
+        verb = "is not a key" if len(extra) == 1 else "are not keys"
+        it = "it" if len(extra) == 1 else "they"
+        raise ConfigError(f"{name}: {keys} {verb} of a {t} segment ({it} would be ignored); {takes}")
+    for k in rule.needs:
+        if getattr(seg, k) is None:
+            raise ConfigError(f"{name} needs {k}; {takes}")
+    if rule.one_of:
+        chosen = [k for k in rule.one_of if getattr(seg, k) is not None]
+        if not chosen:
+            raise ConfigError(f"{name} needs {' or '.join(rule.one_of)}; {takes}")
+        if len(chosen) > 1:
+            got = " and ".join(f"{k} {getattr(seg, k):g}" for k in chosen)
+            raise ConfigError(f"{name}: give {' or '.join(chosen)}, not both (got {got}); one of them sets the "
+                              "other, so the second would be ignored")
+    if t in ("climb", "descend") and not abs(seg.angle_deg) < 90.0:
+        raise ConfigError(f"{name}: angle_deg {seg.angle_deg:g} is no flight-path angle: |angle_deg| must be "
+                          f"below 90 (at 90 the vehicle flies straight up, beyond it backwards and upside down); "
+                          f"{t} goes {'up' if t == 'climb' else 'down'} by the angle's size")
+    if t == "coning":
+        check_frequency(seg.frequency_hz, imu, name, f"frequency_hz {seg.frequency_hz:g} Hz")
+
+
+def check_frequency(f_hz: float, imu: ImuSpec, name: str, what: str) -> None:
+    """Refuse a motion at ``f_hz`` (``what`` of ``name``, in words) that the IMU of
+    ``[imu]`` cannot sample: at or above its Nyquist frequency ``rate_hz /
+    2``, or above the frequency its quadrature integrates to
+    :data:`.imu.INCREMENT_TOLERANCE` (with fewer than 3 nodes); see
+    :func:`.imu.max_oscillation_hz` for why the limit sits there."""
+    limit, inclusive, reason = max_oscillation_hz(imu.rate_hz, imu.quadrature_nodes)
+    if f_hz < limit or (inclusive and f_hz <= limit):
+        return
+    if reason == "nyquist":
+        raise ConfigError(f"{name}: {what} is at or above the Nyquist frequency of the IMU ({limit:g} Hz "
+                          f"at imu.rate_hz {imu.rate_hz:g}): its increments would alias and not reproduce the "
+                          f"motion; keep it below {limit:g} Hz or raise imu.rate_hz")
+    raise ConfigError(f"{name}: {what} is above the {limit:.3g} Hz up to which imu.quadrature_nodes "
+                      f"{imu.quadrature_nodes} integrate the increments at imu.rate_hz {imu.rate_hz:g} to "
+                      f"{INCREMENT_TOLERANCE:.1%}; raise imu.quadrature_nodes (from 3 they reach the Nyquist "
+                      f"frequency, {0.5 * imu.rate_hz:g} Hz) or imu.rate_hz")
+
+
+def check_vibration(v: VibrationSpec, i: int, imu: ImuSpec, where: str = "") -> None:
+    """Refuse a ``[[vibration]]`` (number ``i``, from 1) with a key its kind
+    would ignore (``band_hz`` of a sinusoid; ``frequency_hz`` of a random
+    vibration given ``band_hz``), a band that is no band, or a frequency the
+    IMU cannot sample (:func:`check_frequency`)."""
+    name = f"{where}vibration {i} ({v.target}, {v.kind})"
+    if v.kind == "sinusoidal":
+        if v.band_hz is not None:
+            raise ConfigError(f"{name}: band_hz is for kind = \"random\" (a sinusoidal vibration would ignore it); "
+                              "a sinusoidal vibration takes frequency_hz")
+        if v.frequency_hz is None:
+            raise ConfigError(f"{name} needs frequency_hz")
+    else:
+        if (v.frequency_hz is None) == (v.band_hz is None):
+            raise ConfigError(f"{name}: give frequency_hz (the band 0.5-1.5 x it) or band_hz, "
+                              + ("not both (frequency_hz would be ignored)" if v.band_hz is not None else
+                                 "one of them"))
+        if v.band_hz is not None:
+            lo, hi = v.band_hz
+            if not 0 < lo < hi:
+                raise ConfigError(f"{name}: band_hz [{lo:g}, {hi:g}] is no band: give [low, high] with "
+                                  "0 < low < high")
+    top, key = v.top_hz()
+    if v.kind == "sinusoidal":
+        what = f"frequency_hz {top:g} Hz"
+    elif key == "band_hz":
+        what = f"the top of band_hz, {top:g} Hz,"
+    else:
+        what = f"the top of the band of frequency_hz {v.frequency_hz:g} (1.5 x), {top:g} Hz,"
+    check_frequency(top, imu, name, what)
+
+
+def check_scenario(sc: Scenario) -> None:
+    """The rules of a scenario beyond its fields' own bounds: every
+    segment's keys and values (:func:`check_segment`) and every vibration's
+    (:func:`check_vibration`).  Run by :func:`load_scenario` and by
+    :func:`build_trajectory` (a scenario made in code)."""
+    where = _where(sc)
+    for i, seg in enumerate(sc.segment, start=1):
+        check_segment(seg, i, sc.imu, where)
+    for i, v in enumerate(sc.vibration, start=1):
+        check_vibration(v, i, sc.imu, where)
 
 
 def build_trajectory(sc: Scenario, rng=None) -> SegmentTrajectory:
-    """The :class:`SegmentTrajectory` a scenario describes."""
+    """The :class:`SegmentTrajectory` a scenario describes (checked first:
+    :func:`check_scenario`).  An accelerate segment must speed up and a
+    decelerate one slow down (from the speed the segments before leave)."""
+    check_scenario(sc)
+    where = _where(sc)
     s = sc.start
     tr = SegmentTrajectory((s.lat_deg * DEG, s.lon_deg * DEG, s.height_m), s.yaw_deg * DEG, s.speed_m_s,
                            s.transition_s)
     for i, seg in enumerate(sc.segment, start=1):
-        for _ in range(seg.repeat):
-            t = seg.type
+        t = seg.type
+        for r in range(1, seg.repeat + 1):
+            tr.label = f"{where}segment {i} ({t})" + (f", repetition {r} of {seg.repeat}" if seg.repeat > 1 else "")
             if t == "static":
-                _need(seg, i, "duration_s")
                 tr.static(seg.duration_s)
             elif t in ("accelerate", "decelerate"):
-                _need(seg, i, "speed_m_s", "duration_s")
-                tr.accelerate(seg.speed_m_s, seg.duration_s)
+                v0, v1 = tr.end_speed, seg.speed_m_s
+                if t == "accelerate" and not v1 > v0 + 1e-9:
+                    raise ConfigError(f"{tr.label}: speed_m_s {v1:g} is not above the current speed {v0:g} m/s; "
+                                      "accelerate speeds up (decelerate slows down)")
+                if t == "decelerate" and not v1 < v0 - 1e-9:
+                    raise ConfigError(f"{tr.label}: speed_m_s {v1:g} is not below the current speed {v0:g} m/s; "
+                                      "decelerate slows down (accelerate speeds up)")
+                tr.accelerate(v1, seg.duration_s)
             elif t == "cruise":
-                _need(seg, i, "duration_s")
                 tr.cruise(seg.duration_s)
             elif t in ("turn", "banked-turn"):
-                _need(seg, i, "angle_deg")
-                if seg.rate_deg_s is None and seg.radius_m is None:
-                    raise ConfigError(f"segment {i} ({t}) needs rate_deg_s or radius_m")
                 tr.turn(seg.angle_deg * DEG, rate=None if seg.rate_deg_s is None else seg.rate_deg_s * DEG,
                         radius=seg.radius_m, banked=(t == "banked-turn"))
             elif t in ("climb", "descend"):
-                _need(seg, i, "angle_deg", "duration_s")
                 a = abs(seg.angle_deg) * (1 if t == "climb" else -1)
                 tr.climb(a * DEG, seg.duration_s)
             elif t in ("pitch", "roll"):
-                _need(seg, i, "amplitude_deg", "duration_s")
                 tr.attitude_pulse(t, seg.amplitude_deg * DEG, seg.duration_s)
             elif t == "coning":
-                _need(seg, i, "amplitude_deg", "frequency_hz", "duration_s")
                 tr.coning(seg.amplitude_deg * DEG, seg.frequency_hz, seg.duration_s)
             elif t == "figure-eight":
-                _need(seg, i, "radius_m")
                 tr.figure_eight(seg.radius_m)
+    tr.label = None
     for v in sc.vibration:
         amp = v.amplitude if v.target == "down" else v.amplitude * DEG
         if v.kind == "sinusoidal":
             tr.vibration(v.target, amp, v.frequency_hz)
         else:
             if rng is None:
-                raise ConfigError("random vibration needs a seed")
+                raise ConfigError(f"{where}random vibration needs a seed")
             band = v.band_hz or (0.5 * v.frequency_hz, 1.5 * v.frequency_hz)
             tr.random_vibration(v.target, amp, band, rng)
     if sc.duration_limit_s is not None:

@@ -335,6 +335,15 @@ class SegmentTrajectory:
         Initial speed [m/s].
     transition_s : float
         Default length of the smooth transitions [s].
+
+    Attributes
+    ----------
+    label : str or None
+        What the error messages call the segment being added; by default
+        ``"segment N (kind)"``, N counting the segments added so far.  A
+        scenario sets it to its own ``"FILE: segment N (type)"`` before each
+        ``[[segment]]`` (a figure eight adds two turns, a repeated segment
+        several), so that a refusal names the table of the file.
     """
 
     def __init__(self, lla0, yaw0=0.0, speed0=0.0, transition_s=2.0):
@@ -350,21 +359,30 @@ class SegmentTrajectory:
         self.osc: list[Oscillation] = []
         self.t = 0.0
         self.segments: list[dict] = []
+        self.label: str | None = None
         self._pos = None
 
     # --- segments -------------------------------------------------------------
     def _v(self):
         return self.speed.value_at_end(self.t)
 
+    @property
+    def end_speed(self):
+        """The speed [m/s] at the end of the segments added so far (where the next one starts)."""
+        return self._v()
+
+    def _where(self, kind):
+        return self.label or f"segment {len(self.segments) + 1} ({kind})"
+
     def static(self, duration):
         if abs(self._v()) > 1e-9:
-            raise ConfigError(f"segment {len(self.segments) + 1} (static): the vehicle still moves at "
+            raise ConfigError(f"{self._where('static')}: the vehicle still moves at "
                               f"{self._v():.2f} m/s; decelerate to 0 first")
         return self._advance("static", duration)
 
     def accelerate(self, to_speed, duration):
         if to_speed < 0:
-            raise ConfigError(f"segment {len(self.segments) + 1} (accelerate): speed must be >= 0, got {to_speed}")
+            raise ConfigError(f"{self._where('accelerate')}: speed must be >= 0, got {to_speed}")
         self.speed.add_step(self.t, duration, to_speed - self._v())
         return self._advance("accelerate", duration)
 
@@ -374,27 +392,35 @@ class SegmentTrajectory:
     def turn(self, angle, rate=None, radius=None, banked=False, transition=None):
         """Turn by ``angle`` [rad] at ``rate`` [rad/s] or on ``radius`` [m]."""
         tr = self.transition if transition is None else transition
+        kind = "banked-turn" if banked else "turn"
         v = self._v()
         if radius is not None:
             if v <= 0:
-                raise ConfigError(f"segment {len(self.segments) + 1} (turn): a turn by radius needs speed > 0")
+                raise ConfigError(f"{self._where(kind)}: a turn by radius needs speed > 0")
             rate = v / radius
         if rate is None or rate <= 0:
-            raise ConfigError(f"segment {len(self.segments) + 1} (turn): give rate_deg_s > 0 or radius_m > 0")
+            raise ConfigError(f"{self._where(kind)}: give rate_deg_s > 0 or radius_m > 0")
         hold = abs(angle) / rate - tr
         if hold < 0:
-            raise ConfigError(f"segment {len(self.segments) + 1} (turn): {np.degrees(abs(angle)):.1f} deg at "
+            raise ConfigError(f"{self._where(kind)}: {np.degrees(abs(angle)):.1f} deg at "
                               f"{np.degrees(rate):.2f} deg/s is shorter than the {tr} s transitions")
         ch = self.rate_bank if banked else self.rate_flat
         ch.add_pulse(self.t, tr, hold, np.sign(angle) * rate)
-        return self._advance("banked-turn" if banked else "turn", 2 * tr + hold)
+        return self._advance(kind, 2 * tr + hold)
 
     def climb(self, angle, duration, transition=None):
-        """Climb (or descend, angle < 0) at flight-path ``angle`` [rad]."""
+        """Climb (or descend, angle < 0) at flight-path ``angle`` [rad],
+        ``|angle| < pi/2``: at 90 deg the vehicle would fly straight up, and
+        beyond it backwards and upside down (and down: the height follows
+        ``sin(angle)``), which no climb means."""
         tr = self.transition if transition is None else transition
+        if not abs(angle) < 0.5 * np.pi:
+            raise ConfigError(f"{self._where('climb')}: the flight-path angle must be within (-90, 90) deg "
+                              f"(negative: descend), got {np.degrees(angle):g} deg")
         hold = duration - 2 * tr
         if hold < 0:
-            raise ConfigError(f"segment {len(self.segments) + 1} (climb): duration must exceed two transitions")
+            raise ConfigError(f"{self._where('climb')}: duration_s {duration:g} must exceed two transitions "
+                              f"(2 x {tr:g} s)")
         self.gamma.add_pulse(self.t, tr, hold, angle)
         return self._advance("climb", duration)
 
@@ -432,7 +458,7 @@ class SegmentTrajectory:
 
     def _advance(self, kind, duration):
         if duration <= 0:
-            raise ConfigError(f"segment {len(self.segments) + 1} ({kind}): duration must be > 0")
+            raise ConfigError(f"{self._where(kind)}: duration must be > 0")
         self.segments.append({"type": kind, "start_s": self.t, "end_s": self.t + duration})
         self.t += duration
         self._pos = None
