@@ -887,11 +887,16 @@ def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, lo
     return float(r.x), sorted(evals)
 
 
+#: fixes reaching further than this [s] beyond the IMU log's ends are worth a warning
+OUTSIDE_IMU_WARN_S = 10.0
+
+
 def gnss_coverage_warnings(fix_time, imu_time) -> list[str]:
     """The stretches of the IMU's span without GNSS fixes that no outage
     protocol asked for (:func:`.outages.gnss_data_gaps`: the solution is
-    free-inertial there) and the fixes outside the IMU's span (not used), in
-    words; empty when the logs cover each other."""
+    free-inertial there) and the fixes outside the IMU's span (not used) when
+    they reach more than :data:`OUTSIDE_IMU_WARN_S` beyond it, in words;
+    empty when the logs cover each other."""
     from .outages import gnss_data_gaps
 
     t0, t1 = float(imu_time[0]), float(imu_time[-1])
@@ -902,7 +907,8 @@ def gnss_coverage_warnings(fix_time, imu_time) -> list[str]:
                    "the solution there is free-inertial")
     ft = np.asarray(fix_time, float)
     outside = int(((ft < t0 - 1e-6) | (ft > t1 + 1e-6)).sum())
-    if outside:
+    beyond = max(0.0, t0 - float(ft[0])) + max(0.0, float(ft[-1]) - t1) if len(ft) else 0.0
+    if outside and beyond > OUTSIDE_IMU_WARN_S:  # a receiver started a few seconds before the IMU is no news
         out.append(f"GNSS: {outside} of {len(ft)} fixes lie outside the IMU log's span ({t0:.3f}..{t1:.3f} s) "
                    "and are not used")
     return out
