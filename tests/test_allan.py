@@ -104,3 +104,61 @@ def test_an_irregular_log_names_its_worst_step():
     with pytest.raises(InputError, match=r"regularly sampled log .*: a step of 7\.51 s at t = 149\.990 s, the "
                                          r"median 0\.01 s\)"):
         allan_imu(ImuData(t, np.zeros_like(dv), dv))
+
+
+@pytest.mark.parametrize("rows", [1, 50])
+def test_a_log_of_too_few_samples_states_the_minimum(rows):
+    """A two-line file (`head -2 imu.csv`: one sample) was an internal error (a maximum of no time steps);
+    50 samples over 490 s are long enough but too few."""
+    from inskit.errors import InputError
+
+    t = np.arange(rows) * 10.0
+    z = np.zeros((rows, 3))
+    with pytest.raises(InputError, match=rf"the log has {rows} sample\(s\); an Allan deviation needs a static log "
+                                         r"of at least 101 samples and 100 s"):
+        allan_imu(ImuData(t, z, z))
+
+
+def _static_log(seconds=300.0, rate_hz=100.0, seed=4):
+    n = int(seconds * rate_hz)
+    t = np.arange(n) / rate_hz
+    g = triad_from_datasheet("gyro", noise=0.1, bias_instability=1.0, bias_instability_tau_s=20.0)
+    a = triad_from_datasheet("accel", noise=50.0, bias_instability=20.0, bias_instability_tau_s=20.0)
+    ideal = ImuData(t, np.zeros((n, 3)), np.tile([0.0, 0.0, -9.80665 / rate_hz], (n, 1)))
+    return apply_imu_errors(ideal, ImuErrors(g, a), np.random.default_rng(seed))[0]
+
+
+def test_a_constant_channel_is_named_and_left_unfitted():
+    """gyro z = 0 everywhere (a stuck or coarsely quantised axis) was an internal error in fit_allan (the
+    log of a zero deviation); an accelerometer stuck on exactly one reading likewise, though its curve is
+    rounding noise, not zero.  The other channels are fitted as without it."""
+    imu = _static_log()
+    ref = allan_imu(imu)
+    dth, dv = imu.dtheta_b.copy(), imu.dv_b.copy()
+    dth[:, 2] = 0.0
+    dv[1:, 0] = 0.0123  # stuck: the same increment every sample
+    r = allan_imu(ImuData(imu.time, dth, dv))
+    assert r["constant"] == ["gyro z", "accel x"]
+    assert r["gyro_fit"][2] is None and r["accel_fit"][0] is None
+    assert not r["gyro_adev"][:, 2].any() and not r["accel_adev"][:, 0].any()
+    assert r["gyro_fit"][:2] == ref["gyro_fit"][:2] and r["accel_fit"][1:] == ref["accel_fit"][1:]
+
+
+@pytest.mark.parametrize("sensor", ["gyro", "accel"])
+def test_three_constant_axes_of_a_sensor_are_refused_naming_it(sensor):
+    from inskit.errors import InputError
+
+    imu = _static_log()
+    dth, dv = imu.dtheta_b.copy(), imu.dv_b.copy()
+    (dth if sensor == "gyro" else dv)[1:] = 0.0
+    with pytest.raises(InputError, match=rf"{sensor} x, y, z are constant over the log .*no {sensor} noise is "
+                                         "measurable"):
+        allan_imu(ImuData(imu.time, dth, dv))
+
+
+def test_fit_allan_refuses_a_zero_curve():
+    from inskit.errors import InputError
+
+    tau = np.logspace(-2, 2, 30)
+    with pytest.raises(InputError, match="a constant signal has none: its deviation is zero"):
+        fit_allan(tau, np.zeros_like(tau))

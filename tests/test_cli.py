@@ -349,6 +349,34 @@ def test_allan_names_the_log_it_refuses_and_two_outputs_in_one_file(files, tmp_p
     assert code == 2 and "a.png: given as both --plot and --toml" in err and not (tmp_path / "a.png").exists()
 
 
+def test_allan_states_the_minimum_of_a_short_log_and_names_a_constant_channel(files, tmp_path, capsys):
+    """`head -2 imu.csv` and a log whose gyro z is 0 everywhere were internal errors (exit 3)."""
+    lines = (files / "imu.csv").read_text().splitlines()
+    (tmp_path / "two.csv").write_text("\n".join(lines[:2]) + "\n")
+    code, out, err = _in_process(capsys, "allan", tmp_path / "two.csv")
+    assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
+    assert "two.csv: the log has 1 sample(s); an Allan deviation needs a static log of at least 101 samples and " \
+           "100 s" in err
+    from inskit.simulation.sensors import apply_imu_errors, preset
+    from inskit.types import ImuData
+
+    t = np.arange(0.0, 120.0, 0.01)
+    ideal = ImuData(t, np.zeros((len(t), 3)), np.tile([0.0, 0.0, -0.0980665], (len(t), 1)))
+    imu, _ = apply_imu_errors(ideal, preset("tactical"), np.random.default_rng(1))
+    dth = imu.dtheta_b.copy()
+    dth[:, 2] = 0.0
+    io.write_imu(tmp_path / "stuck.csv", ImuData(t, dth, imu.dv_b))
+    code, out, err = _in_process(capsys, "allan", tmp_path / "stuck.csv")
+    assert code == 0, err
+    row_z = next(x for x in out.splitlines() if x.startswith("z "))
+    assert row_z.split()[1:5] == ["constant", "(no", "noise", "measurable)"], out  # the gyro columns
+    assert "# note: gyro z: constant over the log" in out
+    code, out, err = _in_process(capsys, "allan", tmp_path / "stuck.csv", "--json")
+    rep = json.loads(out)
+    assert rep["gyro"][2]["constant"] is True and rep["gyro"][2]["arw_deg_sqrt_h"] is None
+    assert rep["noise_section"]["gyro_arw_deg_sqrt_h"] > 0
+
+
 def test_a_refused_run_leaves_no_empty_output_folder(capsys, tmp_path):
     """`inskit navigate bad.toml --out new/dir` made new/dir before finding that an input was missing;
     the folder it made is removed when the command fails, one already there (or not empty) stays."""

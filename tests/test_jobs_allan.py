@@ -94,3 +94,20 @@ def test_rate_random_walk_gives_a_random_walk_bias_section():
     s = sensor_noise(n)
     assert math.isinf(s.accel_bias_tau_s)
     assert s.accel_bias_sigma * math.sqrt(3600.0) == pytest.approx(n.accel_bias_rrw_ug_sqrt_h * MICRO_G)
+
+
+def test_a_constant_axis_is_a_row_and_a_note_and_the_section_comes_from_the_other_axes():
+    """A gyro z that reads 0 at rest: its row says constant (figures None), a note names it, and the gyro keys
+    are the other two axes' (RMS of their white noise), parsed as a navigate section."""
+    imu = _static(0.1, 100.0, seed=5)
+    dth = imu.dtheta_b.copy()
+    dth[:, 2] = 0.0
+    fits, rep = allan_report(ImuData(imu.time, dth, imu.dv_b))
+    z = rep["gyro"][2]
+    assert z["constant"] is True and z["arw_deg_sqrt_h"] is None and z["bias_instability_resolved"] is None
+    assert [x["constant"] for x in rep["gyro"][:2] + rep["accel"]] == [False] * 5
+    assert any(n.startswith("gyro z: constant over the log") for n in rep["notes"])
+    arw = math.sqrt((rep["gyro"][0]["arw_deg_sqrt_h"] ** 2 + rep["gyro"][1]["arw_deg_sqrt_h"] ** 2) / 2)
+    assert rep["noise_section"]["gyro_arw_deg_sqrt_h"] == pytest.approx(arw, rel=1e-12)
+    assert _parsed(rep).gyro_arw_deg_sqrt_h == pytest.approx(arw, rel=1e-4)
+    assert "# note: gyro z: constant over the log" in rep["noise_toml"]

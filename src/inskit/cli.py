@@ -477,7 +477,15 @@ def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, f
 def allan(imu_file, plot_file, toml_file, force, no_unit_check, first_row, as_json):
     """Allan deviation of a static IMU log and the filter noise parameters it
     implies: the [noise] section of an inskit navigate config (noise_section
-    in the JSON, the TOML text with --toml)."""
+    in the JSON, the TOML text with --toml).
+
+    The log must last at least 100 s and hold at least 101 samples (hours to
+    see the bias instability).  A constant channel (every increment the
+    same: a stuck axis, or one quantised coarser than its noise) has no
+    measurable noise: its row reads 'constant' (constant: true, figures null
+    in the JSON), a note names it, and the [noise] section comes from the
+    other axes of its sensor; three constant gyro (or accelerometer) axes
+    are refused."""
     from . import io
     from .analysis.allan import plot_allan
     from .files import check_folder_writable, same_file, write_text
@@ -508,12 +516,22 @@ def allan(imu_file, plot_file, toml_file, force, no_unit_check, first_row, as_js
     def rrw(v):
         return f"{v:.3g}" if v is not None else "-"
 
+    def gyro_cols(g):
+        if g["constant"]:
+            return f"{'constant (no noise measurable)':>50}"
+        return (f"{g['arw_deg_sqrt_h']:>15.4f}{g['bias_instability_deg_h']:>10.3f}{g['gm_tau_s']:>8.0f}"
+                f"{rrw(g['rrw_deg_h_sqrt_h']):>17}")
+
+    def accel_cols(a):
+        if a["constant"]:
+            return f"{'constant (no noise measurable)':>45}"
+        return (f"{a['vrw_ug_sqrt_hz']:>14.2f}{a['bias_instability_ug']:>9.2f}{a['gm_tau_s']:>8.0f}"
+                f"{rrw(a['rrw_ug_sqrt_h']):>14}")
+
     lines = [f"{'axis':<6}{'ARW deg/rt(h)':>15}{'BI deg/h':>10}{'tau s':>8}{'RRW deg/h/rt(h)':>17}   "
              f"{'VRW ug/rt(Hz)':>14}{'BI ug':>9}{'tau s':>8}{'RRW ug/rt(h)':>14}"]
     for g, a in zip(gyro, acc):
-        lines.append(f"{g['axis']:<6}{g['arw_deg_sqrt_h']:>15.4f}{g['bias_instability_deg_h']:>10.3f}{g['gm_tau_s']:>8.0f}"
-                     f"{rrw(g['rrw_deg_h_sqrt_h']):>17}   {a['vrw_ug_sqrt_hz']:>14.2f}{a['bias_instability_ug']:>9.2f}"
-                     f"{a['gm_tau_s']:>8.0f}{rrw(a['rrw_ug_sqrt_h']):>14}")
+        lines.append(f"{g['axis']:<6}{gyro_cols(g)}   {accel_cols(a)}")
     lines.append("for inskit navigate" + (f" (written to {toml_file})" if toml_file else "") + ":")
     lines.append(rep["noise_toml"].rstrip())
     _emit(res, as_json, "\n".join(lines))

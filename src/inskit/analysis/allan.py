@@ -57,7 +57,7 @@ def allan_deviation(increments, dt, taus_per_decade=10, min_clusters=9):
         x = x[:, None]
     n = len(x)
     if n < 3 * min_clusters:
-        raise InputError(f"{n} samples are too few for an Allan deviation")
+        raise InputError(f"{n} samples are too few for an Allan deviation (at least {3 * min_clusters})")
     theta = np.vstack([np.zeros((1, x.shape[1])), np.cumsum(x, axis=0)])
     m_max = (n - 1) // min_clusters // 2 * 1
     ms = np.unique(np.round(np.logspace(0, np.log10(max(m_max, 1)), int(taus_per_decade * np.log10(max(m_max, 10))) + 1)).astype(int))
@@ -74,6 +74,9 @@ def allan_deviation(increments, dt, taus_per_decade=10, min_clusters=9):
 GM_PEAK = 0.6174
 #: shortest log the Allan analysis accepts [s]
 MIN_DURATION_S = 100.0
+#: fewest increments (samples after the first) the Allan analysis accepts: a curve of five cluster times
+#: (:func:`allan_deviation` asks for 27 at least, which give one); 1 Hz over :data:`MIN_DURATION_S`
+MIN_SAMPLES = 100
 
 
 def _check_static(imu: ImuData, dt):
@@ -160,11 +163,20 @@ def fit_allan(tau, adev, duration_s=None):
     clusters the longest cluster times rest on, hence how far the curve's
     end may wander by chance before a rise is read as a rate random walk
     (:data:`RRW_RISE_SIGMAS`).
+
+    Raises
+    ------
+    InputError
+        A curve that is zero (a constant signal: no noise to fit), not
+        finite, or shorter than two points.
     """
     from scipy.optimize import least_squares
 
     tau = np.asarray(tau, float)
     a = np.asarray(adev, float)
+    if len(a) < 2 or not (np.isfinite(a).all() and (a > 0).all()):
+        raise InputError("the Allan deviation must be positive and finite at two or more cluster times to fit "
+                         "noise terms (a constant signal has none: its deviation is zero)")
     duration_s = 18.0 * float(tau[-1]) if duration_s is None else float(duration_s)
     lt, la = np.log(tau), np.log(a)
     slope = np.gradient(la, lt)
@@ -214,31 +226,54 @@ def fit_allan(tau, adev, duration_s=None):
 def allan_imu(imu: ImuData):
     """Allan deviations and fits of the six IMU axes.
 
+    A channel whose increments are all the same (a stuck axis, or one
+    quantised coarser than its noise: a gyro reading 0 at rest) has an
+    Allan deviation of zero and no measurable noise: it is not fitted (its
+    fit is None, its curve zero) and is named in ``constant``.  The other
+    channels are fitted as usual.
+
     Returns
     -------
     dict with ``tau``, ``gyro_adev`` (m, 3) [rad/s], ``accel_adev`` (m, 3)
-    [m/s^2], ``gyro_fit`` and ``accel_fit`` (lists of three AllanFit).
+    [m/s^2], ``gyro_fit`` and ``accel_fit`` (lists of three AllanFit, None
+    for a constant channel) and ``constant`` (the constant channels, e.g.
+    ``["gyro z"]``).
+
+    Raises
+    ------
+    InputError
+        A log shorter than :data:`MIN_DURATION_S` or with fewer than
+        :data:`MIN_SAMPLES` increments, irregularly sampled, moving, or whose
+        three gyro (or three accelerometer) channels are all constant.
     """
+    duration = float(imu.time[-1] - imu.time[0])
+    if len(imu) > 1 and duration < MIN_DURATION_S:
+        raise InputError(f"the log lasts {duration:.1f} s; an Allan deviation needs a static log of at least "
+                         f"{MIN_DURATION_S:.0f} s (hours to see the bias instability)")
+    if len(imu) - 1 < MIN_SAMPLES:  # before the time steps: one row has none
+        raise InputError(f"the log has {len(imu)} sample(s); an Allan deviation needs a static log of at least "
+                         f"{MIN_SAMPLES + 1} samples and {MIN_DURATION_S:.0f} s (hours to see the bias "
+                         "instability)")
     dt = np.diff(imu.time)
     dtm = float(np.median(dt))
     if np.ptp(dt) > 0.01 * dtm:
         i = int(np.argmax(np.abs(dt - dtm)))
         raise InputError(f"the Allan deviation needs a regularly sampled log (the time steps vary by more than 1 %: "
                          f"a step of {dt[i]:.6g} s at t = {imu.time[i]:.3f} s, the median {dtm:.6g} s)")
-    duration = float(imu.time[-1] - imu.time[0])
-    if duration < MIN_DURATION_S:
-        raise InputError(f"the log lasts {duration:.1f} s; an Allan deviation needs a static log of at least "
-                         f"{MIN_DURATION_S:.0f} s (hours to see the bias instability)")
     _check_static(imu, dtm)
-    tau, ga = allan_deviation(imu.dtheta_b[1:], dtm)
-    _, aa = allan_deviation(imu.dv_b[1:], dtm)
-    return {
-        "tau": tau,
-        "gyro_adev": ga,
-        "accel_adev": aa,
-        "gyro_fit": [fit_allan(tau, ga[:, j], duration) for j in range(3)],
-        "accel_fit": [fit_allan(tau, aa[:, j], duration) for j in range(3)],
-    }
+    out = {"constant": []}
+    for sensor, inc in (("gyro", imu.dtheta_b[1:]), ("accel", imu.dv_b[1:])):
+        flat = np.ptp(inc, axis=0) == 0  # every increment the same: the deviation is zero (rounding aside)
+        if flat.all():
+            raise InputError(f"{sensor} x, y, z are constant over the log (every increment the same): no {sensor} "
+                             "noise is measurable (a stuck sensor, or one quantised coarser than its noise?)")
+        tau, adev = allan_deviation(inc, dtm)
+        adev[:, flat] = 0.0
+        out["tau"] = tau
+        out[f"{sensor}_adev"] = adev
+        out[f"{sensor}_fit"] = [None if flat[j] else fit_allan(tau, adev[:, j], duration) for j in range(3)]
+        out["constant"] += [f"{sensor} {'xyz'[j]}" for j in range(3) if flat[j]]
+    return out
 
 
 def plot_allan(res, path, title="Allan deviation"):
@@ -255,8 +290,11 @@ def plot_allan(res, path, title="Allan deviation"):
     for ax, key, fits, scale, unit in ((axes[0], "gyro_adev", res["gyro_fit"], DEG_PER_HOUR, "deg/h"),
                                        (axes[1], "accel_adev", res["accel_fit"], MICRO_G, "micro-g")):
         for j, axis in enumerate("xyz"):
-            (ln,) = ax.loglog(tau, res[key][:, j] / scale, lw=1.0, label=axis)
             f = fits[j]
+            if f is None:  # a constant channel: a zero curve has no place on a log axis
+                ax.plot([], [], lw=0, label=f"{axis}: constant (no noise measurable)")
+                continue
+            (ln,) = ax.loglog(tau, res[key][:, j] / scale, lw=1.0, label=axis)
             ax.loglog(tau, f.white / np.sqrt(tau) / scale, ls=":", color=ln.get_color(), lw=0.8)
             ax.loglog(tau, np.sqrt(gm_avar(tau, f.gm_sigma, f.gm_tau)) / scale, ls="--", color=ln.get_color(),
                       lw=0.6)

@@ -21,6 +21,13 @@ The section holds exactly keys of :class:`~inskit.jobs.config.NoiseSection`
 Turn-on biases are not in it: a static log cannot tell them from the
 mounting and gravity (they need a multi-position calibration or a
 datasheet).
+
+A constant channel (every increment the same: a stuck axis, or one
+quantised coarser than its noise) shows no noise: it is left out of the
+RMS and means above (the section holds the other two axes of its sensor),
+its row has ``constant = true`` and None for every figure, and a note names
+it.  Three constant axes of one sensor are refused
+(:func:`inskit.analysis.allan.allan_imu`).
 """
 
 from __future__ import annotations
@@ -29,12 +36,13 @@ import math
 
 import numpy as np
 
-from ..analysis.allan import allan_imu
+from ..analysis.allan import AllanFit, allan_imu
 from ..units import DEG, DEG_PER_HOUR, MICRO_G
 
 
 def _bias_section(sensor, fits, sigma_unit, rrw_unit, sigma_key, rrw_key):
-    """The bias keys of one sensor from its three AllanFit (SI inside)."""
+    """The bias keys of one sensor from its AllanFit (SI inside; constant axes left out)."""
+    fits = [f for f in fits if f is not None]
     if any(f.rate_random_walk is not None for f in fits):
         q = [(f.rate_random_walk or 0.0) ** 2 + (f.gm_sigma**2 / f.gm_tau if f.bias_resolved else 0.0)
              for f in fits]
@@ -47,7 +55,7 @@ def _bias_section(sensor, fits, sigma_unit, rrw_unit, sigma_key, rrw_key):
 def noise_section(r) -> dict:
     """The ``[noise]`` keys (datasheet units) of :func:`allan_imu` fits ``r``
     (see the module text)."""
-    g, a = r["gyro_fit"], r["accel_fit"]
+    g, a = ([f for f in r[k] if f is not None] for k in ("gyro_fit", "accel_fit"))  # constant axes left out
     out = {"gyro_arw_deg_sqrt_h": float(np.sqrt(np.mean([f.white**2 for f in g]))) / DEG * 60.0,
            "accel_vrw_m_s_sqrt_h": float(np.sqrt(np.mean([f.white**2 for f in a]))) * 60.0}
     out.update(_bias_section("gyro", g, DEG_PER_HOUR, DEG_PER_HOUR / 60.0, "gyro_bias_sigma_deg_h",
@@ -72,6 +80,15 @@ def noise_toml(section: dict, comments=()) -> str:
     return "\n".join(lines) + "\n"
 
 
+def _axis_row(axis, fit, figures):
+    """One axis of the report: ``figures(fit)`` (datasheet units), or None
+    for each of them on a constant axis (``fit`` None)."""
+    if fit is None:
+        row = dict.fromkeys(figures(AllanFit(1.0, 1.0, 1.0, 1.0, None)))  # the keys (of any fit), all None
+        return {"axis": axis, **row, "bias_instability_resolved": None, "constant": True}
+    return {"axis": axis, **figures(fit), "bias_instability_resolved": fit.bias_resolved, "constant": False}
+
+
 def allan_report(imu):
     """Per-axis fits in datasheet units and the navigate ``[noise]`` keys.
 
@@ -83,29 +100,35 @@ def allan_report(imu):
         ``gyro`` and ``accel`` lists of per-axis dicts, ``noise_section``
         (the ``[noise]`` keys, :func:`noise_section`; also under its older
         name ``navigate_noise_section``), ``noise_toml`` (the same as TOML
-        text) and ``notes``.
+        text) and ``notes``.  A row has ``constant`` (true for a constant
+        channel, whose figures are then None: module text).
     """
     r = allan_imu(imu)
-    gyro = [{"axis": a, "arw_deg_sqrt_h": f.white / DEG * 60, "bias_instability_deg_h": f.bias_instability / DEG_PER_HOUR,
-             "gm_sigma_deg_h": f.gm_sigma / DEG_PER_HOUR, "gm_tau_s": f.gm_tau,
-             "rrw_deg_h_sqrt_h": None if f.rate_random_walk is None else f.rate_random_walk / DEG_PER_HOUR * 60,
-             "bias_instability_resolved": f.bias_resolved}
+    gyro = [_axis_row(a, f, lambda f: {
+                "arw_deg_sqrt_h": f.white / DEG * 60, "bias_instability_deg_h": f.bias_instability / DEG_PER_HOUR,
+                "gm_sigma_deg_h": f.gm_sigma / DEG_PER_HOUR, "gm_tau_s": f.gm_tau,
+                "rrw_deg_h_sqrt_h": None if f.rate_random_walk is None else f.rate_random_walk / DEG_PER_HOUR * 60})
             for a, f in zip("xyz", r["gyro_fit"])]
-    acc = [{"axis": a, "vrw_ug_sqrt_hz": f.white / MICRO_G, "vrw_m_s_sqrt_h": f.white * 60,
-            "bias_instability_ug": f.bias_instability / MICRO_G, "gm_sigma_ug": f.gm_sigma / MICRO_G,
-            "gm_tau_s": f.gm_tau,
-            "rrw_ug_sqrt_h": None if f.rate_random_walk is None else f.rate_random_walk / MICRO_G * 60,
-            "bias_instability_resolved": f.bias_resolved}
+    acc = [_axis_row(a, f, lambda f: {
+               "vrw_ug_sqrt_hz": f.white / MICRO_G, "vrw_m_s_sqrt_h": f.white * 60,
+               "bias_instability_ug": f.bias_instability / MICRO_G, "gm_sigma_ug": f.gm_sigma / MICRO_G,
+               "gm_tau_s": f.gm_tau,
+               "rrw_ug_sqrt_h": None if f.rate_random_walk is None else f.rate_random_walk / MICRO_G * 60})
            for a, f in zip("xyz", r["accel_fit"])]
     noise = noise_section(r)
     notes = []
     for sensor, rows in (("gyro", gyro), ("accel", acc)):
-        flat = [x["axis"] for x in rows if not x["bias_instability_resolved"]]
+        stuck = [x["axis"] for x in rows if x["constant"]]
+        if stuck:
+            notes.append(f"{sensor} {', '.join(stuck)}: constant over the log (every increment the same: a stuck "
+                         "axis, or one quantised coarser than its noise), so no noise is measurable there; the "
+                         f"{sensor} keys of the [noise] section come from the other axes")
+        flat = [x["axis"] for x in rows if x["bias_instability_resolved"] is False]
         if noise[f"{sensor}_bias_model"] == "gauss-markov" and flat:
             notes.append(f"{sensor} {', '.join(flat)}: no bias-instability bump within the log, so the bias sigma "
                          "is an upper bound (the curve's floor) and the correlation time the log's reach; record "
                          "a longer static log")
-        if noise[f"{sensor}_bias_model"] == "random-walk" and len(flat) < 3:
+        if noise[f"{sensor}_bias_model"] == "random-walk" and len(flat) < len(rows) - len(stuck):
             notes.append(f"{sensor}: the random walk also carries the bias-instability bump of the axes that show "
                          "one (its variance over its correlation time)")
     duration_h = float(imu.time[-1] - imu.time[0]) / 3600.0

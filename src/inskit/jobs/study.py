@@ -331,10 +331,11 @@ def allan_grade(g: AllanGrade):
     its three axes' white-noise densities and ``B`` (the presets are
     isotropic; for white noise that keeps the summed noise power) and the
     geometric mean of their ``tau``.  Everything else is the ``base``
-    preset's: turn-on bias, scale factor, saturation.  A fitted rate random
-    walk is recorded but not simulated: the presets have none, the 15-state
-    filter does not model it, and on a log shorter than hours it is often a
-    chance upturn of the last few clusters.
+    preset's: turn-on bias, scale factor, saturation.  A constant axis (no
+    measurable noise) is left out of the means, as in ``inskit allan``.  A
+    fitted rate random walk is recorded but not simulated: the presets have
+    none, the 15-state filter does not model it, and on a log shorter than
+    hours it is often a chance upturn of the last few clusters.
 
     Returns
     -------
@@ -362,6 +363,8 @@ def allan_grade(g: AllanGrade):
         raise InputError(f"{g._key}: {exc}") from None
 
     def triad(base, axes):
+        axes = [f for f in axes if f is not None]  # a constant axis shows no noise (allan_report's notes)
+
         def rms(k):
             return float(np.sqrt(np.mean([getattr(f, k) ** 2 for f in axes])))
 
@@ -384,7 +387,8 @@ def allan_grade(g: AllanGrade):
               "log_duration_s": float(imu.time[-1] - imu.time[0]), "base": g.base, "parameters": params,
               "from_fit": {k: params[k] for k in FROM_FIT}, "rate_random_walk_not_used": rrw,
               "per_axis": {"gyro": rep["gyro"], "accel": rep["accel"]},
-              "bias_resolved": all(x["bias_instability_resolved"] for x in rep["gyro"] + rep["accel"]),
+              "bias_resolved": all(x["bias_instability_resolved"] for x in rep["gyro"] + rep["accel"]
+                                   if not x["constant"]),
               "notes": notes}
     return errors, record
 
