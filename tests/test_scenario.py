@@ -370,3 +370,20 @@ def test_force_never_overwrites_the_scenario_or_its_navigation_file(tmp_path):
     assert nav.read_text() == "the user's navigation file"
     with pytest.raises(InputError, match="is an input of this command"):
         check_simulation_outputs(sc, tmp_path, overwrite=True, plot=False, inputs=[tmp_path / "imu.csv"])
+
+
+def test_outages_over_the_whole_scenario_are_refused_by_simulate(tmp_path, capsys):
+    """`inskit simulate` of a scenario whose `[gnss] outages_s` cover it all: one line naming the key (it was
+    'internal error: ValueError: cannot reshape array of size 0'), and no output folder."""
+    import warnings
+
+    from inskit.cli import main
+
+    p = tmp_path / "s.toml"
+    p.write_text(SCEN.replace("correlated_h_m = 0.5", "outages_s = [[0, 100]]"))
+    with warnings.catch_warnings(), np.errstate(), pytest.raises(SystemExit) as exc:  # main() silences both
+        main(["simulate", str(p), "--out", str(tmp_path / "o"), "--no-plot"])
+    err = capsys.readouterr().err
+    assert exc.value.code == 2 and len(err.strip().splitlines()) == 1, err
+    assert err.startswith("inskit: error: field 'gnss.outages_s': the outages [[0.0, 100.0]] remove every GNSS fix")
+    assert not (tmp_path / "o").exists()

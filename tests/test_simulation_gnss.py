@@ -38,3 +38,16 @@ def test_outages_lever_arm_latency_outliers():
     g2, drawn = simulate_gnss(TRAJ, 0.0, 1000.0, e2, np.random.default_rng(1))
     big = np.abs(earth.lla_to_ned(g2.lla, truth.lla[0])[:, 0]) > 2.0
     assert big.mean() == pytest.approx(0.05 * 0.97, rel=0.15)
+
+
+def test_outages_that_remove_every_fix_are_refused_naming_the_key():
+    """`outages_s = [[0, 100]]` on a 10 s scenario was an internal error (an array of no rows reshaped); no
+    consumer can use an empty GNSS file (navigate needs two fixes), so the key is named instead."""
+    from inskit.errors import ConfigError
+
+    e = GnssErrors(outages=((0.0, 100.0),))
+    with pytest.raises(ConfigError, match=r"^field 'gnss.outages_s': the outages \[\[0.0, 100.0\]\] remove every "
+                                          r"GNSS fix of the run \(11 at 1 Hz over 0..10 s\)"):
+        simulate_gnss(TRAJ, 0.0, 10.0, e, np.random.default_rng(0))
+    g, _ = simulate_gnss(TRAJ, 0.0, 10.0, GnssErrors(outages=((0.0, 9.5),)), np.random.default_rng(0))
+    assert list(g.time) == [10.0]  # one fix left: a valid file (navigate says it needs two)

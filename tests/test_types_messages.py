@@ -39,3 +39,16 @@ def test_array_messages_name_the_bad_value():
     assert "np." not in str(exc.value)
     with pytest.raises(InputError, match=r"`dtheta_b` must have shape \(n, 3\), got \(3, 2\)"):
         ImuData(t, np.zeros((3, 2)), np.zeros((3, 3)))
+
+
+def test_no_rows_are_valid_arrays():
+    """An empty selection of fixes (every one outside a mask) was an internal error: numpy cannot
+    reshape 0 rows to (0, -1)."""
+    from inskit.types import GnssData
+
+    g = GnssData(np.arange(3.0), np.zeros((3, 3)), np.ones((3, 3)), np.zeros((3, 3)), np.ones((3, 3)))
+    none = g.select(np.zeros(3, bool))
+    assert len(none) == 0 and none.lla.shape == (0, 3) and none.v_n.shape == (0, 3)
+    assert len(ImuData(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)))) == 0
+    with pytest.raises(InputError, match=r"`lla` must have shape \(n, 3\), got \(0, 2\)"):
+        GnssData(np.zeros(0), np.zeros((0, 2)), np.ones((0, 3)))

@@ -40,7 +40,7 @@ def _as_array(name, x, shape_tail, n=None):
         raise InputError(f"`{name}` must have shape {want}, got {a.shape}")
     if n is not None and a.shape[0] != n:
         raise InputError(f"`{name}` has {a.shape[0]} rows but `time` has {n}")
-    flat = a.reshape(a.shape[0], -1)
+    flat = a.reshape(a.shape[0], int(np.prod(shape_tail)))  # not -1: no rows is valid (an empty selection)
     bad = ~np.isfinite(flat).all(axis=1)
     if bad.any():
         k = int(np.argmax(bad))

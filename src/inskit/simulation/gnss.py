@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import earth
+from ..errors import ConfigError
 from ..types import GnssData
 from .sensors import _gauss_markov
 
@@ -63,11 +64,24 @@ def simulate_gnss(trajectory, t_start, t_end, errors: GnssErrors, rng):
     gnss : GnssData
     truth_errors : (n, 3) ndarray
         The position errors drawn (NED, before outliers) for tests.
+
+    Raises
+    ------
+    ConfigError
+        When the outages leave no fix between ``t_start`` and ``t_end``: an
+        empty GNSS file no consumer can use (``navigate`` needs two fixes
+        outside its outages), named as the scenario key the outages come
+        from (``[gnss] outages_s``).
     """
     t = np.arange(t_start, t_end + 1e-9, 1.0 / errors.rate_hz)
     keep = np.ones(len(t), bool)
     for a, b in errors.outages:
         keep &= ~((t >= a) & (t <= b))
+    if not keep.any():
+        shown = [[float(a), float(b)] for a, b in errors.outages]
+        raise ConfigError(f"field 'gnss.outages_s': the outages {shown} remove every GNSS fix of the run "
+                          f"({len(t)} at {errors.rate_hz:g} Hz over {t_start:g}..{t_end:g} s): the GNSS file would be "
+                          "empty; leave fixes outside the outages (navigate needs at least two)")
     t_true = np.clip(t - errors.latency_s, t_start, t_end)
     kin = trajectory.kinematics(t_true)
     lever = np.asarray(errors.lever_arm_b_m, float)
