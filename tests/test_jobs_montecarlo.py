@@ -157,3 +157,33 @@ def test_the_gnss_on_figure_leaves_out_the_scenarios_own_outages_too():
     sc = load_scenario(EXAMPLES / "tc_blockage.toml")
     rows = {r["scheme"]: r for r in compare_schemes(sc, (60.0, 100.0), seed=0)}
     assert rows["closed"]["gnss_on_horizontal_rms_m"] < 2.0 and rows["uncoupled"]["gnss_on_horizontal_rms_m"] < 3.0
+
+
+@pytest.mark.parametrize("duration", [0.05, 1.0, 1.99])
+def test_a_consistency_run_too_short_for_a_gnss_update_is_refused_stating_the_minimum(duration):
+    """`inskit consistency car.toml --duration 0.05` was 'internal error: IndexError' (no update node: an
+    empty float index); 1 s gave the same (the fix at the start is the initial epoch)."""
+    from inskit.errors import InputError
+    from inskit.jobs.montecarlo import consistency_study, min_consistency_duration_s
+
+    assert min_consistency_duration_s() == 2.0
+    sc = load_scenario(EXAMPLES / "car.toml")
+    with pytest.raises(InputError, match=rf"^--duration must be at least 2 s, got {duration} \(a GNSS update at 1 "
+                                         r"Hz after the start: the NEES is taken at the updates\)$"):
+        consistency_study(sc, "tactical", 2, duration)
+    res = consistency_study(sc, "tactical", 2, 2.0)  # the minimum runs
+    assert res["duration_s"] == 1.0 and np.isfinite(res["anees"]["pos"]["mean"])  # its one update
+
+
+def test_a_run_without_an_update_is_an_input_error_not_an_index_error():
+    from inskit.errors import InputError
+    from inskit.jobs.montecarlo import ConsistencySpec, run_once
+
+    sc = load_scenario(EXAMPLES / "car.toml")
+    tr = build_trajectory(sc, np.random.default_rng(0))
+    errors = consistency_errors(preset("tactical"))
+    init = InitialUncertainty(pos_m=(1.0, 1.0, 2.0), vel_m_s=0.1, roll_pitch_rad=0.01, yaw_rad=0.02)
+    spec = ConsistencySpec(tr, 100.0, errors, GnssErrors(velocity_sigma_m_s=0.0),
+                           matched_settings(errors, init, smoother_node_s=0.0), duration=0.5)
+    with pytest.raises(InputError, match=r"holds no GNSS update after its start .*it needs at least 2 s"):
+        run_once(spec, 0)

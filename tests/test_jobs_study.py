@@ -319,6 +319,15 @@ def test_allan_example_spec_is_valid(static_log, tmp_path):
                for g in spec.grades)
 
 
+def test_a_consistency_study_too_short_for_a_gnss_update_names_the_key(tmp_path):
+    """`duration_s = 0.5` without an outage: the NEES is taken at the GNSS updates and there was none, an
+    IndexError in every run; now refused before any run, naming the key and the minimum."""
+    text = TINY.replace("duration_s = 100.0", "duration_s = 0.5").split("[outage]")[0]
+    with pytest.raises(ConfigError, match=r"tiny\.toml: field 'duration_s' must be at least 2 s, got 0\.5: the "
+                                          r"consistency figures are taken at the GNSS updates \(1 Hz\)"):
+        run_study(_spec(tmp_path, text), tmp_path / "out")
+
+
 def test_an_outage_past_the_study_data_names_the_study_file(tmp_path):
     """It said 'outage: it ends at 160 s, ...': no file."""
     text = EXAMPLE.read_text().replace("runs = 50", "runs = 2").replace("duration_s = 600.0", "duration_s = 60.0")

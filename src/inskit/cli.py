@@ -660,7 +660,8 @@ def reproduce_alignment(out_dir, as_json):
 @click.option("--grade", type=click.Choice(["navigation", "tactical", "industrial-mems", "consumer-mems"]),
               default="tactical", show_default=True, help="IMU grade of the runs (overrides the scenario's).")
 @click.option("--runs", type=int, default=50, show_default=True)
-@click.option("--duration", type=FINITE, help="Use only the first seconds of the scenario.")
+@click.option("--duration", type=FINITE, help="Use only the first seconds of the scenario (at least 2 s: a GNSS "
+              "update after the start, where the NEES is taken).")
 @click.option("--seed", type=SEED, default=0, show_default=True)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def consistency(scenario_file, grade, runs, duration, seed, as_json):

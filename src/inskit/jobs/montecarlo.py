@@ -26,11 +26,23 @@ from ..integration import (FilterSettings, GnssPosition, InitialUncertainty, Sen
 from ..simulation.gnss import GnssErrors, simulate_gnss
 from ..simulation.imu import ideal_imu, truth_solution
 from ..simulation.sensors import ImuErrors, TriadErrors, apply_imu_errors
+from ..errors import InputError
 from ..types import NavState
 
 #: initial uncertainty used by the consistency runs, per IMU grade (tilt, yaw) [deg]
 GRADE_INITIAL_ATTITUDE_DEG = {"navigation": (0.2, 1.0), "tactical": (0.2, 1.0), "industrial-mems": (1.0, 3.0),
                               "consumer-mems": (1.0, 3.0)}
+
+
+#: GNSS of the consistency runs (``inskit consistency``, a study without an outage): 1 Hz white fixes
+CONSISTENCY_GNSS = GnssErrors(rate_hz=1.0, white_h_m=1.0, white_v_m=2.0, velocity_sigma_m_s=0.0)
+
+
+def min_consistency_duration_s(gnss: GnssErrors = CONSISTENCY_GNSS) -> float:
+    """The shortest run of a consistency study [s]: two GNSS intervals, so
+    that a fix after the start updates the filter (the NEES is taken at the
+    updates; the fix at the start is the initial epoch): 2 s at 1 Hz."""
+    return 2.0 / gnss.rate_hz
 
 
 def grade_initial_uncertainty(grade) -> InitialUncertainty:
@@ -145,7 +157,11 @@ def run_errors(spec: ConsistencySpec, seed):
     gnss, _ = simulate_gnss(spec.trajectory, t[0], t[-1], spec.gnss_errors, rng)
     start = perturbed_start(truth.state(0), spec.settings, rng)
     out = run_filter(imu, start, [GnssPosition(gnss)], spec.settings, smoother=True)
-    k = np.asarray(out.store.k)
+    k = np.asarray(out.store.k, dtype=int)
+    if len(k) == 0:  # the jobs refuse such a run first, naming their option (min_consistency_duration_s)
+        raise InputError(f"a consistency run of {t[-1] - t[0]:g} s holds no GNSS update after its start (the "
+                         "NEES is taken at the updates): it needs at least "
+                         f"{min_consistency_duration_s(spec.gnss_errors):g} s")
     sol = out.nav
     lay = spec.settings.layout
     err = np.zeros((len(k), lay.size))
@@ -236,8 +252,6 @@ def compare_schemes(scenario, outage, seed=0, schemes=("uncoupled", "open", "clo
     """
     from ..simulation.scenario import build_trajectory, gnss_errors, imu_errors
 
-    from ..errors import InputError
-
     rng = np.random.default_rng(seed)
     tr = build_trajectory(scenario, rng)
     t = np.arange(0.0, tr.duration, 1.0 / scenario.imu.rate_hz)
@@ -294,17 +308,31 @@ def compare_schemes(scenario, outage, seed=0, schemes=("uncoupled", "open", "clo
 def consistency_study(scenario, grade, runs, duration=None, seed=0, progress=None, map=map):
     """The ``inskit consistency`` job: Monte Carlo NEES of the closed-loop
     filter on a scenario's trajectory with a preset IMU grade and 1 Hz GNSS
-    (1 m horizontal, 2 m vertical white noise).  Returns the JSON summary."""
-    from ..errors import InputError
+    (1 m horizontal, 2 m vertical white noise).  Returns the JSON summary.
+
+    Raises
+    ------
+    InputError
+        Fewer than two runs, or a ``duration`` (or a scenario) shorter than
+        :func:`min_consistency_duration_s` or longer than the scenario.
+    """
     from ..simulation.scenario import build_trajectory
     from ..simulation.sensors import preset
 
     if runs < 2:
         raise InputError(f"--runs must be at least 2, got {runs}")
     tr = build_trajectory(scenario, np.random.default_rng(seed))
+    g = CONSISTENCY_GNSS
+    shortest = min_consistency_duration_s(g)
+    if tr.duration < shortest:
+        raise InputError(f"the scenario {scenario.name!r} lasts {tr.duration:g} s; a consistency study needs at "
+                         f"least {shortest:g} s (a GNSS update at {g.rate_hz:g} Hz after the start: the NEES is "
+                         "taken at the updates)")
     if duration is not None and not 0 < duration <= tr.duration:
         raise InputError(f"--duration must be within (0, {tr.duration:.0f}] s, got {duration}")
-    g = GnssErrors(rate_hz=1.0, white_h_m=1.0, white_v_m=2.0, velocity_sigma_m_s=0.0)
+    if duration is not None and duration < shortest:
+        raise InputError(f"--duration must be at least {shortest:g} s, got {duration} (a GNSS update at "
+                         f"{g.rate_hz:g} Hz after the start: the NEES is taken at the updates)")
     r = monte_carlo(tr, scenario.imu.rate_hz, consistency_errors(preset(grade)), g, grade_initial_uncertainty(grade),
                     runs=runs, seed=seed, duration=duration, progress=progress, map=map, gate_probability=None,
                     gravity=scenario.earth.gravity)

@@ -72,8 +72,9 @@ from ..errors import ConfigError, InputError
 from ..files import atomic_write, check_folder_writable, save_figure, write_text
 from ..types import ImuData
 from ..units import DEG, DEG_PER_HOUR, G0, MICRO_G, PPM
-from .montecarlo import (ConsistencySpec, anees_band, consistency_errors, grade_initial_uncertainty,
-                         matched_settings, perturbed_start, run_once)
+from .montecarlo import (CONSISTENCY_GNSS, ConsistencySpec, anees_band, consistency_errors,
+                         grade_initial_uncertainty, matched_settings, min_consistency_duration_s, perturbed_start,
+                         run_once)
 from .outages import withheld_mask
 
 #: the sensor grades a study can sweep (:data:`inskit.simulation.sensors.PRESETS` plus ``ideal``)
@@ -475,7 +476,6 @@ def build_cases(spec: StudySpec, scenario_path, key="", source=None) -> list[Stu
     def where(key):
         return f"{source}: field '{key}'" if source is not None else key
 
-    from ..simulation.gnss import GnssErrors
     from ..simulation.scenario import build_trajectory, gnss_errors, load_scenario
 
     sc = load_scenario(scenario_path)
@@ -490,6 +490,12 @@ def build_cases(spec: StudySpec, scenario_path, key="", source=None) -> list[Stu
     if T > tr.duration:
         raise ConfigError(f"{where('duration_s')} must be within (0, {tr.duration:.0f}] s for {scenario_path.name}, "
                           f"got {spec.duration_s}")
+    shortest = min_consistency_duration_s(CONSISTENCY_GNSS)
+    if spec.outage is None and T < shortest:  # the consistency figures: NEES at the GNSS updates
+        what = (f"{where('duration_s')} must be at least {shortest:g} s, got {spec.duration_s}"
+                if spec.duration_s is not None else f"{scenario_path.name} lasts {T:g} s, less than {shortest:g} s")
+        raise ConfigError(f"{what}: the consistency figures are taken at the GNSS updates "
+                          f"({CONSISTENCY_GNSS.rate_hz:g} Hz), and a run needs one after its start")
     outage = None
     if spec.outage is not None:
         outage = (spec.outage.start_s, spec.outage.start_s + spec.outage.length_s)
@@ -507,7 +513,7 @@ def build_cases(spec: StudySpec, scenario_path, key="", source=None) -> list[Stu
                 kw["lever_arm_b"] = lever
             else:  # the consistency job's set-up: what the filter models, 1 Hz white GNSS, smoothed NEES
                 sim, lever = model, (0.0, 0.0, 0.0)
-                g = GnssErrors(rate_hz=1.0, white_h_m=1.0, white_v_m=2.0, velocity_sigma_m_s=0.0)
+                g = CONSISTENCY_GNSS
                 kw["smoother_node_s"] = 0.0
             settings = matched_settings(_scaled(model, f.noise_scale), _initial(initial), **kw)
             cs = ConsistencySpec(tr, sc.imu.rate_hz, sim, g, settings, spec.duration_s)
