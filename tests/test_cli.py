@@ -388,3 +388,19 @@ def test_a_refused_run_leaves_no_empty_output_folder(capsys, tmp_path):
     (tmp_path / "kept").mkdir()
     code, _, _ = _in_process(capsys, "navigate", cfg, "--out", tmp_path / "kept")
     assert code == 2 and (tmp_path / "kept").is_dir()
+
+
+@pytest.mark.parametrize("command", [["simulate", "s.toml", "--out", "o", "--truth-rate"],
+                                     ["navigate", "c.toml", "--output-rate"],
+                                     ["gyrofree", "simulate", "source003", "--out", "o", "--rate"]])
+def test_every_rate_option_is_capped_at_the_scenario_imu_rate_cap(command, capsys, tmp_path, monkeypatch):
+    """--rate 1e7 of gyrofree simulate grew to 24 GB; --truth-rate and --output-rate had no bound either."""
+    monkeypatch.chdir(tmp_path)
+    option = command[-1]
+    code, out, err = _in_process(capsys, *command, "1e7")
+    assert code == 2 and out == "", err
+    assert (f"Invalid value for '{option}': 1e+07 Hz is not a rate within (0, 10000] Hz (every rate is capped at "
+            "10000 Hz, as a scenario's [imu] rate_hz)") in err
+    code, out, err = _in_process(capsys, *command, "0")
+    assert code == 2 and f"Invalid value for '{option}': 0 Hz is not a rate within (0, 10000] Hz" in err
+    assert not (tmp_path / "o").exists()

@@ -10,6 +10,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
 from click.testing import CliRunner
 
 from inskit.cli_gyrofree import gyrofree, reproduce_gyrofree
@@ -115,3 +116,35 @@ def test_reproduce_gyrofree_json(tmp_path):
     assert all(Path(f).stat().st_size > 10_000 for f in d["figures"])
     rows = (tmp_path / "growth_60s.csv").read_text().splitlines()
     assert rows[0] == "unit,rms_10s_m,rms_30s_m,rms_60s_m" and len(rows) == 5
+
+
+def test_rates_and_sample_counts_are_capped_naming_the_option(tmp_path):
+    """`gyrofree simulate source003 --rate 1e7` grew to 24 GB before the system killed it: the rate is
+    capped at the scenario's [imu] rate_hz cap, and a duration at a rate at MAX_SAMPLES samples."""
+    from inskit.units import MAX_RATE_HZ, MAX_SAMPLES
+
+    assert (MAX_RATE_HZ, MAX_SAMPLES) == (10_000, 10_000_000)
+    r = invoke(gyrofree, "simulate", "source003", "--out", tmp_path / "a", "--rate", "1e7")
+    assert r.exit_code == 2 and "Invalid value for '--rate': 1e+07 Hz is not a rate within (0, 10000] Hz" in r.output
+    r = invoke(gyrofree, "simulate", "source003", "--out", tmp_path / "a", "--rate", 1000, "--duration", "1e5")
+    assert isinstance(r.exception, InputError) and str(r.exception) == (
+        "--duration 100000 s at --rate 1000 Hz: 100,000,000 samples, more than the 10,000,000 one simulation "
+        "holds; shorten --duration or lower --rate")
+    from inskit.jobs.gyrofree import simulate_job
+
+    with pytest.raises(InputError, match=r"^--rate must be within \(0, 10000\] Hz, got 20000.0$"):
+        simulate_job("source003", "ten", tmp_path / "b", rate_hz=2e4)
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+
+
+def test_a_duration_past_the_scenario_is_refused_as_platform_and_consistency_do(tmp_path):
+    """`gyrofree simulate car.toml --duration 5000` clipped in silence to the scenario's 1842 s."""
+    r = invoke(gyrofree, "simulate", EXAMPLES / "car.toml", "--out", tmp_path / "car", "--duration", 5000)
+    assert isinstance(r.exception, InputError)
+    assert str(r.exception) == "--duration must be within (0, 1842] s, got 5000.0"
+    from inskit.jobs.montecarlo import consistency_study
+    from inskit.simulation.scenario import load_scenario
+
+    with pytest.raises(InputError) as other:  # the wording of the others
+        consistency_study(load_scenario(EXAMPLES / "car.toml"), "tactical", 2, 5000.0)
+    assert str(other.value) == str(r.exception)

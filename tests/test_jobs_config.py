@@ -460,3 +460,12 @@ def test_a_run_name_is_a_plain_folder_name(tmp_path, name):
     p.write_text(f'name = "{name}"\n[imu]\nfile = "imu.csv"\n[gnss]\nfile = "gnss.csv"\n')
     with pytest.raises(ConfigError, match="field 'name': .* is not a plain folder name"):
         load_config(p)
+
+
+def test_the_output_rate_is_capped_as_every_rate():
+    """`[output] rate_hz = 1e300` made t * rate overflow to inf: the CSV kept its first row only."""
+    from inskit.units import MAX_RATE_HZ
+
+    assert _cfg(LOOSE, output={"rate_hz": MAX_RATE_HZ}).output.rate_hz == MAX_RATE_HZ
+    with pytest.raises(ConfigError, match=r"c\.toml: field 'output\.rate_hz': .*less than or equal to 10000"):
+        _cfg(LOOSE, output={"rate_hz": 1e300})

@@ -187,3 +187,15 @@ def test_a_run_without_an_update_is_an_input_error_not_an_index_error():
                            matched_settings(errors, init, smoother_node_s=0.0), duration=0.5)
     with pytest.raises(InputError, match=r"holds no GNSS update after its start .*it needs at least 2 s"):
         run_once(spec, 0)
+
+
+def test_a_consistency_run_of_too_many_imu_samples_is_refused_naming_the_duration():
+    from inskit.errors import InputError
+    from inskit.jobs.montecarlo import consistency_study
+
+    sc = load_scenario(EXAMPLES / "car.toml")
+    fast = sc.model_copy(update={"imu": sc.imu.model_copy(update={"rate_hz": 1e4})})
+    with pytest.raises(InputError, match=r"^--duration 1842\.1 s at the scenario's \[imu\] rate_hz = 10000 Hz: "
+                                         r"18,420,999 IMU samples per run, more than the 10,000,000 one simulation "
+                                         r"holds; give a shorter --duration$"):
+        consistency_study(fast, "tactical", 2)

@@ -140,3 +140,13 @@ def test_integrate_without_any_fix_is_refused(tmp_path):
     with pytest.raises(ConfigError, match=r"blind\.toml: no GNSS fix reaches the filter .*outages_s"):
         run(platform, ["integrate", p, "--out", tmp_path / "o", "--no-plots"])
     assert not (tmp_path / "o" / "solution.csv").exists()
+
+
+def test_the_step_is_capped_as_every_rate_and_by_the_epoch_count(scenario, tmp_path):
+    """`--dt` is a rate's inverse: 1e-6 s would make 900 million epochs of the 900 s scenario."""
+    with pytest.raises(InputError, match=r"^--dt must be at least 0\.0001 s \(every rate is capped at 10000 Hz\), "
+                                         r"got 1e-06$"):
+        run(platform, ["simulate", scenario, "--out", tmp_path / "a", "--dt", "1e-6"])
+    with pytest.raises(InputError, match=r"^--dt 0\.0001 s over 1982 s: 19,820,000 epochs, more than the "
+                                         r"10,000,000 one simulation holds"):
+        run(platform, ["integrate", scenario, "--out", tmp_path / "a", "--dt", "1e-4"])

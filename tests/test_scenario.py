@@ -387,3 +387,35 @@ def test_outages_over_the_whole_scenario_are_refused_by_simulate(tmp_path, capsy
     assert exc.value.code == 2 and len(err.strip().splitlines()) == 1, err
     assert err.startswith("inskit: error: field 'gnss.outages_s': the outages [[0.0, 100.0]] remove every GNSS fix")
     assert not (tmp_path / "o").exists()
+
+
+def test_imu_and_truth_rates_are_capped_and_so_is_the_sample_count(tmp_path):
+    """`inskit simulate --truth-rate 1e6` grew without bound; the scenario's [imu] rate_hz cap
+    (MAX_RATE_HZ) is every rate's, and a rate times the scenario's length is refused at MAX_SAMPLES
+    samples before any array is made."""
+    import warnings
+
+    from inskit.cli import main
+    from inskit.errors import ConfigError
+    from inskit.simulation.scenario import ImuSpec
+    from inskit.units import MAX_RATE_HZ
+
+    assert MAX_RATE_HZ == 10_000 and any(getattr(m, "le", None) == MAX_RATE_HZ
+                                         for m in ImuSpec.model_fields["rate_hz"].metadata)
+    p = tmp_path / "s.toml"
+    p.write_text(SCEN)
+    sc = load_scenario(p)
+    with pytest.raises(ConfigError, match=r"^the truth rate must be within \(0, 10000\] Hz, got 1000000.0$"):
+        simulate(sc, truth_rate_hz=1e6)
+    long = sc.model_copy(update={"segment": [sc.segment[0].model_copy(update={"duration_s": 1001.0})]})
+    with pytest.raises(ConfigError, match=r"^the scenario lasts 1001 s: 10,010,000 truth rows at the truth rate "
+                                          r"\(simulate --truth-rate\) 10000 Hz, more than the 10,000,000 one "
+                                          r"simulation holds"):
+        simulate(long, truth_rate_hz=1e4)
+    fast = long.model_copy(update={"imu": long.imu.model_copy(update={"rate_hz": 1e4})})
+    with pytest.raises(ConfigError, match=r"^the scenario lasts 1001 s: 10,010,000 IMU samples at field "
+                                          r"'imu\.rate_hz' = 10000 Hz, more than"):
+        simulate(fast)
+    with warnings.catch_warnings(), np.errstate(), pytest.raises(SystemExit) as exc:  # main() silences both
+        main(["simulate", str(p), "--out", str(tmp_path / "o"), "--truth-rate", "1e6"])
+    assert exc.value.code == 2 and not (tmp_path / "o").exists()

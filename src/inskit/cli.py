@@ -17,11 +17,11 @@ import numpy as np
 
 from . import __version__
 from .cli_output import emit as _emit
-from .cli_output import FINITE, FiniteFloatRange
+from .cli_output import FINITE, RATE_HZ
 from .cli_output import log as _log
 from .cli_output import SEED
 from .errors import InputError, InskitError
-from .units import DEG
+from .units import DEG, MAX_RATE_HZ
 
 
 
@@ -297,9 +297,9 @@ def bench(quick, no_cli, long_runs, as_json):
 @click.option("--output-format", type=click.Choice(["parquet", "csv", "both"]),
               help="Solution files: Parquet at every IMU epoch, CSV at --output-rate, or both (default: the "
               "config's [output] format, else both).")
-@click.option("--output-rate", type=FiniteFloatRange(min=0, min_open=True), metavar="HZ",
-              help="Rows per second of the CSV solution files (default: [output] rate_hz, else 10 Hz); a rate at "
-              "or above the IMU rate writes every epoch.")
+@click.option("--output-rate", type=RATE_HZ, metavar="HZ",
+              help="Rows per second of the CSV solution files (default: [output] rate_hz, else 10 Hz; at most "
+              f"{MAX_RATE_HZ:g} Hz); a rate at or above the IMU rate writes every epoch.")
 @click.option("--stream", type=click.Choice(["auto", "on", "off"]),
               help="Write the solution files while the filter runs, memory bounded whatever the log's length "
               "(default: [output] stream, else auto = on); off keeps every row in memory.")
@@ -413,7 +413,8 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
 @click.option("--force", is_flag=True, help="Overwrite files in --out.")
 @click.option("--no-plot", is_flag=True, help="Skip the scenario plot.")
 @click.option("--verify", is_flag=True, help="Also mechanize the ideal IMU (at the rate and at twice it) against the truth.")
-@click.option("--truth-rate", type=FINITE, help="Rate of the truth file [Hz] (default: the IMU rate).")
+@click.option("--truth-rate", type=RATE_HZ, metavar="HZ", help="Rate of the truth file [Hz] (default: the IMU "
+              f"rate; at most {MAX_RATE_HZ:g} Hz).")
 @click.option("--format", "file_format", type=click.Choice(["csv", "parquet"]), default="csv", show_default=True,
               help="imu, gnss and truth files as CSV or Parquet (typed, exact, about 20x faster to write); "
               "every inskit reader takes both.")

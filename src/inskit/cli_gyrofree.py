@@ -20,11 +20,12 @@ from __future__ import annotations
 import click
 
 from .cli_output import emit as _emit
-from .cli_output import FINITE
+from .cli_output import FINITE, RATE_HZ
 from .cli_output import log as _log
 from .cli_output import SEED
 
 from .errors import InputError
+from .units import MAX_RATE_HZ, MAX_SAMPLES
 
 
 
@@ -50,9 +51,10 @@ def gyrofree():
 @click.option("--layout", "layout_spec", default="ten", show_default=True, help=_LAYOUT_HELP)
 @click.option("--d", "d", type=FINITE, default=0.1, show_default=True, help="Lever arm of ten/six [m].")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Output folder.")
-@click.option("--rate", "rate_hz", type=FINITE, help="Sampling rate [Hz] (default 1000 for source003, else the "
-              "scenario's IMU rate).")
-@click.option("--duration", type=FINITE, help="Length [s] (default 10 for source003, else the scenario's).")
+@click.option("--rate", "rate_hz", type=RATE_HZ, metavar="HZ", help="Sampling rate [Hz] (default 1000 for "
+              f"source003, else the scenario's IMU rate; at most {MAX_RATE_HZ:g} Hz).")
+@click.option("--duration", type=FINITE, help="Length [s] (default 10 for source003, else the scenario's; at most "
+              f"the scenario's, and {MAX_SAMPLES:,} samples).")
 @click.option("--bias-ug", type=FINITE, default=0.0, show_default=True, help="Bias of every accelerometer [micro-g].")
 @click.option("--bias-sigma-ug", type=FINITE, default=0.0, show_default=True,
               help="Random bias per accelerometer, 1 sigma [micro-g].")

@@ -23,6 +23,7 @@ from .cli_output import SEED
 import numpy as np
 
 from .errors import InputError
+from .units import MAX_RATE_HZ
 
 __all__ = ["platform", "reproduce_integration_filters"]
 
@@ -53,7 +54,8 @@ def _check_scenario(path):
 def _common(f):
     f = click.option("--earth", "earth_model", type=click.Choice(["wgs84", "sphere"]), default="wgs84",
                      show_default=True, help="Earth model of world and computer (sphere: R = 6378 km).")(f)
-    f = click.option("--dt", type=FINITE, default=1.0, show_default=True, help="Step of the simulation [s].")(f)
+    f = click.option("--dt", type=FINITE, default=1.0, show_default=True, help="Step of the simulation [s] (at "
+                     f"least {1.0 / MAX_RATE_HZ:g} s: every rate is capped at {MAX_RATE_HZ:g} Hz).")(f)
     f = click.option("--duration", type=FINITE, help="Use only the first seconds of the scenario.")(f)
     f = click.option("--seed", type=SEED, default=0, show_default=True, help="Seed of every random draw.")(f)
     f = click.option("--gyro-drift-deg-h", help="Gyro drifts x,y,z [deg/h], platform axes (default: the scenario's "

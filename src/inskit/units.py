@@ -2,6 +2,11 @@
 
 ``DEG`` is one degree in radians, so ``30 * DEG`` is 30 degrees in radians and
 ``x / DEG`` turns radians into degrees.  ``DEG_PER_HOUR`` is one deg/h in rad/s.
+
+Also the sampling limits shared by the scenario files, the simulations and
+the command line (:data:`MAX_RATE_HZ`, :data:`MAX_SAMPLES`): constants of the
+lowest layer, so the command line's option types take them without importing
+the simulation.
 """
 
 import math
@@ -18,3 +23,12 @@ MILLI_G = 1e-3 * G0
 MICRO_G = 1e-6 * G0
 MICRO_G_PER_SQRT_HZ = MICRO_G
 PPM = 1e-6
+
+#: The highest sampling rate [Hz] inskit simulates or writes: a scenario's ``[imu] rate_hz``, the
+#: navigate config's ``[output] rate_hz`` and every rate option of the command line (``--rate``,
+#: ``--truth-rate``, ``--output-rate``; ``--dt`` of ``inskit platform`` as its inverse, the shortest step).
+MAX_RATE_HZ = 10_000  # an int: 10000, not 10000.0, in the messages and docs/config.md
+#: The most samples one simulated series (IMU, truth, accelerometer array, platform epochs) may hold:
+#: 1000 s at :data:`MAX_RATE_HZ`, 27.8 h at 100 Hz; about 10 GB of arrays in the simulations.  Beyond it a
+#: rate times a duration is refused before any array is made.
+MAX_SAMPLES = 10_000_000

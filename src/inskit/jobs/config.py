@@ -26,6 +26,7 @@ from pydantic_core import PydanticCustomError
 
 from ..config_files import check_magnitude, check_scalar_type, read_toml, validation_message
 from ..errors import ConfigError, InputError
+from ..units import MAX_RATE_HZ
 
 #: error type of a consistency rule that names its key (see :func:`_key_error`)
 _KEY_ERROR = "inskit_key"
@@ -550,7 +551,7 @@ class OutputSection(_Strict):
         "float64 columns with their units in the schema metadata), csv (solution_forward.csv at rate_hz), or both "
         "(the CSV keeps `inskit report` and scripts that read CSV working); --output-format overrides it")
     rate_hz: float = Field(
-        10.0, gt=0, description="rows per second of the CSV solution files (the first row at or after each "
+        10.0, gt=0, le=MAX_RATE_HZ, description="rows per second of the CSV solution files (the first row at or after each "
         "multiple of 1/rate_hz, plus the first and last rows); a rate at or above the IMU rate writes every "
         "epoch. 10 Hz matches the ZUPT/NHC update rate and makes 1 h of 31 columns 21 MB instead of 211 MB "
         "at 100 Hz; Parquet files always hold every epoch; --output-rate overrides it")

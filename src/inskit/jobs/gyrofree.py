@@ -17,7 +17,7 @@ import numpy as np
 
 from ..files import save_figure
 from ..errors import InputError
-from ..units import DEG, MICRO_G, PPM
+from ..units import DEG, MAX_RATE_HZ, MAX_SAMPLES, MICRO_G, PPM
 
 SOURCE_SCENARIO = "source003"
 
@@ -93,7 +93,9 @@ def simulate_job(scenario, layout_spec, out_dir, *, d=0.1, rate_hz=None, duratio
         Lever arm of the built-in layouts [m].
     rate_hz, duration : float, optional
         Sampling rate [Hz] (default 1000 Hz for ``source003``, the scenario's
-        IMU rate otherwise) and length [s] (default: 10 s, or the scenario's).
+        IMU rate otherwise; at most :data:`inskit.units.MAX_RATE_HZ`) and
+        length [s] (default: 10 s, or the scenario's; at most the scenario's,
+        and :data:`inskit.units.MAX_SAMPLES` samples at the rate).
     seed : int
         Seed of every random draw.
     **errors
@@ -103,6 +105,14 @@ def simulate_job(scenario, layout_spec, out_dir, *, d=0.1, rate_hz=None, duratio
     -------
     dict
         A JSON-able summary.
+
+    Raises
+    ------
+    InputError
+        A rate or a duration out of those bounds (named as the options
+        ``--rate``, ``--duration``; a duration past the scenario's end in
+        the words of ``platform simulate`` and ``consistency``), before the
+        output folder is made.
     """
     from .. import io
     from ..gyrofree.files import write_array, write_inertial, write_layout
@@ -112,12 +122,12 @@ def simulate_job(scenario, layout_spec, out_dir, *, d=0.1, rate_hz=None, duratio
     log = log or (lambda s: None)
     t0 = time.perf_counter()
     layout = layout_from_spec(layout_spec, d)
-    out = _check_out(out_dir, ["array.csv", "layout.csv", "truth.csv"], overwrite, [scenario, layout_spec])
     rng = np.random.default_rng(seed)
     if scenario == SOURCE_SCENARIO:
         rate = 1000.0 if rate_hz is None else float(rate_hz)
         T = 10.0 if duration is None else float(duration)
         _check_rate(rate, T)
+        out = _check_out(out_dir, ["array.csv", "layout.csv", "truth.csv"], overwrite, [scenario, layout_spec])
         motion = ConstantRateMotion()
         t = np.arange(0.0, T + 0.5 / rate, 1.0 / rate)
         mot = motion.motion(t)
@@ -130,8 +140,11 @@ def simulate_job(scenario, layout_spec, out_dir, *, d=0.1, rate_hz=None, duratio
         sc = load_scenario(scenario)
         tr = build_trajectory(sc, rng)
         rate = sc.imu.rate_hz if rate_hz is None else float(rate_hz)
-        T = tr.duration if duration is None else min(float(duration), tr.duration)
+        T = tr.duration if duration is None else float(duration)
+        if not 0 < T <= tr.duration + 1e-9:  # as platform simulate and consistency: not clipped in silence
+            raise InputError(f"--duration must be within (0, {tr.duration:.0f}] s, got {duration}")
         _check_rate(rate, T)
+        out = _check_out(out_dir, ["array.csv", "layout.csv", "truth.csv"], overwrite, [scenario, layout_spec])
         t = np.arange(0.0, T + 1e-9, 1.0 / rate)
         log(f"gyrofree simulate: {sc.name}, {len(t)} samples")
         mot = motion_from_trajectory(tr, t)
@@ -162,10 +175,15 @@ def simulate_job(scenario, layout_spec, out_dir, *, d=0.1, rate_hz=None, duratio
 
 
 def _check_rate(rate, T):
-    if not (np.isfinite(rate) and rate > 0):
-        raise InputError(f"--rate must be > 0 Hz, got {rate}")
+    """Refuse a rate outside (0, MAX_RATE_HZ], and a duration of fewer than
+    two or more than MAX_SAMPLES samples at it (before any array is made)."""
+    if not (np.isfinite(rate) and 0 < rate <= MAX_RATE_HZ):
+        raise InputError(f"--rate must be within (0, {MAX_RATE_HZ:g}] Hz, got {rate}")
     if not (np.isfinite(T) and T * rate >= 2):
         raise InputError(f"--duration must cover at least two samples, got {T} s at {rate} Hz")
+    if T * rate > MAX_SAMPLES:
+        raise InputError(f"--duration {T:g} s at --rate {rate:g} Hz: {T * rate:,.0f} samples, more than the "
+                         f"{MAX_SAMPLES:,} one simulation holds; shorten --duration or lower --rate")
 
 
 # --- navigate --------------------------------------------------------------------------------

@@ -28,6 +28,7 @@ from ..simulation.imu import ideal_imu, truth_solution
 from ..simulation.sensors import ImuErrors, TriadErrors, apply_imu_errors
 from ..errors import InputError
 from ..types import NavState
+from ..units import MAX_SAMPLES
 
 #: initial uncertainty used by the consistency runs, per IMU grade (tilt, yaw) [deg]
 GRADE_INITIAL_ATTITUDE_DEG = {"navigation": (0.2, 1.0), "tactical": (0.2, 1.0), "industrial-mems": (1.0, 3.0),
@@ -313,8 +314,9 @@ def consistency_study(scenario, grade, runs, duration=None, seed=0, progress=Non
     Raises
     ------
     InputError
-        Fewer than two runs, or a ``duration`` (or a scenario) shorter than
-        :func:`min_consistency_duration_s` or longer than the scenario.
+        Fewer than two runs, a ``duration`` (or a scenario) shorter than
+        :func:`min_consistency_duration_s` or longer than the scenario, or
+        more than :data:`inskit.units.MAX_SAMPLES` IMU samples per run.
     """
     from ..simulation.scenario import build_trajectory
     from ..simulation.sensors import preset
@@ -333,6 +335,11 @@ def consistency_study(scenario, grade, runs, duration=None, seed=0, progress=Non
     if duration is not None and duration < shortest:
         raise InputError(f"--duration must be at least {shortest:g} s, got {duration} (a GNSS update at "
                          f"{g.rate_hz:g} Hz after the start: the NEES is taken at the updates)")
+    T = tr.duration if duration is None else duration
+    if T * scenario.imu.rate_hz > MAX_SAMPLES:  # before any array is made
+        raise InputError(f"--duration {T:g} s at the scenario's [imu] rate_hz = {scenario.imu.rate_hz:g} Hz: "
+                         f"{T * scenario.imu.rate_hz:,.0f} IMU samples per run, more than the {MAX_SAMPLES:,} one "
+                         "simulation holds; give a shorter --duration")
     r = monte_carlo(tr, scenario.imu.rate_hz, consistency_errors(preset(grade)), g, grade_initial_uncertainty(grade),
                     runs=runs, seed=seed, duration=duration, progress=progress, map=map, gate_probability=None,
                     gravity=scenario.earth.gravity)

@@ -39,7 +39,7 @@ from ..platform.integrated import (
 from ..platform.mechanization import KINDS, mechanize_platform, source_errors
 from ..platform.sensors import InitialErrors, PlatformErrors
 from ..platform.world import platform_truth, simulate_sns
-from ..units import ARCMIN, DEG, DEG_PER_HOUR, HOUR, MICRO_G
+from ..units import ARCMIN, DEG, DEG_PER_HOUR, HOUR, MAX_RATE_HZ, MAX_SAMPLES, MICRO_G
 
 __all__ = [
     "EXPERIMENT",
@@ -539,8 +539,12 @@ def _scenario_setup(scenario_file, *, dt, earth_model, seed, gyro_drift_deg_h=No
     T = traj.duration if duration is None else float(duration)
     if not 0 < T <= traj.duration + 1e-9:
         raise InputError(f"--duration must be within (0, {traj.duration:.0f}] s, got {duration}")
-    if not dt > 0:
-        raise InputError(f"--dt must be > 0 s, got {dt}")
+    if not dt >= 1.0 / MAX_RATE_HZ:  # the rate cap, as a step
+        raise InputError(f"--dt must be at least {1.0 / MAX_RATE_HZ:g} s (every rate is capped at "
+                         f"{MAX_RATE_HZ:g} Hz), got {dt}")
+    if T / dt > MAX_SAMPLES:  # before any array is made
+        raise InputError(f"--dt {dt:g} s over {T:g} s: {T / dt:,.0f} epochs, more than the {MAX_SAMPLES:,} one "
+                         "simulation holds; use a longer --dt or a shorter --duration")
     truth = platform_truth(traj, T, dt, earth_model=earth_model)
     ie = imu_errors(sc)
     g, a = ie.gyro, ie.accel

@@ -25,7 +25,7 @@ from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError,
 from ..config_files import check_magnitude, check_scalar_type, read_toml, validation_message
 from ..errors import ConfigError
 from ..types import GnssData, ImuData, NavSolution
-from ..units import DEG
+from ..units import DEG, MAX_RATE_HZ, MAX_SAMPLES
 from .gnss import GnssErrors, simulate_gnss
 from .imu import INCREMENT_TOLERANCE, ideal_imu, max_oscillation_hz, truth_solution
 from .segments import SegmentTrajectory
@@ -48,7 +48,7 @@ class StartSpec(_S):
 
 
 class ImuSpec(_S):
-    rate_hz: float = Field(100.0, gt=0, le=10000)
+    rate_hz: float = Field(100.0, gt=0, le=MAX_RATE_HZ)
     grade: Literal["ideal", "navigation", "tactical", "industrial-mems", "consumer-mems"] = "ideal"
     gyro: dict = Field(default_factory=dict, description="datasheet-unit overrides of the gyro preset")
     accel: dict = Field(default_factory=dict, description="datasheet-unit overrides of the accel preset")
@@ -602,8 +602,16 @@ def simulate(sc: Scenario, seed=0, *, truth_rate_hz=None, progress=None) -> Simu
     Raw GNSS observations (``[raw_gnss]``) draw from their own child
     generator (:func:`simulate_raw_gnss`).
     """
+    if truth_rate_hz is not None and not 0 < truth_rate_hz <= MAX_RATE_HZ:
+        raise ConfigError(f"the truth rate must be within (0, {MAX_RATE_HZ:g}] Hz, got {truth_rate_hz}")
     rng = np.random.default_rng(seed)
     tr = build_trajectory(sc, rng)
+    for what, rate in (("IMU samples at field 'imu.rate_hz' =", sc.imu.rate_hz),
+                       ("truth rows at the truth rate (simulate --truth-rate)", truth_rate_hz)):
+        if rate is not None and tr.duration * rate > MAX_SAMPLES:  # refused before any array is made
+            raise ConfigError(f"the scenario lasts {tr.duration:g} s: {tr.duration * rate:,.0f} {what} {rate:g} "
+                              f"Hz, more than the {MAX_SAMPLES:,} one simulation holds; lower the rate or shorten "
+                              "the scenario (duration_limit_s)")
     dt = 1.0 / sc.imu.rate_hz
     t = np.arange(0.0, tr.duration + 1e-9, dt)
     if len(t) < 2:
@@ -616,8 +624,6 @@ def simulate(sc: Scenario, seed=0, *, truth_rate_hz=None, progress=None) -> Simu
     imu, draws = apply_imu_errors(ideal, imu_errors(sc), rng)
     gnss, gerr = simulate_gnss(tr, 0.0, tr.duration, gnss_errors(sc), rng)
     draws["gnss_position_errors"] = gerr
-    if truth_rate_hz is not None and not truth_rate_hz > 0:
-        raise ConfigError(f"the truth rate must be > 0 Hz, got {truth_rate_hz}")
     tt = t if truth_rate_hz is None else np.arange(0.0, tr.duration + 1e-9, 1.0 / truth_rate_hz)
     truth = truth_solution(tr, tt, with_rates=True, gravity=sc.earth.gravity)
     raw = None
