@@ -136,7 +136,7 @@ def test_integrate_without_any_fix_is_refused(tmp_path):
     from inskit.errors import ConfigError
 
     p = tmp_path / "blind.toml"
-    p.write_text(SCENARIO.replace("outages_s = [[1200.0, 1500.0]]", "outages_s = [[-1.0, 5000.0]]"))
+    p.write_text(SCENARIO.replace("outages_s = [[1200.0, 1500.0]]", "outages_s = [[0.0, 5000.0]]"))
     with pytest.raises(ConfigError, match=r"blind\.toml: no GNSS fix reaches the filter .*outages_s"):
         run(platform, ["integrate", p, "--out", tmp_path / "o", "--no-plots"])
     assert not (tmp_path / "o" / "solution.csv").exists()
