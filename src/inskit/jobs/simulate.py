@@ -42,8 +42,9 @@ def write_simulation(sim: Simulation, out_dir, *, overwrite=False, plot=True, fi
         gnss = dataclasses.replace(gnss, time=gnss.time + sow0)
         truth = dataclasses.replace(truth, time=truth.time + sow0)
     with staged_files(out) as stage:
-        _write_together([(io.write_imu, stage(files[0]), imu), (io.write_gnss, stage(files[1]), gnss),
-                         (io.write_solution, stage(files[2]), truth)])
+        io.write_imu(stage(files[0]), imu, overwrite=True)
+        io.write_gnss(stage(files[1]), gnss, overwrite=True)
+        io.write_solution(stage(files[2]), truth, overwrite=True)
         if sim.raw is not None:
             _write_raw(sim, stage(files[3]), stage(files[4]), stage(files[5]))
         if plot:
@@ -52,19 +53,6 @@ def write_simulation(sim: Simulation, out_dir, *, overwrite=False, plot=True, fi
     for f in stale:  # --force: an earlier run in the other format goes, not only the files of this one
         f.unlink()
     return files
-
-
-def _write_together(jobs):
-    """Run the writers ``(write, path, data)`` side by side in threads (each
-    file atomic on its own; the Parquet encoder and the compressor release
-    the GIL, so the truth and the IMU file overlap: 0.1 s of an hour at
-    100 Hz).  The first failure is raised after all have finished."""
-    from concurrent.futures import ThreadPoolExecutor
-
-    with ThreadPoolExecutor(max_workers=len(jobs), thread_name_prefix="inskit-write") as pool:
-        futures = [pool.submit(write, path, data, overwrite=True) for write, path, data in jobs]
-    for f in futures:
-        f.result()
 
 
 def check_simulation_outputs(sc, out_dir, *, overwrite=False, plot=True, file_format="csv", inputs=()):
