@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from inskit import earth, io
-from inskit.errors import InputError
+from inskit.errors import ConfigError, InputError
 from inskit.jobs.simulate import write_simulation
 from inskit.simulation.scenario import load_scenario, simulate
 
@@ -419,3 +419,20 @@ def test_imu_and_truth_rates_are_capped_and_so_is_the_sample_count(tmp_path):
     with warnings.catch_warnings(), np.errstate(), pytest.raises(SystemExit) as exc:  # main() silences both
         main(["simulate", str(p), "--out", str(tmp_path / "o"), "--truth-rate", "1e6"])
     assert exc.value.code == 2 and not (tmp_path / "o").exists()
+
+
+def test_an_outage_after_the_segments_end_is_refused(tmp_path):
+    """A window that starts after the scenario's segments end withheld
+    nothing, silently; one beyond duration_limit_s but inside the segments
+    stays (the limit cuts the run short on purpose)."""
+    from inskit.simulation.scenario import build_trajectory
+
+    sc = _scenario(tmp_path)
+    total = build_trajectory(sc, np.random.default_rng(0)).t
+    late = sc.model_copy(update={"gnss": sc.gnss.model_copy(update={"outages_s": [[total + 5.0, total + 10.0]]})})
+    with pytest.raises(ConfigError, match=r"field 'gnss.outages_s': window 1 .* starts after the scenario's "
+                                          r"segments end .*withhold nothing"):
+        build_trajectory(late, np.random.default_rng(0))
+    cut = sc.model_copy(update={"duration_limit_s": total / 2,
+                                "gnss": sc.gnss.model_copy(update={"outages_s": [[0.75 * total, total]]})})
+    build_trajectory(cut, np.random.default_rng(0))

@@ -444,7 +444,23 @@ def build_trajectory(sc: Scenario, rng=None) -> SegmentTrajectory:
             tr.random_vibration(v.target, amp, band, rng)
     if sc.duration_limit_s is not None:
         tr.duration_limit = float(sc.duration_limit_s)
+    _check_windows_inside(sc, tr.t, where)
     return tr
+
+
+def _check_windows_inside(sc: Scenario, total_s, where=""):
+    """Refuse a GNSS outage or raw-GNSS blockage window that starts after the
+    segments end (``total_s``): it would withhold nothing, silently.  A
+    window beyond ``duration_limit_s`` but inside the segments is kept (the
+    limit cuts a scenario short on purpose)."""
+    lists = [("gnss.outages_s", [tuple(w) for w in sc.gnss.outages_s])]
+    if sc.raw_gnss is not None:
+        lists.append(("raw_gnss.blockage", [(b.start_s, b.end_s) for b in sc.raw_gnss.blockage]))
+    for key, wins in lists:
+        for k, (a, b) in enumerate(wins, start=1):
+            if a >= total_s:
+                raise ConfigError(f"{where}field '{key}': window {k} [{a:g}, {b:g}] starts after the scenario's "
+                                  f"segments end ({total_s:g} s): it would withhold nothing")
 
 
 def imu_errors(sc: Scenario) -> ImuErrors:
