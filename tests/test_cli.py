@@ -1,6 +1,7 @@
 """The CLI turns every bad input into one line on stderr and a non-zero exit."""
 
 import json
+import shutil
 import subprocess
 import sys
 
@@ -347,6 +348,11 @@ def test_allan_names_the_log_it_refuses_and_two_outputs_in_one_file(files, tmp_p
     code, out, err = _in_process(capsys, "allan", files / "imu.csv", "--plot", tmp_path / "a.png",
                                  "--toml", tmp_path / "a.png", "--force")
     assert code == 2 and "a.png: given as both --plot and --toml" in err and not (tmp_path / "a.png").exists()
+    # --force never lets an output replace the log it reads (the shared check of every writer)
+    shutil.copy(files / "imu.csv", tmp_path / "log.csv")
+    before = (tmp_path / "log.csv").read_bytes()
+    code, out, err = _in_process(capsys, "allan", tmp_path / "log.csv", "--toml", tmp_path / "log.csv", "--force")
+    assert code == 2 and "log.csv: is an input of this command" in err and (tmp_path / "log.csv").read_bytes() == before
 
 
 def test_allan_states_the_minimum_of_a_short_log_and_names_a_constant_channel(files, tmp_path, capsys):

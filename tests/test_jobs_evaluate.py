@@ -131,3 +131,14 @@ def test_a_gap_in_the_truth_is_not_interpolated_across(files, tmp_path):
     assert evaluate(files / "sol.csv", files / "truth.csv")["warnings"] == []
     # an epoch on a truth sample at the edge of a gap is still scored (nothing is interpolated there)
     assert analysis.truth_covers(np.array([99.9, 100.0, 160.0]), cut.time).tolist() == [True, False, True]
+    # a streamed run hands the gaps found once to every segment: the same errors as the whole solution's
+    from inskit.analysis.errors import nav_error_part
+
+    sol = io.read_solution(files / "sol.csv")
+    gaps, limit = analysis.truth_gaps(cut.time)
+    assert gaps.tolist() == [[pytest.approx(99.9), pytest.approx(160.0)]] and limit == pytest.approx(0.5)
+    whole = analysis.nav_error(sol, cut)
+    parts = [nav_error_part(NavSolution(sol.time[a:a + 700], sol.lla[a:a + 700], sol.v_n[a:a + 700],
+                                        sol.q_nb[a:a + 700]), cut, gaps) for a in range(0, 3000, 700)]
+    assert np.array_equal(np.concatenate([p.time for p in parts]), whole.time)
+    assert np.allclose(np.concatenate([p.pos_ned for p in parts]), whole.pos_ned)

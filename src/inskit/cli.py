@@ -119,12 +119,9 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
     from .strapdown import mechanize as run_mech
     from .types import NavState
 
-    from .files import check_folder_writable, same_file
+    from .files import check_folder_writable, check_outputs
 
-    if out_file and Path(out_file).exists() and not force:
-        raise InputError(f"{out_file}: already exists; refusing to overwrite it (use --force)")
-    if out_file and (same_file(out_file, imu_file) or (init_from and same_file(out_file, init_from))):
-        raise InputError(f"{out_file}: is an input of this command; refusing to overwrite it")
+    check_outputs([out_file], [imu_file, init_from], force)
     if out_file:
         check_folder_writable(Path(out_file).resolve().parent)
     from .jobs.warm import warm_compiled_code
@@ -203,15 +200,18 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
 PLOT_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
 
 
-def _check_plot_file(plot_file, force):
-    """A plot path the plotting library can write, checked before the work."""
+def _check_plot_file(plot_file, force, inputs=()):
+    """A plot path the plotting library can write, not an input, and new
+    unless ``force`` (:func:`inskit.files.check_outputs`), checked before
+    the work."""
+    from .files import check_outputs
+
     if not plot_file:
         return
     if Path(plot_file).suffix.lower() not in PLOT_SUFFIXES:
         raise InputError(f"{plot_file}: unsupported plot format {Path(plot_file).suffix or '(none)'!r}; use one of "
                          f"{', '.join(PLOT_SUFFIXES)}")
-    if Path(plot_file).exists() and not force:
-        raise InputError(f"{plot_file}: already exists; refusing to overwrite it (use --force)")
+    check_outputs([plot_file], inputs, force)
 
 
 # --- evaluate ----------------------------------------------------------------------
@@ -237,7 +237,7 @@ def evaluate(solution_file, truth_file, t_from, t_to, remove_offset, per_epoch_f
     in degrees, yaw wrapped to +-180."""
     from .jobs import evaluate as E
 
-    _check_plot_file(plot_file, force)
+    _check_plot_file(plot_file, force, [solution_file, truth_file])
     interval = E.parse_interval(remove_offset) if remove_offset is not None else None
     s = E.evaluate(solution_file, truth_file, t_from=t_from, t_to=t_to, remove_offset=interval,
                    per_epoch_file=per_epoch_file, force=force, plot_file=plot_file)
@@ -489,17 +489,14 @@ def allan(imu_file, plot_file, toml_file, force, no_unit_check, first_row, as_js
     are refused."""
     from . import io
     from .analysis.allan import plot_allan
-    from .files import check_folder_writable, same_file, write_text
+    from .files import check_folder_writable, check_outputs, same_file, write_text
     from .jobs.allan import allan_report
 
-    _check_plot_file(plot_file, force)
+    _check_plot_file(plot_file, force, [imu_file])
     if toml_file:
         if plot_file and same_file(toml_file, plot_file):
             raise InputError(f"{toml_file}: given as both --plot and --toml; choose two files")
-        if same_file(toml_file, imu_file):
-            raise InputError(f"{toml_file}: is the input of this command; refusing to overwrite it")
-        if Path(toml_file).exists() and not force:
-            raise InputError(f"{toml_file}: already exists; refusing to overwrite it (use --force)")
+        check_outputs([toml_file], [imu_file], force)
         check_folder_writable(Path(toml_file).resolve().parent)
     imu = io.read_imu(imu_file, check_units=not no_unit_check, first_row=first_row)
     try:

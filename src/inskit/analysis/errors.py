@@ -55,24 +55,34 @@ class NavError:
 TRUTH_GAP_FACTOR = 5.0
 
 
-def truth_covers(t, truth_time, factor=TRUTH_GAP_FACTOR):
+def truth_gaps(truth_time, factor=TRUTH_GAP_FACTOR):
+    """``(gaps, limit)``: the ``(k, 2)`` array of the ``[start, end]`` [s]
+    of every interval of the truth longer than ``factor`` median sampling
+    intervals, and that limit [s].  One pass over the truth: a streamed
+    run computes it once and hands it to :func:`nav_error_part` for every
+    segment."""
+    tt = np.asarray(truth_time, float)
+    steps = np.diff(tt)
+    limit = factor * float(np.median(steps)) if len(steps) else 0.0
+    big = np.nonzero(steps > limit)[0]
+    return np.column_stack([tt[big], tt[big + 1]]) if len(big) else np.zeros((0, 2)), limit
+
+
+def truth_covers(t, truth_time, factor=TRUTH_GAP_FACTOR, gaps=None):
     """Which times ``t`` a truth sampled at ``truth_time`` can score: inside
-    its span and between two truth samples at most ``factor`` median
-    sampling intervals apart (linear interpolation across a longer gap
+    its span and not strictly inside one of its gaps (:func:`truth_gaps`,
+    or the ``gaps`` array given; linear interpolation across a longer gap
     invents the motion: 60 s of a turn removed from a truth turned a 41 m
     RMS error into 65 m).  Returns a boolean mask."""
     tt = np.asarray(truth_time, float)
     t = np.asarray(t, float)
     inside = (t >= tt[0]) & (t <= tt[-1])
-    if len(tt) < 2:
-        return inside & (t == tt[0])
-    steps = np.diff(tt)
-    limit = factor * float(np.median(steps))
-    if not (steps > limit).any():
+    if gaps is None:
+        gaps = truth_gaps(tt, factor)[0]
+    if not len(gaps):
         return inside
-    j = np.clip(np.searchsorted(tt, t, side="right") - 1, 0, len(tt) - 2)
-    exact = np.isin(t, tt)
-    return inside & ((steps[j] <= limit) | exact)
+    i = np.clip(np.searchsorted(gaps[:, 0], t, side="right") - 1, 0, len(gaps) - 1)
+    return inside & ~((t > gaps[i, 0]) & (t < gaps[i, 1]))
 
 
 def truth_coverage(t, truth_time, factor=TRUTH_GAP_FACTOR) -> dict:
@@ -83,26 +93,30 @@ def truth_coverage(t, truth_time, factor=TRUTH_GAP_FACTOR) -> dict:
     limit) and ``truth_gap_limit_s``."""
     tt = np.asarray(truth_time, float)
     t = np.asarray(t, float)
+    gaps, limit = truth_gaps(tt, factor)
     inside = (t >= tt[0]) & (t <= tt[-1])
-    ok = truth_covers(t, tt, factor)
-    steps = np.diff(tt)
-    limit = factor * float(np.median(steps)) if len(steps) else 0.0
-    big = np.nonzero(steps > limit)[0] if len(steps) else np.zeros(0, int)
+    ok = truth_covers(t, tt, gaps=gaps)
     return {"epochs": int(len(t)), "epochs_scored": int(ok.sum()), "epochs_outside_truth_span": int((~inside).sum()),
-            "epochs_in_truth_gaps": int((inside & ~ok).sum()),
-            "truth_gaps": [[float(tt[i]), float(tt[i + 1])] for i in big], "truth_gap_limit_s": limit}
+            "epochs_in_truth_gaps": int((inside & ~ok).sum()), "truth_gaps": gaps.tolist(),
+            "truth_gap_limit_s": limit}
 
 
-def nav_error(sol: NavSolution, truth: NavSolution) -> NavError:
+def nav_error(sol: NavSolution, truth: NavSolution, gaps=None) -> NavError:
     """Errors of ``sol`` against ``truth``, evaluated at the solution times
     the truth covers (:func:`truth_covers`: inside its span, not inside a
-    gap of the truth; truth interpolated linearly)."""
-    inside = truth_covers(sol.time, truth.time)
+    gap of the truth, ``gaps`` as :func:`truth_gaps` gives them; truth
+    interpolated linearly)."""
+    inside = truth_covers(sol.time, truth.time, gaps=gaps)
     if not inside.any():
         raise InputError(
             f"the solution ({sol.time[0]:.3f}..{sol.time[-1]:.3f} s) and the truth "
             f"({truth.time[0]:.3f}..{truth.time[-1]:.3f} s) do not overlap in time: mismatched time bases?"
         )
+    return _errors_at(sol, truth, inside)
+
+
+def _errors_at(sol, truth, inside):
+    """:func:`nav_error` at the rows ``inside`` (a non-empty mask)."""
     s = sol if inside.all() else NavSolution(sol.time[inside], sol.lla[inside], sol.v_n[inside], sol.q_nb[inside])
     tr = truth.interpolate(s.time)
     r_s = earth.lla_to_ecef(s.lla)
@@ -176,15 +190,17 @@ def summarize(err: NavError) -> dict:
     return ErrorSummary().add(err).result()
 
 
-def nav_error_part(sol: NavSolution, truth: NavSolution) -> NavError:
+def nav_error_part(sol: NavSolution, truth: NavSolution, gaps=None) -> NavError:
     """:func:`nav_error` of a part of a solution (a segment of a streamed
     run), empty where the part lies outside the truth's span (no error: the
-    whole run's check of the overlap is :meth:`ErrorSummary.result`)."""
-    inside = truth_covers(sol.time, truth.time)
+    whole run's check of the overlap is :meth:`ErrorSummary.result`).
+    ``gaps``: the truth's (:func:`truth_gaps`), computed once per run rather
+    than once per segment."""
+    inside = truth_covers(sol.time, truth.time, gaps=gaps)
     if not inside.any():
         e = np.zeros((0, 3))
         return NavError(np.zeros(0), e, e, e)
-    return nav_error(sol, truth)
+    return _errors_at(sol, truth, inside)
 
 
 def _epoch_tolerance(t):

@@ -270,15 +270,11 @@ def compare_schemes(scenario, outage, seed=0, schemes=("uncoupled", "open", "clo
                                          yaw_rad=np.radians(2.0))
     # GNSS on: after the first 60 s (start-up), outside every stretch without a used fix (this outage, the
     # scenario's own outages) and the 60 s of re-convergence after each
+    from .outages import gnss_data_gaps
+
     gnss_on = t > 60.0
-    tu = gnss.time[use]
-    if len(tu):
-        step = float(np.median(np.diff(tu))) if len(tu) > 1 else 1.0
-        bounds = np.r_[t[0], tu, t[-1]]
-        for j in np.nonzero(np.diff(bounds) > 2.0 * step)[0]:  # the gaps only (a few), not every fix
-            gnss_on &= ~((t > bounds[j]) & (t < bounds[j + 1] + 60.0))
-    else:
-        gnss_on[:] = False
+    for a, b in gnss_data_gaps(gnss.time[use], float(t[0]), float(t[-1])):  # the gaps only (a few), not every fix
+        gnss_on &= ~((t > a) & (t < b + 60.0)) if a > t[0] else ~(t < b + 60.0)
     rows = []
     lever = tuple(scenario.gnss.lever_arm_b_m)
     for scheme in schemes:

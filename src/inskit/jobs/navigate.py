@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import earth, io
-from ..alignment.coarse import Startup, static_intervals
+from .. import io
+from ..alignment.coarse import Startup, gnss_speed, static_intervals
 from ..errors import InputError
 from ..files import write_text
 from ..io.rtklib import read_pos, read_rtklibexplorer_imu
@@ -192,7 +192,7 @@ def _smooth_streamed(cfg, out, store, scratch, imu, settings, stream_dir, log=No
     their truth errors into ``truth_parts["smoothed"]``); returns the
     smoothed track at the forward run's kept rows and the smoothed files'
     streams."""
-    from ..analysis.errors import nav_error_part
+    from ..analysis.errors import nav_error_part, truth_gaps
     from ..integration.engine import NAV_SIGMA_BLOCKS, SEGMENT_ROWS
     from ..integration.smoother import backward_pass, smooth_rows
 
@@ -201,6 +201,7 @@ def _smooth_streamed(cfg, out, store, scratch, imu, settings, stream_dir, log=No
     nodes = backward_pass(store.block, store.m, lay.initial_covariance())
     nodes.t = imu.time[nodes.k]
     streams = open_streams(cfg, Path(stream_dir), imu.time, settings, "smoothed")
+    gaps = truth_gaps(truth.time)[0] if truth_parts is not None else None  # once, not per segment
     try:
         N = len(imu)
         for a in range(0, N, SEGMENT_ROWS):
@@ -212,7 +213,7 @@ def _smooth_streamed(cfg, out, store, scratch, imu, settings, stream_dir, log=No
             for w in streams:
                 w.write(sol, a)
             if truth_parts is not None:
-                truth_parts["smoothed"].add(nav_error_part(sol, truth))
+                truth_parts["smoothed"].add(nav_error_part(sol, truth, gaps))
         for w in streams:
             w.close()
     except BaseException:
@@ -373,8 +374,9 @@ ODOMETER_SPEED_RATIO = (0.8, 1.25)
 
 def check_odometer_speed(path, t, v, gnss: GnssData, min_speed_m_s=2.0):
     """Refuse an odometer log whose speed is not the GNSS track's: the
-    median ratio of odometer speed to the speed of the fixes (differenced
-    positions, interpolated to the odometer times) while both say the
+    median ratio of odometer speed to the speed of the fixes
+    (:func:`inskit.alignment.coarse.gnss_speed`, interpolated to the
+    odometer times) while both say the
     vehicle moves faster than ``min_speed_m_s``, outside
     :data:`ODOMETER_SPEED_RATIO` (3.6: km/h under an m/s header; 2.24: mph;
     the filter then rejected the GNSS and blamed it).  A scale error of a
@@ -382,16 +384,11 @@ def check_odometer_speed(path, t, v, gnss: GnssData, min_speed_m_s=2.0):
     Silent when the track gives fewer than 10 such moments."""
     if len(gnss.time) < 3:
         return
-    p = earth.lla_to_ned(gnss.lla, gnss.lla[0])
-    tm = 0.5 * (gnss.time[1:] + gnss.time[:-1])
-    dt = np.diff(gnss.time)
-    ok = dt > 0
-    sp = np.hypot(*(np.diff(p[:, :2], axis=0)[ok] / dt[ok, None]).T)
-    tm = tm[ok]
-    inside = (t >= tm[0]) & (t <= tm[-1])
+    sp = gnss_speed(gnss)[0]
+    inside = (t >= gnss.time[0]) & (t <= gnss.time[-1])
     if inside.sum() < 10:
         return
-    g = np.interp(t[inside], tm, sp)
+    g = np.interp(t[inside], gnss.time, sp)
     o = np.abs(np.asarray(v, float)[inside])
     moving = (g > min_speed_m_s) & (o > 0.5 * min_speed_m_s)
     if moving.sum() < 10:
@@ -799,7 +796,7 @@ def _run_streamed(cfg, imu, gnss, windows, initial, meas, settings, extra, smoot
     import shutil
     import tempfile
 
-    from ..analysis.errors import ErrorSummary, nav_error_part
+    from ..analysis.errors import ErrorSummary, nav_error_part, truth_gaps
     from ..integration.engine import NAV_SIGMA_BLOCKS, Segment
     from ..integration.smoother import DiskStore
 
@@ -812,6 +809,7 @@ def _run_streamed(cfg, imu, gnss, windows, initial, meas, settings, extra, smoot
     # the truth errors of every row, summed segment by segment (the kept rows would weigh the outages'
     # full-rate rows above the rest)
     truth_parts = None if truth is None else {"forward": ErrorSummary(), "smoothed": ErrorSummary()}
+    gaps = None if truth is None else truth_gaps(truth.time)[0]  # once, not per segment
 
     def write(sg):
         extra_cols = lay.columns(sg.aux, sg.sigma, sigma_blocks=NAV_SIGMA_BLOCKS)
@@ -821,7 +819,7 @@ def _run_streamed(cfg, imu, gnss, windows, initial, meas, settings, extra, smoot
         if scratch is not None:
             scratch(sg)
         if truth_parts is not None:
-            truth_parts["forward"].add(nav_error_part(sol, truth))
+            truth_parts["forward"].add(nav_error_part(sol, truth, gaps))
     pipe = _Pipe(write)
 
     def sink(sg):  # the views are the engine's buffers: copied, then converted and written on the worker
