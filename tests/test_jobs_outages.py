@@ -294,3 +294,50 @@ def test_the_start_up_looks_only_at_fixes_inside_the_imu_log(drive, tmp_path):
                             "output": {"plots": False}}, base_dir=tmp_path, source="short")
     with pytest.raises(InputError, match=r"inside the IMU log's span .*fixes lie outside it"):
         navigate(cfg)
+
+
+def _east_drive_with_errors(accel_m_s2, cross_m, v_east=10.0):
+    """Truth driving east; the solution runs ahead by accel (t - 19)^2 / 2 and
+    ``cross_m`` to the right (south) inside the window 20..30 s; noise-free
+    fixes at 4 Hz."""
+    t = np.arange(4001) / 100.0
+    ref = np.array([np.radians(45.0), np.radians(7.0), 300.0])
+    n = len(t)
+    lla = earth.ned_to_lla(np.column_stack([np.zeros(n), v_east * t, np.zeros(n)]), ref)
+    yaw_east = np.tile([0.0, 0.0, np.pi / 2], (n, 1))
+    truth = NavSolution.from_euler(t, lla, np.tile([0.0, v_east, 0.0], (n, 1)), yaw_east)
+    inside = (t > 19.0) & (t < 31.0)
+    along = np.where(inside, 0.5 * accel_m_s2 * (t - 19.0) ** 2, 0.0)
+    south = np.where(inside, cross_m, 0.0)
+    sol = NavSolution(t, earth.ned_to_lla(np.column_stack([-south, along, 0 * t]), truth.lla), truth.v_n, truth.q_nb)
+    tf = np.arange(161) * 0.25
+    k = np.round(tf * 100).astype(int)
+    ant = earth.ned_to_lla(np.array([truth.C_nb[i] @ LEVER_B for i in k]), truth.lla[k])
+    return sol, GnssData(tf, ant, np.full((len(tf), 3), 0.01))
+
+
+def test_the_outage_end_error_is_split_along_and_across_the_reference_track():
+    a = 0.08  # 8 mg: what a 0.47 deg pitch error gives
+    sol, gnss = _east_drive_with_errors(a, 0.3)
+    (r,) = score_outages(sol, gnss, [(20.0, 30.0)], LEVER_B, t0=0.0).table
+    assert r["outage_end_along_track_vs_withheld_fixes_m"] == pytest.approx(0.5 * a * 11.0 ** 2, abs=1e-4)
+    # right of east is south; 1 mm: the direction from fixes 5 m apart on the ellipsoid (not a flat plane)
+    assert r["outage_end_cross_track_vs_withheld_fixes_m"] == pytest.approx(0.3, abs=1e-3)
+    assert r["outage_along_track_accel_fit_m_s2"] == pytest.approx(a, rel=1e-4)
+    assert r["horizontal_m"] == pytest.approx(np.hypot(0.5 * a * 121.0, 0.3), abs=1e-4)
+    # behind and to the left flip both signs; a velocity error alone fits no acceleration
+    sol, gnss = _east_drive_with_errors(-a, -0.3)
+    (r,) = score_outages(sol, gnss, [(20.0, 30.0)], LEVER_B, t0=0.0).table
+    assert r["outage_end_along_track_vs_withheld_fixes_m"] < 0 and r["outage_end_cross_track_vs_withheld_fixes_m"] < 0
+    assert r["outage_along_track_accel_fit_m_s2"] == pytest.approx(-a, rel=1e-4)
+
+
+def test_a_standing_reference_has_no_track_to_split_along():
+    sol, gnss = _east_drive_with_errors(0.05, 0.2, v_east=0.0)
+    sc = score_outages(sol, gnss, [(20.0, 30.0)], LEVER_B, t0=0.0)
+    (r,) = sc.table
+    assert r["outage_end_along_track_vs_withheld_fixes_m"] is None
+    assert r["outage_end_cross_track_vs_withheld_fixes_m"] is None
+    assert r["outage_along_track_accel_fit_m_s2"] is None
+    assert sc.summary["outage_end_along_track_vs_withheld_fixes_rms_m"] is None
+    assert r["horizontal_m"] > 0  # the horizontal figure is still there

@@ -16,7 +16,7 @@ from ..errors import InputError
 from ..files import write_text
 from ..io.rtklib import read_pos, read_rtklibexplorer_imu
 from ..types import GnssData, ImuData, NavState
-from ..units import DEG
+from ..units import DEG, MILLI_G
 from ..integration import (FilterOutput, FilterSettings, GnssPosition, GnssVelocity, InitialUncertainty,
                            NonHolonomic, SensorNoise, Track, ZeroVelocity, rts_smooth, run_filter, run_uncoupled)
 from ..types import NavSolution
@@ -1150,6 +1150,11 @@ def fmt_or_na(x, fmt=".3f"):
     return "n/a" if x is None else format(x, fmt)
 
 
+def _mg(a_m_s2):
+    """An acceleration [m/s^2] in mg (standard gravity), None kept."""
+    return None if a_m_s2 is None else a_m_s2 / MILLI_G
+
+
 def outage_table_text(s: dict) -> str:
     """The outage table and its figures, each named by its reference: the
     withheld fixes (their noise included), the truth when one was given, and
@@ -1157,13 +1162,16 @@ def outage_table_text(s: dict) -> str:
     rows = s["outage_table"]
     truth = "outages_vs_truth" in s
     head = (f"{'outage':>6} {'window [s after first fix]':>27} {'end horiz [m]':>14} {'end vert [m]':>13} "
-            f"{'worst horiz [m]':>16}")
+            f"{'worst horiz [m]':>16} {'along [m]':>10} {'cross [m]':>10} {'accel fit [mg]':>15}")
     lines = [f"{'':>6} {'':>27} {'--- against the withheld fixes (noise included) ---':>45}"
-             + (f"  {'--- against the truth ---':>31}" if truth else ""),
+             + (f"{'':>38}  {'--- against the truth ---':>31}" if truth else ""),
              head + (f" {'end horiz [m]':>14} {'worst horiz [m]':>16}" if truth else "")]
     for r in rows:
         line = (f"{r['k']:>6} {r['start_s']:>12.2f} .. {r['end_s']:>9.2f}   {r['horizontal_m']:>13.3f} "
-                f"{r['vertical_m']:>13.3f} {r['worst_horizontal_m']:>16.3f}")
+                f"{r['vertical_m']:>13.3f} {r['worst_horizontal_m']:>16.3f} "
+                f"{fmt_or_na(r.get('outage_end_along_track_vs_withheld_fixes_m'), '.2f'):>10} "
+                f"{fmt_or_na(r.get('outage_end_cross_track_vs_withheld_fixes_m'), '.2f'):>10} "
+                f"{fmt_or_na(_mg(r.get('outage_along_track_accel_fit_m_s2')), '.1f'):>15}")
         if truth:
             line += f" {fmt_or_na(r.get('outage_end_h_vs_truth_m')):>14} {fmt_or_na(r.get('outage_worst_h_vs_truth_m')):>16}"
         lines.append(line)
@@ -1172,6 +1180,11 @@ def outage_table_text(s: dict) -> str:
                      f"horizontal RMS {s['outage_end_horizontal_rms_m']:.3f} m, median "
                      f"{s['outage_end_horizontal_median_m']:.3f} m, max {s['outage_end_horizontal_max_m']:.3f} m; "
                      f"worst in the outage RMS {s['outage_worst_horizontal_rms_m']:.3f} m")
+    if rows and s.get("outage_end_along_track_vs_withheld_fixes_rms_m") is not None:
+        lines.append(f"outage-end error along the track RMS {s['outage_end_along_track_vs_withheld_fixes_rms_m']:.3f} m, "
+                     f"across it {s['outage_end_cross_track_vs_withheld_fixes_rms_m']:.3f} m (along: + ahead, cross: "
+                     "+ right of travel); accel fit: the constant along-track acceleration error that best fits "
+                     "each outage's error growth (1 mg is a tilt of 0.057 deg or a forward accelerometer bias of 1 mg)")
     if truth and s.get("outages_vs_truth"):
         lines.append(f"against the truth, {s['solution']} solution: outage-end horizontal RMS "
                      f"{fmt_or_na(s['outage_end_h_vs_truth_rms_m'])} m, max {fmt_or_na(s['outage_end_h_vs_truth_max_m'])} m (the "

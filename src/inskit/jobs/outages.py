@@ -87,7 +87,15 @@ class OutageScore:
         ``vertical_m``, ``worst_horizontal_m``, ``worst_time_s`` (the earlier
         keys, all against the withheld fixes), and their named twins
         ``outage_end_{h,v,3d}_vs_withheld_fixes_m``,
-        ``outage_worst_{h,v,3d}_vs_withheld_fixes_m``.  With a truth also
+        ``outage_worst_{h,v,3d}_vs_withheld_fixes_m``, the end error split
+        along and across the reference track,
+        ``outage_end_along_track_vs_withheld_fixes_m`` (positive: ahead) and
+        ``outage_end_cross_track_vs_withheld_fixes_m`` (positive: right), and
+        ``outage_along_track_accel_fit_m_s2``, the constant along-track
+        acceleration error that best fits the error's growth (a tilt of
+        ``a / g`` rad or a forward accelerometer bias; see
+        :func:`along_track_accel_fit`); each ``None`` when the reference
+        stands still or too few fixes fall inside.  With a truth also
         ``outage_end_{h,v,3d}_vs_truth_m``, ``outage_end_time_vs_truth_s``,
         ``outage_worst_{h,v,3d}_vs_truth_m``, ``outage_worst_time_vs_truth_s``
         and ``unaided_from_s``, ``unaided_to_s`` (the used fixes that bound
@@ -99,7 +107,9 @@ class OutageScore:
         ``outage_end_vertical_rms_m``, ``outage_worst_horizontal_rms_m``,
         ``..._max_m`` and their twins
         ``outage_{end,worst}_h_vs_withheld_fixes_{rms,median,max}_m``,
-        ``outage_{end,worst}_{v,3d}_vs_withheld_fixes_rms_m``.  The fit to the
+        ``outage_{end,worst}_{v,3d}_vs_withheld_fixes_rms_m``,
+        ``outage_end_{along,cross}_track_vs_withheld_fixes_rms_m`` (over the
+        outages where the reference moves).  The fit to the
         used fixes, which is not an accuracy (the filter was fed those fixes):
         ``fit_to_used_fixes_h_rms_m``, ``fit_to_used_fixes_v_rms_m``,
         ``fit_to_used_fixes_count`` and the earlier names
@@ -116,6 +126,71 @@ class OutageScore:
 
     table: list
     summary: dict
+
+
+#: Below this reference speed [m/s] an outage's error has no along- and cross-track parts.
+TRACK_MIN_SPEED_M_S = 0.5
+
+
+def track_components(gnss: GnssData, idx, d_ned):
+    """Split horizontal errors at fixes into along- and cross-track parts.
+
+    The direction of travel at each fix comes from the reference itself: the
+    central difference of the neighbouring fixes (one-sided at either end of
+    the file), never from the solution under test.
+
+    Parameters
+    ----------
+    gnss : GnssData
+        The reference fixes.
+    idx : (m,) array of int
+        Indices of the fixes the errors belong to.
+    d_ned : (m, 3) array
+        Solution minus reference, NED [m].
+
+    Returns
+    -------
+    along, cross : (m,) arrays [m]
+        Along-track error (positive: the solution is ahead) and cross-track
+        error (positive: to the right of the direction of travel); NaN where
+        the reference moves slower than :data:`TRACK_MIN_SPEED_M_S`.
+    """
+    idx = np.asarray(idx, dtype=int)
+    n = len(gnss.time)
+    lo, hi = np.maximum(idx - 1, 0), np.minimum(idx + 1, n - 1)
+    along = np.full(len(idx), np.nan)
+    cross = np.full(len(idx), np.nan)
+    for j, (a, b) in enumerate(zip(lo, hi)):  # a handful of fixes per outage
+        dt = gnss.time[b] - gnss.time[a]
+        if b == a or dt <= 0:
+            continue
+        step = earth.lla_to_ned(gnss.lla[b], gnss.lla[a])[:2]
+        speed = float(np.hypot(*step)) / dt
+        if speed < TRACK_MIN_SPEED_M_S:
+            continue
+        u = step / np.hypot(*step)
+        along[j] = d_ned[j, 0] * u[0] + d_ned[j, 1] * u[1]
+        cross[j] = -d_ned[j, 0] * u[1] + d_ned[j, 1] * u[0]
+    return along, cross
+
+
+def along_track_accel_fit(t, along):
+    """The constant along-track acceleration error that best explains an
+    outage's along-track error growth.
+
+    Least squares of ``e(t) = e0 + v0 (t - t_0) + a (t - t_0)^2 / 2`` over the
+    withheld fixes; ``a`` is what a tilt error ``a / g`` [rad] or a forward
+    accelerometer bias ``a`` would give.  ``None`` with fewer than four usable
+    fixes or a span under 2 s (a quadratic is then not determined).
+    """
+    ok = np.isfinite(along)
+    t, e = np.asarray(t, dtype=float)[ok], np.asarray(along, dtype=float)[ok]
+    if len(t) < 4 or t[-1] - t[0] < 2.0:
+        return None
+    tau = t - t[0]
+    A = np.stack([np.ones_like(tau), tau, 0.5 * tau ** 2], axis=1)
+    coef = np.linalg.lstsq(A, e, rcond=None)[0]
+    return float(coef[2])
 
 
 def _rms(x):
@@ -138,6 +213,9 @@ def _summaries(rows, ref):
         out.update(_aggregate(rows, f"outage_{what}_h_vs_{ref}_m", ("rms", "median", "max")))
         out.update(_aggregate(rows, f"outage_{what}_v_vs_{ref}_m"))
         out.update(_aggregate(rows, f"outage_{what}_3d_vs_{ref}_m"))
+    if ref == "withheld_fixes":
+        out.update(_aggregate(rows, "outage_end_along_track_vs_withheld_fixes_m"))
+        out.update(_aggregate(rows, "outage_end_cross_track_vs_withheld_fixes_m"))
     return out
 
 
@@ -178,6 +256,14 @@ def gnss_data_gaps(fix_time, t_start, t_end):
     edges = np.concatenate([[t_start], tf, [t_end]])
     d = np.diff(edges)
     return [(float(edges[i]), float(edges[i + 1])) for i in np.nonzero(d > limit)[0]]
+
+
+def _track_keys(gnss, inside, d_all):
+    along, cross = track_components(gnss, inside, d_all)
+    fin = lambda x: float(x) if np.isfinite(x) else None  # noqa: E731
+    return {"outage_end_along_track_vs_withheld_fixes_m": fin(along[-1]),
+            "outage_end_cross_track_vs_withheld_fixes_m": fin(cross[-1]),
+            "outage_along_track_accel_fit_m_s2": along_track_accel_fit(gnss.time[inside], along)}
 
 
 def _truth_scores(sol: NavSolution, truth: NavSolution, gnss: GnssData, windows, rows, t0):
@@ -285,7 +371,8 @@ def score_outages(sol: NavSolution, gnss: GnssData, windows, lever_arm_b, t0=Non
                      "outage_end_3d_vs_withheld_fixes_m": float(n_all[-1]),
                      "outage_worst_h_vs_withheld_fixes_m": float(h_all.max()),
                      "outage_worst_v_vs_withheld_fixes_m": float(v_all.max()),
-                     "outage_worst_3d_vs_withheld_fixes_m": float(n_all.max())})
+                     "outage_worst_3d_vs_withheld_fixes_m": float(n_all.max()),
+                     **_track_keys(gnss, inside, d_all)})
     hs = np.asarray([r["horizontal_m"] for r in rows])
     vs = np.asarray([r["vertical_m"] for r in rows])
     worst = np.asarray([r["worst_horizontal_m"] for r in rows])

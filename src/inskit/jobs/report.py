@@ -635,14 +635,18 @@ def _outage_table(s, solution):
         f"<tr><td>{r['k']}</td><td>{r['start_s']:.2f}</td><td>{r['end_s']:.2f}</td>"
         f"<td>{_num(r.get('horizontal_m'))}</td><td>{_num(r.get('vertical_m'))}</td>"
         f"<td>{_num(r.get('worst_horizontal_m'))}</td><td>{_num(r.get('worst_time_s'), '.2f')}</td>"
+        f"<td>{_num(r.get('outage_end_along_track_vs_withheld_fixes_m'), '.2f')}</td>"
+        f"<td>{_num(r.get('outage_end_cross_track_vs_withheld_fixes_m'), '.2f')}</td>"
         + (f"<td>{_num(r.get('outage_end_h_vs_truth_m'))}</td><td>{_num(r.get('outage_worst_h_vs_truth_m'))}</td>"
            if truth else "") + "</tr>"
         for r in rows)
     note = (f"<p class=note>Errors of the {_e(solution)} solution against the withheld fixes (their noise "
-            "included)" + ("; the last two columns against the truth, from the last used fix before the window "
-                           "to the next" if truth else "") + "; windows in seconds after the first GNSS fix.</p>")
+            "included; the end error split along the reference track, + ahead, and across it, + right)"
+            + ("; the last two columns against the truth, from the last used fix before the window to the next"
+               if truth else "") + "; windows in seconds after the first GNSS fix.</p>")
     return (note + "<table><tr><th>outage</th><th>start [s]</th><th>end [s]</th>"
             "<th>end horiz [m]</th><th>end vert [m]</th><th>worst horiz [m]</th><th>worst at [s]</th>"
+            "<th>end along-track [m]</th><th>end cross-track [m]</th>"
             + ("<th>end horiz vs truth [m]</th><th>worst horiz vs truth [m]</th>" if truth else "") + "</tr>"
             + body + "</table>")
 
