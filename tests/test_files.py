@@ -178,3 +178,42 @@ def test_a_folder_that_existed_is_never_taken_for_one_made_here(tmp_path, monkey
     files.check_folder_writable(pathlib.Path("x/../E/new"))
     files.remove_made_folders()
     assert (tmp_path / "E").is_dir() and not (tmp_path / "E" / "new").exists()
+
+
+def test_staged_files_land_whole_or_leave_the_old_set(tmp_path, monkeypatch):
+
+    from inskit.files import staged_files
+
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "a.txt").write_text("old a")
+    (out / "b.txt").write_text("old b")
+    # a complete set replaces the old one
+    with staged_files(out) as stage:
+        stage(out / "a.txt").write_text("new a")
+        stage(out / "c.txt").write_text("new c")
+    assert (out / "a.txt").read_text() == "new a" and (out / "c.txt").read_text() == "new c"
+    assert (out / "b.txt").read_text() == "old b"
+    assert sorted(p.name for p in out.iterdir()) == ["a.txt", "b.txt", "c.txt"]  # no staging folder left
+    # a move that fails midway undoes the ones already made
+    real = os.replace
+
+    failed = []
+
+    def failing(src, dst):  # the disk fills as the staged b.txt moves in (once)
+        if not failed and os.path.basename(dst) == "b.txt" and os.path.basename(os.path.dirname(src)).startswith(
+                ".staging-"):
+            failed.append(src)
+            raise OSError(28, "No space left on device")
+        return real(src, dst)
+
+    monkeypatch.setattr(os, "replace", failing)
+    with pytest.raises(InputError, match="could not be written"):
+        with staged_files(out) as stage:
+            stage(out / "a.txt").write_text("newer a")
+            stage(out / "d.txt").write_text("new d")
+            stage(out / "b.txt").write_text("newer b")
+    assert (out / "a.txt").read_text() == "new a"  # restored
+    assert (out / "b.txt").read_text() == "old b"
+    assert not (out / "d.txt").exists()  # the new file of the failed set went
+    assert failed and sorted(p.name for p in out.iterdir()) == ["a.txt", "b.txt", "c.txt"]

@@ -42,7 +42,8 @@ def staged_files(folder):
     to its final name (``os.replace``, same file system), on any error or
     interrupt the staging folder goes and the files already in ``folder``
     are left as they were (a failed ``--force`` run does not leave new files
-    beside old ones of another run)."""
+    beside old ones of another run).  The moves are undone too when one of
+    them fails (:func:`_commit`): the set lands whole or the old one stays."""
     import shutil
     import tempfile
 
@@ -58,9 +59,7 @@ def staged_files(folder):
 
     try:
         yield stage
-        for final, part in staged.items():
-            if part.exists():
-                os.replace(part, final)
+        _commit(staged, tmp / "previous")
     except OSError as exc:
         shutil.rmtree(tmp, ignore_errors=True)
         raise InputError(f"{folder}: the results could not be written ({exc.strerror or exc})") from None
@@ -68,6 +67,34 @@ def staged_files(folder):
         shutil.rmtree(tmp, ignore_errors=True)
         raise
     shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _commit(staged, previous):
+    """Move each staged file to its final name; should any move fail (or be
+    interrupted), undo the ones made: the files they replaced come back from
+    ``previous``, the new ones go, and the error is raised."""
+    previous.mkdir()
+    moved = []  # (final, the file it replaced or None)
+    try:
+        for final, part in staged.items():
+            if not part.exists():
+                continue
+            old = None
+            if final.exists():
+                old = previous / final.name
+                os.replace(final, old)
+            moved.append((final, old))
+            os.replace(part, final)
+    except BaseException:
+        for final, old in reversed(moved):
+            try:
+                if old is not None:
+                    os.replace(old, final)
+                else:
+                    final.unlink(missing_ok=True)
+            except OSError:
+                pass
+        raise
 
 
 #: the output folders :func:`check_folder_writable` made in this command (the deepest first)
