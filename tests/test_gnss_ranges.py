@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from inskit import earth
-from inskit.errors import ConfigError
+from inskit.errors import ConfigError, InputError
 from inskit.gnss import RangeTable, range_table, read_nav, read_obs, saastamoinen_delay, sagnac_rotate
 
 DATA = Path(__file__).resolve().parent / "data" / "gnss"
@@ -181,3 +181,45 @@ def test_abpo_full_day():
     assert tab.dropped["no_ephemeris"] == 803   # G08, unhealthy all day
     assert _rms(_clock_free_residual(tab)) < 5.0   # measured 3.36 m
     assert dt < 5.0                                 # measured 0.11 s
+
+
+def _relabel(path, tmp_path, letter):
+    """The walk excerpt with its GPS satellites renamed to another system
+    (and the Galileo/SBAS lines dropped): a GLONASS- or BeiDou-only file."""
+    lines = Path(path).read_text().split("\n")
+    end = next(k for k, line in enumerate(lines) if "END OF HEADER" in line)
+    out = [(letter + line[1:]) if line[:1] == "G" and "SYS / # / OBS TYPES" in line else line
+           for line in lines[:end + 1]]
+    i = end + 1
+    while i < len(lines):
+        line = lines[i]
+        if line.startswith(">"):
+            n = int(line[32:35])
+            sats = [letter + s[1:] for s in lines[i + 1:i + 1 + n] if s[:1] == "G"]
+            out += [line[:32] + f"{len(sats):3d}" + line[35:]] + sats
+            i += 1 + n
+        else:
+            i += 1
+    p = tmp_path / f"only_{letter}.obs"
+    p.write_text("\n".join(out) + "\n")
+    return p
+
+
+@pytest.mark.parametrize("letter, name", [("R", "GLONASS"), ("C", "BeiDou")])
+def test_a_file_without_gps_or_galileo_is_refused_naming_what_it_holds(tmp_path, walk, letter, name):
+    """A GLONASS- or BeiDou-only file was refused as "no code 'C1C' in the
+    observations (have )": now the systems asked for and held are named."""
+    obs = read_obs(_relabel(WALK_OBS, tmp_path, letter))
+    held = obs.header["satellites_by_system"]
+    assert obs.sats == () and list(held) == [letter] and held[letter] > 4
+    with pytest.raises(InputError, match=rf"no satellite of the systems asked for \(GPS \(G\), Galileo \(E\)\).*"
+                                         rf"holds {name} \({letter}\): {held[letter]} satellites; only GPS"):
+        range_table(obs, walk[1])
+
+
+def test_a_system_absent_from_the_file_is_refused_naming_the_present_ones(abpo):
+    """systems=('E',) on GPS-only ABPO ended in "no epoch could be solved ...
+    rows dropped: none: does the navigation file cover ...?"."""
+    obs = read_obs(ABPO_OBS, systems=("E",))
+    with pytest.raises(InputError, match=r"Galileo \(E\).*holds GPS \(G\): \d+ satellites; use the system\(s\) G"):
+        range_table(obs, abpo[1], systems=("E",))

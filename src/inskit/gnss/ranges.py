@@ -60,7 +60,7 @@ from .constants import C, FREQ_L1, frequency
 from .ephemeris import sagnac_rotate, select_records, transmit_time
 from .rinex import NavData, ObsData
 
-__all__ = ["RangeTable", "range_table", "SECOND_CODES", "SIGMA_FACTOR"]
+__all__ = ["RangeTable", "range_table", "require_systems", "SECOND_CODES", "SIGMA_FACTOR"]
 
 #: Second-frequency codes tried, in order, for ionosphere-free rows.
 SECOND_CODES = {
@@ -177,6 +177,44 @@ def _receiver_positions(obs: ObsData, rx_e):
     return np.where(good[:, None], rx, rx[nearest])
 
 
+def require_systems(obs: ObsData, systems):
+    """Refuse observations without a single satellite of ``systems``.
+
+    Without this check a GLONASS-only file, or ``systems=('E',)`` on a
+    GPS-only one, ended in "no code 'C1C' in the observations (have )" or in
+    "no epoch could be solved ... does the navigation file cover ...".
+
+    Parameters
+    ----------
+    obs : ObsData
+    systems : sequence of str
+        System letters asked for (``'G'``, ``'E'``).
+
+    Raises
+    ------
+    InputError
+        Naming the file, the systems asked for and those the file holds
+        (``obs.header['satellites_by_system']``).
+    """
+    from .rinex import _SYSTEM_NAMES
+
+    systems = tuple(systems)
+    if any(s[0] in systems for s in obs.sats):
+        return
+    asked = ", ".join(f"{_SYSTEM_NAMES.get(s, s)} ({s})" for s in systems) or "none"
+    held = (getattr(obs, "header", None) or {}).get("satellites_by_system") or {}
+    if held:
+        have = ", ".join(f"{_SYSTEM_NAMES.get(s, s)} ({s}): {n} satellite{'s' if n != 1 else ''}"
+                         for s, n in held.items())
+        usable = [s for s in held if s in ("G", "E")]
+        hint = (f"; use the system(s) {', '.join(usable)} (spp --systems, or [gnss] systems)" if usable else
+                "; only GPS (G) and Galileo (E) broadcast orbits are supported")
+        raise InputError(f"{obs.path}: no satellite of the systems asked for ({asked}) in the observations; the "
+                         f"file holds {have}{hint}")
+    raise InputError(f"{obs.path}: no satellite observations in the file (systems asked for: {asked}): an empty "
+                     "observation file?")
+
+
 def _code(obs: ObsData, code, what):
     arr = obs.obs.get(code)
     if arr is None:
@@ -217,6 +255,8 @@ def range_table(obs: ObsData, nav: NavData, *, rx_e=None, mask_deg=10.0, code="C
     ------
     ConfigError
         Unknown model name, missing code, or no receiver position.
+    InputError
+        No satellite of ``systems`` in ``obs`` (:func:`require_systems`).
     """
     if iono not in ("klobuchar", "iono-free", "none"):
         raise ConfigError(f"iono must be 'klobuchar', 'iono-free' or 'none', got {iono!r}")
@@ -234,6 +274,7 @@ def range_table(obs: ObsData, nav: NavData, *, rx_e=None, mask_deg=10.0, code="C
     else:
         iono_src, alpha, beta = "default", KLOBUCHAR_DEFAULT_ALPHA, KLOBUCHAR_DEFAULT_BETA
 
+    require_systems(obs, systems)
     rx_ep = _receiver_positions(obs, rx_e)
     sats = np.array(obs.sats, dtype="<U3")
     sat_sys = np.array([s[0] for s in obs.sats], dtype="<U1")

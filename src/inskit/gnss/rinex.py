@@ -269,7 +269,9 @@ class ObsData:
     header : dict
         Header lines by label (content columns 1-60), plus parsed entries
         ``'antenna_delta_hen'`` (3,) [m], ``'receiver'``, ``'antenna'``,
-        ``'marker'``, ``'time_system'``, ``'obs_types'`` ({system: codes}).
+        ``'marker'``, ``'time_system'``, ``'obs_types'`` ({system: codes}),
+        ``'satellites_by_system'`` ({system letter: number of satellites in
+        the file}, the systems not kept included).
     epoch_flag : (n_epoch,) int8 ndarray
         0 or 1 (power failure before this epoch).
     clock_offset_s : (n_epoch,) ndarray
@@ -567,6 +569,8 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
     sysch = np.array([n[0] for n in names], dtype="<U1") if names.size else np.zeros(0, "<U1")
     keep = np.isin(sysch, list(keep_sys))
     sats = tuple(sorted(set(names[keep].tolist())))
+    # every system the file holds, kept or not: a consumer that finds none of its systems can say what is there
+    in_file = {s: len(set(names[sysch == s].tolist())) for s in sorted(set(sysch.tolist()))}
     sat_arr = np.array(sats, dtype="<U3")
     col = np.searchsorted(sat_arr, names) if sats else np.zeros(len(names), np.int64)
 
@@ -608,7 +612,7 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
 
     return ObsData(
         path=str(path), version=version, time=time, sats=sats, obs=obs, lli=lli or None,
-        approx_position_e=approx, interval_s=interval, header={**header, **info},
+        approx_position_e=approx, interval_s=interval, header={**header, **info, "satellites_by_system": in_file},
         epoch_flag=np.asarray(ep_flag, dtype=np.int8), clock_offset_s=clock, skipped_events=skipped,
     )
 
