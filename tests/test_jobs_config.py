@@ -167,6 +167,15 @@ def test_loose_keys_with_tight_coupling():
         _cfg(TIGHT, gnss={"use_velocity": True, "velocity_delay_s": 0.1})
 
 
+def test_gnss_systems_empty_or_repeated_are_refused_naming_the_key():
+    # an empty list reached the range table as "no code 'C1C' in the observations (have )"
+    with pytest.raises(ConfigError, match=r"field 'gnss\.systems': List should have at least 1 item"):
+        _cfg(TIGHT, gnss={"systems": []})
+    with pytest.raises(ConfigError, match=r"field 'gnss\.systems': each system once: \['G', 'E', 'G'\] lists "
+                                          r"\['G'\] twice"):
+        _cfg(TIGHT, gnss={"systems": ["G", "E", "G"]})
+
+
 def test_gnss_error_tau_needs_its_sigma():
     assert _cfg(LOOSE, gnss={"error_sigma_m": 0.03, "error_tau_s": 5.0}).gnss.error_tau_s == 5.0
     with pytest.raises(ConfigError, match=r"field 'gnss\.error_tau_s': gnss\.error_tau_s would be ignored"):

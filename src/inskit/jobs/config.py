@@ -168,7 +168,8 @@ class GnssSection(_Strict):
     obs: Path | None = Field(None, description="RINEX 2/3 observation file (tight coupling, or loose coupling "
                              "on our own single-point fixes)")
     nav: Path | None = Field(None, description="RINEX 2/3 navigation file with the broadcast ephemerides")
-    systems: list[Literal["G", "E"]] = Field(["G", "E"], description="satellite systems used (GPS, Galileo)")
+    systems: list[Literal["G", "E"]] = Field(["G", "E"], min_length=1, description="satellite systems used "
+                                             "(GPS, Galileo), each once")
     mask_deg: float = Field(10.0, ge=0, lt=90, description="elevation mask")
     iono: Literal["klobuchar", "iono-free", "none"] = Field(
         "klobuchar", description="ionospheric correction: the broadcast Klobuchar model, the dual-frequency "
@@ -188,6 +189,13 @@ class GnssSection(_Strict):
                                       "velocity; withheld in outage windows like the fixes")
     speed_course_min_speed_m_s: float = Field(0.5, ge=0, description="below this speed (or 3 sigma of it) the "
                                               "course is meaningless and the reading is skipped [m/s]")
+    @field_validator("systems")
+    @classmethod
+    def _once(cls, v):
+        if len(set(v)) != len(v):
+            raise ValueError(f"each system once: {v} lists {sorted({s for s in v if v.count(s) > 1})} twice")
+        return v
+
     @model_validator(mode="after")
     def _inputs(self):
         if self.coupling == "loose" and self.file is None and (self.obs is None or self.nav is None):
