@@ -511,3 +511,49 @@ def test_spp_on_simulated_raw_data_is_consistent(tmp_path):
     nees = np.einsum("ni,nij,nj->n", e, np.linalg.inv(sol.cov_enu), e)
     assert abs(nees.mean() - 3.0) < 0.26, nees.mean()
     assert np.sqrt(np.mean(np.sum(e[:, :2] ** 2, axis=1))) < 1.5
+
+
+def test_a_wrong_header_position_does_not_stop_the_solution():
+    """A header APPROX POSITION XYZ at the antipode (a receiver's default,
+    a header copied from another site) made the first pass's elevation mask
+    drop every satellite, and spp refused the file as "no epoch could be
+    solved ... does the navigation file cover ...?".  It is now ignored with
+    a note, and the file solves as without a header position."""
+    import dataclasses
+
+    from inskit.gnss.rinex import read_nav, read_obs
+    from inskit.gnss.spp import spp
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        obs = read_obs(EXCERPTS / "abpo0080_0000-0200.15o")
+        nav = read_nav(EXCERPTS / "abpo0080.15n")
+        a = spp(dataclasses.replace(obs, approx_position_e=None), nav)
+        b = spp(dataclasses.replace(obs, approx_position_e=-ABPO_XYZ), nav)
+    assert b.solved.all()
+    np.testing.assert_allclose(b.r_e, a.r_e, atol=1e-6)
+    assert any("APPROX POSITION XYZ" in n and "12755 km from the solved positions" in n for n in b.notes)
+
+
+def test_an_unsolvable_file_names_the_cause():
+    """"no epoch could be solved" ended with the same question whatever the
+    cause; it now names it: an elevation mask leaving fewer than four
+    satellites (also when the first pass solved without the mask: no run of
+    zero fixes), or a navigation file of another day (both spans given)."""
+    from inskit.errors import InputError
+    from inskit.gnss.rinex import read_nav, read_obs
+    from inskit.gnss.spp import spp
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        obs = read_obs(EXCERPTS / "abpo0080_0000-0200.15o")
+        nav = read_nav(EXCERPTS / "abpo0080.15n")
+        other_day = read_nav(EXCERPTS / "gnss_1730.nav", systems=("G",))
+        with pytest.raises(InputError, match=r"the elevation mask of 60 deg leaves at most [0-3] satellite"):
+            spp(obs, nav, mask_deg=60.0)
+        with pytest.raises(InputError, match=r"the elevation mask of 89.9 deg leaves at most 0 satellite"):
+            spp(obs, nav, mask_deg=89.9)
+        with pytest.raises(InputError, match=r"no ephemeris of .*gnss_1730.nav is valid at the observation times: "
+                                             r"its records \(toe\) span 2025-08-28 18:00:00, the observations "
+                                             r"2015-01-08 00:00:00 \.\. 2015-01-08 0[12]:"):
+            spp(obs, other_day)

@@ -775,6 +775,10 @@ def _notes(time, status, why, high, excluded):
     return notes
 
 
+#: a header position this far [m] from the solved ones is wrong, not merely approximate
+_HEADER_FAR_M = 100.0e3
+
+
 def _approx_ok(r):
     if r is None:
         return False
@@ -828,6 +832,8 @@ def spp(obs, nav, *, mask_deg=10.0, iono="klobuchar", tropo="saastamoinen", raim
     t_rng = t_sol = 0.0
     t0 = _time.perf_counter()
     approx = getattr(obs, "approx_position_e", None)
+    rx = None
+    header_note = None
     if _approx_ok(approx):
         x0 = np.asarray(approx, dtype=float).reshape(3)
         tab = range_table(obs, nav, rx_e=x0, mask_deg=mask_deg, iono=iono, tropo=tropo, **kw)
@@ -836,9 +842,18 @@ def spp(obs, nav, *, mask_deg=10.0, iono="klobuchar", tropo="saastamoinen", raim
             warnings.simplefilter("ignore")
             first = solve_epochs(tab, time=obs.time, x0=x0, systems=systems, raim=raim, p_fa=p_fa,
                                  max_hdop=max_hdop)
-    else:
+        t_rng += t1 - t0
+        t_sol += _time.perf_counter() - t1
+        rx = np.where((first.status > 0)[:, None], first.r_e, np.nan)
+        if not np.isfinite(rx).any():
+            # the header's position may be wrong (a receiver's default, another site): its elevation mask
+            # then drops every satellite; solve without it, as for a header without a position
+            header_note = approx
+            rx = None
+    if rx is None:
         # no usable approximate position: satellite states do not depend on it, so take every row (no mask,
         # no atmosphere), weight them equally and solve from the Earth's centre; the models come in pass 2
+        t0 = _time.perf_counter()
         iono0 = "iono-free" if iono == "iono-free" else "none"
         tab = range_table(obs, nav, rx_e=np.array([0.0, 0.0, earth.A]), mask_deg=-90.0, iono=iono0, tropo="none",
                           **kw)
@@ -847,15 +862,22 @@ def spp(obs, nav, *, mask_deg=10.0, iono="klobuchar", tropo="saastamoinen", raim
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             first = solve_epochs(tab, time=obs.time, systems=systems, raim=False, p_fa=p_fa, max_hdop=1e9)
+        t_rng += t1 - t0
+        t_sol += _time.perf_counter() - t1
+        rx = np.where((first.status > 0)[:, None], first.r_e, np.nan)
     t2 = _time.perf_counter()
-    t_rng += t1 - t0
-    t_sol += t2 - t1
-    rx = np.where((first.status > 0)[:, None], first.r_e, np.nan)
     if not np.isfinite(rx).any():
-        dropped = ", ".join(f"{k} {v}" for k, v in (getattr(tab, "dropped", {}) or {}).items() if v)
         raise InputError(f"{getattr(obs, 'path', 'observations')}: no epoch could be solved ({n_ep} epochs, "
-                         f"{len(tab.pseudorange_m)} usable {code} ranges; rows dropped: {dropped or 'none'}): "
-                         "does the navigation file cover the observation time and systems?")
+                         f"{len(tab.pseudorange_m)} usable {code} ranges without elevation mask; "
+                         f"{_unsolvable_hint(obs, nav, tab)}")
+    if header_note is not None:
+        far = float(np.median(np.linalg.norm(rx[np.isfinite(rx).all(axis=1)] - header_note, axis=1)))
+        header_note = None if far < _HEADER_FAR_M else (
+            f"{getattr(obs, 'path', 'observations')}: the header's APPROX POSITION XYZ "
+            f"{np.round(approx, 1).tolist()} is {far / 1e3:.0f} km from the solved positions (the elevation "
+            "mask there left no epoch solvable): ignored, solved without it")
+        if header_note is not None:
+            warnings.warn(header_note, stacklevel=2)
     tab = range_table(obs, nav, rx_e=rx, mask_deg=mask_deg, iono=iono, tropo=tropo, **kw)
     t3 = _time.perf_counter()
     sol = solve_epochs(tab, time=obs.time, x0=np.where(np.isfinite(rx), rx, 0.0), systems=systems, raim=raim,
@@ -865,7 +887,54 @@ def spp(obs, nav, *, mask_deg=10.0, iono="klobuchar", tropo="saastamoinen", raim
     t_sol += t4 - t3
     if timing is not None:
         timing.update(ranges_s=t_rng, solve_s=t_sol, dropped=dict(getattr(tab, "dropped", {}) or {}))
+    if not (sol.status > 0).any():
+        raise InputError(f"{getattr(obs, 'path', 'observations')}: no epoch could be solved ({n_ep} epochs, "
+                         f"{len(tab.pseudorange_m)} usable {code} ranges above the {mask_deg:g} deg elevation mask; "
+                         f"{_unsolvable_hint(obs, nav, tab, mask_deg)}")
+    if header_note is not None:
+        sol = dataclasses.replace(sol, notes=(header_note,) + tuple(sol.notes))
     return sol
+
+
+def _span(t):
+    from .time import to_datetime64
+
+    t = np.asarray(t, dtype=float)
+    t = t[np.isfinite(t)]
+    if not t.size:
+        return "none"
+    a, b = (str(to_datetime64(x).astype("datetime64[s]")).replace("T", " ") for x in (t.min(), t.max()))
+    return a if a == b else f"{a} .. {b}"
+
+
+def _unsolvable_hint(obs, nav, tab, mask_deg=None):
+    """Why no epoch could be solved, from the range table's dropped rows
+    (a pass without mask): the navigation file's ephemeris span against
+    the observation span, or too few satellites per epoch."""
+    dropped = dict(getattr(tab, "dropped", {}) or {})
+    text = ", ".join(f"{k} {v}" for k, v in dropped.items() if v) or "none"
+    if dropped.get("no_ephemeris") and not dropped.get("below_mask") and len(tab.pseudorange_m) == 0:
+        systems = sorted({str(s)[0] for s in obs.sats})
+        have = sorted(set(np.asarray(nav.system).tolist()))
+        missing = [s for s in systems if s not in have]
+        why = (f"the navigation file {nav.path} has no record of system(s) {', '.join(missing)}"
+               if missing and len(missing) == len(systems) else
+               f"no ephemeris of {nav.path} is valid at the observation times: its records (toe) span "
+               f"{_span(nav.toe)}, the observations {_span(obs.time)} GPS time")
+        return f"rows dropped: {text}): {why}"
+    if dropped.get("no_second_code") and len(tab.pseudorange_m) == 0:
+        return f"rows dropped: {text}): iono-free needs a second-frequency code; use --iono klobuchar"
+    ep = np.asarray(getattr(tab, "epoch", np.zeros(0, int)), dtype=np.int64)
+    most = int(np.bincount(ep).max()) if ep.size else 0
+    if most < 4 and mask_deg is not None and dropped.get("below_mask"):
+        return (f"rows dropped: {text}): the elevation mask of {mask_deg:g} deg leaves at most {most} "
+                "satellite(s) at any epoch, fewer than the 4 a fix needs (position and one clock); lower --mask "
+                "(or [gnss] mask_deg)")
+    if most < 4:
+        return (f"rows dropped: {text}): at most {most} satellite(s) with an ephemeris at any epoch, fewer than "
+                "the 4 a fix needs (position and one clock); does the navigation file cover the observation time "
+                "and systems?")
+    return f"rows dropped: {text}): no solution converged"
 
 
 __all__ = [
