@@ -295,6 +295,9 @@ def navigate_job(array_file, layout_spec, out_dir, *, d=0.1, solver="auto", fram
     out = _check_out(out_dir, ["rates.csv", "solution.csv"], overwrite, [array_file, layout_spec, init_from, truth_file])
     data = read_array(array_file, layout)
     log(f"gyrofree navigate: {len(data)} samples, layout {layout.label}")
+    warnings_ = _sampling_warnings(data, array_file)
+    for w in warnings_:
+        log(f"warning: {w}")
     w0 = None if omega0 is None else _parse_vector(omega0, 3, "--omega0")
     initial = None
     ref_inertial = None
@@ -351,9 +354,28 @@ def navigate_job(array_file, layout_spec, out_dir, *, d=0.1, solver="auto", fram
                             "height_m": end.lla[2]}
     if truth_file:
         summary["truth_errors"] = _truth_errors(frame, nav, sol, truth_file)
+    summary["warnings"] = warnings_
     summary["elapsed_s"] = time.perf_counter() - t0
     summary["files"] = [str(out / "rates.csv"), str(out / "solution.csv")]
     return summary
+
+
+def _sampling_warnings(data, name):
+    """Gaps and rate changes of an array file's time column, in words, as
+    ``inskit mechanize`` reports them of an IMU log; a gap beyond
+    :data:`inskit.integration.gaps.MAX_GAP_S` is refused.  The solvers and
+    the navigation step across a gap from its two end samples (the rate
+    sign tracker integrates the angular acceleration over it), so a run
+    across one completes but is degraded, and says so."""
+    from ..integration.gaps import find_gaps, find_rate_changes, refuse_long_gaps
+
+    gaps = find_gaps(data)
+    refuse_long_gaps(gaps, str(name))
+    out = [f"{name}: the sampling rate changes from {ch.rate_before_hz:.4g} Hz to {ch.rate_after_hz:.4g} Hz near "
+           f"t = {ch.t_s:.3f} s (row {ch.row})" for ch in find_rate_changes(data)]
+    out += [f"{name}: a gap of {g.length_s:.3f} s at t = {g.start_s:.3f} s (row {g.row}); the solver and the "
+            "navigation step across it from its two end samples" for g in gaps]
+    return out
 
 
 def _truth_errors(frame, nav, sol, truth_file):
