@@ -150,3 +150,14 @@ def test_the_step_is_capped_as_every_rate_and_by_the_epoch_count(scenario, tmp_p
     with pytest.raises(InputError, match=r"^--dt 0\.0001 s over 1982 s: 19,820,000 epochs, more than the "
                                          r"10,000,000 one simulation holds"):
         run(platform, ["integrate", scenario, "--out", tmp_path / "a", "--dt", "1e-4"])
+
+
+def test_a_step_longer_than_the_run_names_the_options(scenario, tmp_path):
+    """`platform simulate --dt 200 --duration 100` answered in the library's words:
+    "`duration` (100.0 s) must be at least one step (200.0 s)"."""
+    with pytest.raises(InputError, match=r"^--dt 200 s is longer than the run \(100 s of --duration\): give a --dt "
+                                         r"of at most 100 s$"):
+        run(platform, ["simulate", scenario, "--out", tmp_path / "a", "--dt", 200, "--duration", 100])
+    with pytest.raises(InputError, match=r"^--dt 5000 s is longer than the run \(1982 s, the whole scenario\)"):
+        run(platform, ["integrate", scenario, "--out", tmp_path / "a", "--dt", 5000])
+    assert not (tmp_path / "a").exists()

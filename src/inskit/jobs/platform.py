@@ -542,6 +542,9 @@ def _scenario_setup(scenario_file, *, dt, earth_model, seed, gyro_drift_deg_h=No
     if not dt >= 1.0 / MAX_RATE_HZ:  # the rate cap, as a step
         raise InputError(f"--dt must be at least {1.0 / MAX_RATE_HZ:g} s (every rate is capped at "
                          f"{MAX_RATE_HZ:g} Hz), got {dt}")
+    if dt > T:  # the library's words were its arguments': "`duration` (100.0 s) must be at least one step"
+        raise InputError(f"--dt {dt:g} s is longer than the run ({T:g} s{' of --duration' if duration is not None else ''}"
+                         f"{'' if duration is not None else ', the whole scenario'}): give a --dt of at most {T:g} s")
     if T / dt > MAX_SAMPLES:  # before any array is made
         raise InputError(f"--dt {dt:g} s over {T:g} s: {T / dt:,.0f} epochs, more than the {MAX_SAMPLES:,} one "
                          "simulation holds; use a longer --dt or a shorter --duration")
