@@ -144,7 +144,7 @@ def simulate_job(scenario, layout_spec, out_dir, *, d=0.1, rate_hz=None, duratio
         if not 0 < T <= tr.duration + 1e-9:  # as platform simulate and consistency: not clipped in silence
             raise InputError(f"--duration must be within (0, {tr.duration:.0f}] s, got {duration}")
         _check_rate(rate, T)
-        _check_motion_sampled(sc, rate)
+        _check_motion_sampled(sc, rate, scenario)
         out = _check_out(out_dir, ["array.csv", "layout.csv", "truth.csv"], overwrite, [scenario, layout_spec])
         t = np.arange(0.0, T + 1e-9, 1.0 / rate)
         log(f"gyrofree simulate: {sc.name}, {len(t)} samples")
@@ -175,7 +175,7 @@ def simulate_job(scenario, layout_spec, out_dir, *, d=0.1, rate_hz=None, duratio
             "elapsed_s": time.perf_counter() - t0, "files": files}
 
 
-def _check_motion_sampled(sc, rate):
+def _check_motion_sampled(sc, rate, name):
     """Refuse a sampling rate [Hz] whose point samples cannot resolve the
     scenario's periodic motion: a vibration (the top of its band) or a
     coning segment at or above the Nyquist frequency ``rate / 2``.
@@ -187,8 +187,6 @@ def _check_motion_sampled(sc, rate):
     sampled at 20 Hz cost 9 m of height in 60 s, with exact data and no
     word of warning.
     """
-    from ..simulation.scenario import _where
-
     nyquist_hz = 0.5 * rate
     items = []
     for i, v in enumerate(sc.vibration, start=1):
@@ -198,9 +196,9 @@ def _check_motion_sampled(sc, rate):
     for i, seg in enumerate(sc.segment, start=1):
         if seg.type == "coning":
             items.append((f"segment {i} (coning)", seg.frequency_hz, f"frequency_hz {seg.frequency_hz:g} Hz"))
-    for name, f_hz, what in items:
+    for item, f_hz, what in items:
         if f_hz >= nyquist_hz:
-            raise InputError(f"--rate {rate:g} Hz: {_where(sc)}{name}: its {what} is at or above the Nyquist "
+            raise InputError(f"--rate {rate:g} Hz: {name}: {item}: its {what} is at or above the Nyquist "
                              f"frequency of the array's samples ({nyquist_hz:g} Hz): they would alias it into "
                              f"false slow motion; give --rate above {2.0 * f_hz:g} Hz (the scenario's IMU "
                              f"samples at {sc.imu.rate_hz:g} Hz)")
