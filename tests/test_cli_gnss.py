@@ -107,3 +107,28 @@ def test_throughput_figure():
     b = spp_throughput(OBS, NAV, repeats=2)
     assert b["epochs"] == 240 and b["repeats"] == 2
     assert b["epochs_per_s_min"] <= b["epochs_per_s"] <= b["epochs_per_s_max"]
+
+
+def test_health_verdict_counts_the_lost_epochs():
+    from inskit.jobs.spp import spp_health
+
+    base = {"epochs_total": 1000, "epochs_unsolved": 0, "epochs_flagged": 0, "epochs_excluded_sats": 0,
+            "rms_residual_median_m": 1.0, "hdop_median": 1.0}
+    assert spp_health(base) == {"verdict": "healthy", "reasons": [], "warnings": []}
+    few = spp_health({**base, "epochs_unsolved": 50, "epochs_excluded_sats": 3})
+    assert few["verdict"] == "healthy" and len(few["warnings"]) == 2 and "5.0 %" in few["warnings"][0]
+    many = spp_health({**base, "epochs_flagged": 101})
+    assert many["verdict"] == "unhealthy" and "101 of 1000 epochs (10.1 %) flagged" in many["reasons"][0]
+    off = spp_health({**base, "rms_residual_median_m": 40.0, "hdop_median": 8.0})
+    assert off["verdict"] == "healthy" and len(off["warnings"]) == 2
+
+
+def test_a_high_mask_run_is_unhealthy_and_strict_exits_3():
+    good = inskit(OBS, NAV, "--reference", "header", "--json")
+    assert good.returncode == 0 and json.loads(good.stdout)["health"]["verdict"] == "healthy"
+    # a 40 deg mask leaves ABPO fewer than four satellites at many epochs
+    r = inskit(OBS, NAV, "--mask", "40", "--strict", "--json")
+    s = json.loads(r.stdout)  # still one JSON object
+    assert r.returncode == 3, r.stderr
+    assert s["health"]["verdict"] == "unhealthy" and s["epochs_unsolved"] > 0.1 * s["epochs_total"]
+    assert "unhealthy:" in r.stderr

@@ -13,6 +13,8 @@ stdout, logs go to stderr, user errors raise :class:`~inskit.errors.InputError`
 
 from __future__ import annotations
 
+import sys
+
 import click
 
 from .cli_output import emit as _emit
@@ -62,8 +64,9 @@ def _table(res):
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Output folder: spp.pos (RTKLIB format), "
               "spp_solution.csv (GNSS fixes for navigate), spp_epochs.csv, summary.json.")
 @click.option("--force", is_flag=True, help="Overwrite the files of an earlier run in --out.")
+@click.option("--strict", is_flag=True, help="Exit with status 3 when the run's health verdict is unhealthy.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def spp(obs, nav, reference, mask_deg, iono, tropo, systems, no_raim, out_dir, force, as_json):
+def spp(obs, nav, reference, mask_deg, iono, tropo, systems, no_raim, out_dir, force, strict, as_json):
     """Single-point positioning of the RINEX observation file OBS with the
     broadcast ephemerides of the RINEX navigation file NAV (RINEX 2 or 3;
     GPS and Galileo code pseudoranges, Doppler velocity when present)."""
@@ -71,7 +74,15 @@ def spp(obs, nav, reference, mask_deg, iono, tropo, systems, no_raim, out_dir, f
 
     res = run_spp(obs, nav, reference=reference, mask_deg=mask_deg, iono=iono, tropo=tropo, systems=systems,
                   out=out_dir, overwrite=force, raim=not no_raim, log=_log)
+    h = res["health"]
+    _log(f"health: {h['verdict']}")
+    for line in h["reasons"]:
+        _log(f"  unhealthy: {line}")
+    for line in h["warnings"]:
+        _log(f"  warning: {line}")
     _emit(res, as_json, _table(res))
+    if strict and h["verdict"] != "healthy":
+        sys.exit(3)
 
 
 @click.command("tight-coupling")

@@ -110,6 +110,42 @@ def _median(x):
     return float(np.median(x)) if len(x) else float("nan")
 
 
+#: Unhealthy above this fraction of epochs unsolved, or flagged by the residual test or HDOP: an
+#: open-sky receiver with broadcast orbits covering its day solves nearly every epoch, so a tenth
+#: lost names a cause (orbits, obstruction, a wrong file) the figures would otherwise hide.
+UNHEALTHY_EPOCH_FRACTION = 0.10
+#: A median code residual above this [m] says the models or the data are wrong (about 1 m is usual).
+RESIDUAL_WARN_M = 10.0
+#: A median HDOP above this says the geometry, not the receiver, sets the errors.
+HDOP_WARN = 5.0
+
+
+def spp_health(s: dict) -> dict:
+    """Verdict of a single-point run from its summary ``s``: ``verdict``
+    ("healthy" or "unhealthy"), ``reasons`` (each a sentence) and
+    ``warnings``.  Unhealthy when more than
+    :data:`UNHEALTHY_EPOCH_FRACTION` of the epochs are unsolved or flagged;
+    warned of any unsolved, flagged or excluded epoch, a median residual
+    above :data:`RESIDUAL_WARN_M` and a median HDOP above :data:`HDOP_WARN`."""
+    n = max(int(s["epochs_total"]), 1)
+    reasons, warns = [], []
+    for key, what in (("epochs_unsolved", "unsolved"), ("epochs_flagged", "flagged (residual test or HDOP)")):
+        k = int(s[key])
+        if not k:
+            continue
+        line = f"{k} of {n} epochs ({100.0 * k / n:.1f} %) {what}"
+        (reasons if k / n > UNHEALTHY_EPOCH_FRACTION else warns).append(line)
+    if s.get("epochs_excluded_sats"):
+        warns.append(f"{s['epochs_excluded_sats']} epochs solved only after excluding a satellite (residual test)")
+    res = s.get("rms_residual_median_m")
+    if res is not None and res > RESIDUAL_WARN_M:
+        warns.append(f"median RMS code residual {res:.1f} m (about 1 m is usual): models or data are off")
+    hd = s.get("hdop_median")
+    if hd is not None and hd > HDOP_WARN:
+        warns.append(f"median HDOP {hd:.1f}: the geometry, not the ranges, sets the errors")
+    return {"verdict": "unhealthy" if reasons else "healthy", "reasons": reasons, "warnings": warns}
+
+
 def run_spp(obs_path, nav_path, *, reference=None, mask_deg=10.0, iono="klobuchar", tropo="saastamoinen",
             systems=("G", "E"), out=None, overwrite=False, raim=True, log=None):
     """Single-point positioning of ``obs_path`` with the broadcast orbits of
@@ -147,7 +183,7 @@ def run_spp(obs_path, nav_path, *, reference=None, mask_deg=10.0, iono="klobucha
         ``mean_enu_m``, ``std_enu_m``, ``max_horizontal_m`` (against the
         reference; None without one), ``hdop_median``, ``n_sats_median``,
         ``seconds`` (read + solve wall time), ``read_s``, ``solve_s``,
-        ``notes``, ``files`` ...
+        ``notes``, ``health`` (:func:`spp_health`), ``files`` ...
     """
     from ..gnss.solution import errors_against, write_pos
     from ..gnss.spp import EXCLUDED, FLAGGED, STATUS_NAMES, UNSOLVED, spp
@@ -208,6 +244,7 @@ def run_spp(obs_path, nav_path, *, reference=None, mask_deg=10.0, iono="klobucha
     else:
         s.update({k: None for k in ("horizontal_rms_m", "rms_3d_m", "mean_enu_m", "std_enu_m", "max_horizontal_m",
                                     "mean_neu_m", "std_neu_m")})
+    s["health"] = spp_health(s)
     if out is not None:
         s["files"] = [str(f) for f in _write(out, files, sol, enu, obs_path, nav_path, s, write_pos, log)]
     else:
