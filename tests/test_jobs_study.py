@@ -338,3 +338,23 @@ def test_an_outage_past_the_study_data_names_the_study_file(tmp_path):
                                           r"study data \(60 s\)"):
         run_study(p, tmp_path / "out", workers=1)
     assert not any((tmp_path / "out").iterdir())  # proved writable (made), nothing written
+
+
+def test_a_folder_of_another_command_is_not_overwritten(tmp_path):
+    """A study into a folder holding a navigate run's summary.json (no study.json) replaced it in silence;
+    now refused before any run unless --force, and never over an input."""
+    out = tmp_path / "nav"
+    out.mkdir()
+    (out / "summary.json").write_text('{"mine": 1}\n')
+    spec = _spec(tmp_path, TINY.replace("runs = 4", "runs = 1"))
+    with pytest.raises(InputError, match=r"holds summary\.json but no study\.json.*--force"):
+        run_study(spec, out, workers=1)
+    assert (out / "summary.json").read_text() == '{"mine": 1}\n'
+    assert sorted(p.name for p in out.iterdir()) == ["summary.json"]
+    res = run_study(spec, out, workers=1, force=True)
+    assert res["runs_computed"] == 2 and json.loads((out / "summary.json").read_text())["runs_total"] == 2
+    # a study file that would be one of the outputs is refused, --force or not
+    (tmp_path / "other").mkdir()
+    inside = _spec(tmp_path / "other", TINY, name="summary.json")
+    with pytest.raises(InputError, match="is an input of this command"):
+        run_study(inside, tmp_path / "other", force=True)

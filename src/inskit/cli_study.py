@@ -37,13 +37,16 @@ def _bar(total, initial):
               help="Address of a running Dask scheduler (tcp://host:8786); default: a local cluster.")
 @click.option("--workers", type=click.IntRange(min=1),
               help="Worker processes of the local cluster (1 thread each)  [default: every core]")
+@click.option("--force", is_flag=True, help="Write into a folder that is not a study's even though it holds files "
+              "of the study's names (runs.parquet, summary.parquet, summary.json, study.png), replacing them.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON summary object on stdout.")
-def study(spec_file, out_dir, scheduler, workers, as_json):
+def study(spec_file, out_dir, scheduler, workers, force, as_json):
     """Monte Carlo study or sensor-grade / filter sweep on Dask (seeded per
     (case, run): results do not depend on the workers), resumable."""
     from .jobs.study import ranking_table, run_study
 
-    res = run_study(spec_file, out_dir, scheduler=scheduler, workers=workers, progress=_bar, log=_log)
+    res = run_study(spec_file, out_dir, scheduler=scheduler, workers=workers, progress=_bar, log=_log,
+                    force=force)
     _emit(res, as_json, table=ranking_table(res))
 
 

@@ -69,7 +69,7 @@ from .. import earth
 from .. import rotations as rot
 from ..config_files import check_magnitude, check_scalar_type, read_toml, validation_message
 from ..errors import ConfigError, InputError
-from ..files import atomic_write, check_folder_writable, save_figure, write_text
+from ..files import atomic_write, check_folder_writable, check_outputs, save_figure, write_text
 from ..types import ImuData
 from ..units import DEG, DEG_PER_HOUR, G0, MICRO_G, PPM
 from .montecarlo import (CONSISTENCY_GNSS, ConsistencySpec, anees_band, consistency_errors,
@@ -84,6 +84,8 @@ OUTAGE_FIGURES = ("outage_end_horizontal_m", "outage_worst_horizontal_m", "outag
                   "outage_end_velocity_m_s", "outage_end_attitude_deg")
 #: figures of one consistency run
 CONSISTENCY_FIGURES = ("nees_pos_mean", "nees_vel_mean", "nees_att_mean", "bias_rms_normalized")
+#: the files a study writes into its folder (besides ``study.json`` and ``runs/``)
+OUTPUT_FILES = ("runs.parquet", "summary.parquet", "summary.json", "study.png")
 #: statistics over the runs of a case, in the order of ``summary.parquet``
 STATISTICS = ("count", "mean", "std", "min", "median", "p90", "max")
 
@@ -700,7 +702,7 @@ def _plot(df, cases, path):
     return save_figure(fig, path)
 
 
-def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None, log=None) -> dict:
+def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None, log=None, force=False) -> dict:
     """Run (or resume) a study on a Dask cluster and write its results.
 
     Parameters
@@ -722,6 +724,12 @@ def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None
         written (after their part file is in place).  An exception it raises
         stops the study as a killed client would (the parts stay).
     log : callable(str), optional
+    force : bool, optional
+        Write into a folder that is not a study's (no ``study.json``) even
+        when it holds files of the study's names (:data:`OUTPUT_FILES`: the
+        results of another command, or the user's); without it that is an
+        :class:`~inskit.errors.InputError` before any run.  A study folder
+        (the same study) is resumed and its own results rewritten either way.
 
     Returns
     -------
@@ -742,6 +750,13 @@ def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None
             for n in r["notes"]:
                 log(f"study: grade {r['name']!r}: note: {n}")
     meta_path = out / "study.json"
+    inputs = [spec_path, scenario_path] + [g._log for g in spec.grades or [] if isinstance(g, AllanGrade)]
+    # never over an input; over another command's (or the user's) files of these names only with --force
+    check_outputs([meta_path] + [out / n for n in OUTPUT_FILES], inputs, overwrite=True)
+    theirs = [n for n in OUTPUT_FILES if (out / n).exists()]
+    if theirs and not meta_path.is_file() and not force:
+        raise InputError(f"{out}: holds {', '.join(theirs)} but no study.json: not the folder of a study (another "
+                         "command's results?); refusing to overwrite them (use --force or another --out)")
     if meta_path.is_file():
         try:
             old = json.loads(meta_path.read_text()).get("fingerprint")
