@@ -167,3 +167,41 @@ def test_a_config_without_outages_tunes_and_an_unjudged_candidate_is_not_called_
     assert by["uncoupled"]["gnss_mean_nis_per_dof"] == {} and by["uncoupled"]["consistent"] is False
     assert res["best"] == {"filter.scheme": "closed"}
     assert "no GNSS NIS" in T.table_text(res)
+
+
+def test_placements_that_withhold_the_same_fixes_run_once():
+    """--shifts 45 on drive_0708 (4 Hz fixes, placements 0.125 s apart) ran 45 placements of which 11 withheld
+    the very fixes of another: the same runs, their outages scored twice (495 'outages' for 374)."""
+    import numpy as np
+
+    t = np.arange(0.0, 200.0, 1.0)  # 1 Hz fixes: placements 0.125 s apart withhold the same ones by eights
+    val = [(62.5, 77.25), (107.5, 122.25)]
+    placed = T.shifted_windows(val, [(40.0, 54.75), (85.0, 99.75)], 0.0, 200.0, 7.75, 45)
+    kept = T.distinct_placements(placed, t)
+    from inskit.jobs.outages import withheld_mask
+
+    keys = [tuple(np.flatnonzero(withheld_mask(t, w))) for _, w in kept]
+    assert len(set(keys)) == len(kept) < len(placed)
+    assert {tuple(np.flatnonzero(withheld_mask(t, w))) for _, w in placed} == set(keys)  # nothing lost
+    assert T.distinct_placements([(0.0, val)], t) == [(0.0, val)]
+
+
+def test_validation_outages_without_a_fix_between_them_are_refused():
+    """--hold 1 --reaid 0 placed 339 one-second validation outages back to back (no fix between): each 'outage
+    end' was the middle of one long outage (cv RMS 44.8 m), scored without a word."""
+    import numpy as np
+
+    t = np.arange(0.0, 100.0, 0.25)
+    with pytest.raises(ConfigError, match=r"--reaid 0: the outages 60-61 s and 61-62 s .* no GNSS fix between them "
+                                          r"\(fixes every 0\.25 s\)"):
+        T.check_separated([(60.0, 61.0), (61.0, 62.0)], [(60.0, 61.0), (61.0, 62.0)], t, 0.0)
+    with pytest.raises(ConfigError, match="no GNSS fix between"):  # flush against a protocol window
+        T.check_separated([(40.0, 50.0), (50.1, 60.0)], [(50.1, 60.0)], t, 0.1)
+    T.check_separated([(40.0, 50.0), (50.3, 60.0)], [(50.3, 60.0)], t, 0.3)  # one fix at 50.25 s between: two
+    T.check_separated([(40.0, 50.0), (50.0, 60.0)], [], t, 0.0)  # the config's own windows: not tune's to judge
+    from pathlib import Path
+
+    ex = Path(__file__).resolve().parents[1] / "examples"
+    with pytest.raises(ConfigError, match="no GNSS fix between them"):
+        T.tune(ex / "drive_0708.toml", T.parse_grid(["constraints.nhc_sigma_m_s=0.2"]), hold_s=1.0, reaid_s=0.0,
+               workers=1)

@@ -230,6 +230,59 @@ def shifted_windows(val, protocol_rel, t_first_rel, t_last_rel, reaid_s, shifts,
     return out
 
 
+def distinct_placements(placed, t_rel):
+    """The placements of :func:`shifted_windows` that withhold different fixes.
+
+    Two placements shifted by less than the fixes' interval can withhold the
+    same fixes: the same runs, whose outages would be scored twice over.
+    The first of each set of fixes is kept.
+
+    Parameters
+    ----------
+    placed : list of (shift_s, windows)
+    t_rel : (n,) array
+        The fixes' times [s after the first fix].
+
+    Returns
+    -------
+    list of (shift_s, windows)
+    """
+    from .outages import withheld_mask
+
+    seen, out = set(), []
+    for d, w in placed:
+        key = tuple(np.flatnonzero(withheld_mask(t_rel, w)).tolist())
+        if key not in seen:
+            seen.add(key)
+            out.append((d, w))
+    return out
+
+
+def check_separated(windows, validation, t_rel, reaid_s):
+    """Refuse a set of withheld windows (the protocol's and the validation
+    outages of one run) in which a validation outage and its neighbour have
+    no used fix between them: they are one outage, and the end of the first
+    is not the end of an outage (``--reaid`` shorter than the fixes'
+    interval; 0 put every validation outage flush against the next).
+
+    Raises
+    ------
+    ConfigError
+        Naming the two windows [s after the first fix] and ``--reaid``.
+    """
+    from .outages import withheld_mask
+
+    w = sorted((float(a), float(b)) for a, b in windows)
+    val = {(float(a), float(b)) for a, b in validation}
+    used = t_rel[~withheld_mask(t_rel, w)]
+    for (a0, b0), (a1, b1) in zip(w, w[1:]):
+        if ((a0, b0) in val or (a1, b1) in val) and not np.any((used > b0) & (used < a1)):
+            dt = float(np.median(np.diff(t_rel))) if len(t_rel) > 1 else float("nan")
+            raise ConfigError(f"--reaid {reaid_s:g}: the outages {a0:g}-{b0:g} s and {a1:g}-{b1:g} s (after the first "
+                              f"fix) have no GNSS fix between them (fixes every {dt:g} s): they are one outage, not "
+                              "two; give a longer --reaid")
+
+
 def default_spacing(protocol_rel):
     """Validation outages like the protocol's: ``hold_s`` the median length of
     its windows (10 s without any), ``reaid_s`` 10 s, or less (not under 2 s)
@@ -291,16 +344,25 @@ def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60
                               "--grid noise.from_static=false")
     if int(shifts) < 1:
         raise ConfigError(f"shifts must be at least 1, got {shifts!r}")
+    t_rel = np.asarray(gnss.time, float) - t0
     placed = shifted_windows(val, protocol, 0.0, float(gnss.time[-1]) - t0, reaid_s, int(shifts))
+    shifted = len(placed)
+    placed = distinct_placements(placed, t_rel)  # the same fixes withheld: the same runs, scored once
     if not any(w for _, w in placed):
         raise ConfigError(f"{config_path}: no placement of the validation outages keeps "
                           f"{min(SHIFT_MIN_REAID_S, reaid_s):g} s of aiding on both sides; shorten --hold or "
                           "--reaid, or use fewer --shifts")
     sets = [(sorted(protocol + w), w) for _, w in placed if w] + [(list(protocol), [])]
+    for windows, w in sets:
+        check_separated(windows, w, t_rel, reaid_s)
     warnings = []
-    if int(shifts) > 1 and len(placed) == 1:
+    if int(shifts) > 1 and shifted == 1:
         warnings.append(f"--shifts {int(shifts)}: one placement only (re-aiding {reaid_s:g} s leaves no room to move the "
                      f"validation outages while keeping {SHIFT_MIN_REAID_S:g} s of aiding)")
+    elif len(placed) < shifted:
+        warnings.append(f"--shifts {int(shifts)}: {len(placed)} placements withhold different fixes (the fixes come "
+                        f"every {float(np.median(np.diff(t_rel))):g} s); the {shifted - len(placed)} that repeat one "
+                        "of them were not run")
     jobs = [(str(config_path), p, sets) for p in cands]
     workers = workers or min(len(jobs), os.cpu_count() or 1)
     results = []
