@@ -199,3 +199,32 @@ def test_a_consistency_run_of_too_many_imu_samples_is_refused_naming_the_duratio
                                          r"18,420,999 IMU samples per run, more than the 10,000,000 one simulation "
                                          r"holds; give a shorter --duration$"):
         consistency_study(fast, "tactical", 2)
+
+
+@pytest.mark.parametrize("outage", [(20.2, 20.5), (20.0, 20.0 + 1e-9)])
+def test_an_outage_between_two_fixes_withholds_nothing_and_is_refused(outage):
+    """`inskit schemes --outage 100.2,100.5` (1 Hz fixes) withheld no fix and reported the GNSS-on error as
+    the error 'at the outage end'; (20, 20 + 1e-9) holds the fix at 20 s and is an outage."""
+    from inskit.errors import InputError
+
+    sc = load_scenario(EXAMPLES / "static.toml")
+    if outage[1] - outage[0] < 1e-6:
+        assert compare_schemes(sc, outage, schemes=("closed",))[0]["outage_end_horizontal_m"] >= 0
+        return
+    with pytest.raises(InputError, match=r"--outage 20\.2,20\.5: holds no GNSS fix of the scenario 'static' \(fixes "
+                                         r"at 1 Hz.*withholds nothing"):
+        compare_schemes(sc, outage)
+
+
+def test_an_outage_inside_the_scenarios_own_outage_withholds_nothing():
+    """tc_blockage removes the fixes of 150-270 s itself: an --outage inside it withholds none."""
+    from inskit.errors import InputError
+    from inskit.simulation.gnss import fix_times
+    from inskit.simulation.scenario import gnss_errors
+
+    sc = load_scenario(EXAMPLES / "tc_blockage.toml")
+    a, b = gnss_errors(sc).outages[0]
+    t = fix_times(0.0, b + 10.0, gnss_errors(sc))
+    assert t[0] == 0.0 and not np.any((t >= a) & (t <= b)) and np.any(t > b)
+    with pytest.raises(InputError, match="holds no GNSS fix"):
+        compare_schemes(sc, (a + 1.5, b - 1.5))

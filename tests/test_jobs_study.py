@@ -358,3 +358,12 @@ def test_a_folder_of_another_command_is_not_overwritten(tmp_path):
     inside = _spec(tmp_path / "other", TINY, name="summary.json")
     with pytest.raises(InputError, match="is an input of this command"):
         run_study(inside, tmp_path / "other", force=True)
+
+
+def test_an_outage_between_two_fixes_is_refused_naming_the_key(tmp_path):
+    """[outage] start_s = 60.2, length_s = 0.5 (1 Hz fixes) withheld no fix: the study ranked the grades by
+    their GNSS-on error 'at the end of the 0.5 s outage'."""
+    text = TINY.replace("start_s = 65.0", "start_s = 60.2").replace("length_s = 30.0", "length_s = 0.5")
+    with pytest.raises(ConfigError, match=r"tiny\.toml: field 'outage': 60\.2\.\.60\.7 s holds no GNSS fix of "
+                                          r"car\.toml \(fixes at 1 Hz.*withholds nothing"):
+        run_study(_spec(tmp_path, text), tmp_path / "out")

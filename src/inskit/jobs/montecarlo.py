@@ -23,7 +23,7 @@ from .. import earth
 from .. import rotations as rot
 from ..integration import (FilterSettings, GnssPosition, InitialUncertainty, SensorNoise, run_filter,
                            run_uncoupled)
-from ..simulation.gnss import GnssErrors, simulate_gnss
+from ..simulation.gnss import GnssErrors, fix_times, simulate_gnss
 from ..simulation.imu import ideal_imu, truth_solution
 from ..simulation.sensors import ImuErrors, TriadErrors, apply_imu_errors
 from ..errors import InputError
@@ -259,19 +259,24 @@ def compare_schemes(scenario, outage, seed=0, schemes=("uncoupled", "open", "clo
     if not (0.0 <= outage[0] and outage[1] <= t[-1]):  # the errors are taken at its end
         raise InputError(f"--outage {outage[0]:g},{outage[1]:g}: the outage must lie within the scenario "
                          f"{scenario.name!r}, 0..{t[-1]:g} s")
+    from .outages import gnss_data_gaps, withheld_mask
+
+    g_err = gnss_errors(scenario)
+    if not withheld_mask(fix_times(t[0], t[-1], g_err), [outage]).any():  # before the simulation
+        raise InputError(f"--outage {outage[0]:g},{outage[1]:g}: holds no GNSS fix of the scenario "
+                         f"{scenario.name!r} (fixes at {g_err.rate_hz:g} Hz, outside its [gnss] outages_s): it "
+                         "withholds nothing; give a longer outage")
     gravity = scenario.earth.gravity  # the simulation's and the filters' model
     ideal = ideal_imu(tr, t, nodes=scenario.imu.quadrature_nodes, gravity=gravity)
     errs = imu_errors(scenario)
     imu, _ = apply_imu_errors(ideal, errs, rng)
-    gnss, _ = simulate_gnss(tr, t[0], t[-1], gnss_errors(scenario), rng)
-    use = ~((gnss.time >= outage[0]) & (gnss.time <= outage[1]))
+    gnss, _ = simulate_gnss(tr, t[0], t[-1], g_err, rng)
+    use = ~withheld_mask(gnss.time, [outage])
     truth = truth_solution(tr, t)
     init = initial or InitialUncertainty(pos_m=(1.0, 1.0, 2.0), vel_m_s=0.1, roll_pitch_rad=np.radians(0.5),
                                          yaw_rad=np.radians(2.0))
     # GNSS on: after the first 60 s (start-up), outside every stretch without a used fix (this outage, the
     # scenario's own outages) and the 60 s of re-convergence after each
-    from .outages import gnss_data_gaps
-
     gnss_on = t > 60.0
     for a, b in gnss_data_gaps(gnss.time[use], float(t[0]), float(t[-1])):  # the gaps only (a few), not every fix
         gnss_on &= ~((t > a) & (t < b + 60.0)) if a > t[0] else ~(t < b + 60.0)

@@ -478,6 +478,7 @@ def build_cases(spec: StudySpec, scenario_path, key="", source=None) -> list[Stu
     def where(key):
         return f"{source}: field '{key}'" if source is not None else key
 
+    from ..simulation.gnss import fix_times
     from ..simulation.scenario import build_trajectory, gnss_errors, load_scenario
 
     sc = load_scenario(scenario_path)
@@ -503,6 +504,11 @@ def build_cases(spec: StudySpec, scenario_path, key="", source=None) -> list[Stu
         outage = (spec.outage.start_s, spec.outage.start_s + spec.outage.length_s)
         if outage[1] >= T:
             raise ConfigError(f"{where('outage')}: it ends at {outage[1]:g} s, after the end of the study data ({T:g} s)")
+        g = gnss_errors(sc)
+        if not withheld_mask(fix_times(0.0, T, g), [outage]).any():  # the runs' fixes, known before any run
+            raise ConfigError(f"{where('outage')}: {outage[0]:g}..{outage[1]:g} s holds no GNSS fix of "
+                              f"{scenario_path.name} (fixes at {g.rate_hz:g} Hz, outside its [gnss] outages_s): it "
+                              "withholds nothing; give a longer length_s")
     lever = tuple(float(x) for x in sc.gnss.lever_arm_b_m)
     cases = []
     for grade in spec.grades or [sc.imu.grade]:

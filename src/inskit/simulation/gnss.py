@@ -56,6 +56,25 @@ class GnssErrors:
     outlier_sigma_m: float = 30.0
 
 
+def _fix_grid(t_start, t_end, errors: GnssErrors):
+    """Every epoch of the receiver's ``rate_hz`` grid from ``t_start`` to
+    ``t_end``, and True where no outage of ``errors`` removes it."""
+    t = np.arange(t_start, t_end + 1e-9, 1.0 / errors.rate_hz)
+    keep = np.ones(len(t), bool)
+    for a, b in errors.outages:
+        keep &= ~((t >= a) & (t <= b))
+    return t, keep
+
+
+def fix_times(t_start, t_end, errors: GnssErrors) -> np.ndarray:
+    """The times [s] of the fixes :func:`simulate_gnss` makes between
+    ``t_start`` and ``t_end`` (its ``rate_hz`` grid outside its outages),
+    known before any is simulated: a window that holds none of them withholds
+    nothing."""
+    t, keep = _fix_grid(t_start, t_end, errors)
+    return t[keep]
+
+
 def simulate_gnss(trajectory, t_start, t_end, errors: GnssErrors, rng):
     """Fixes of ``trajectory`` between ``t_start`` and ``t_end``.
 
@@ -73,10 +92,7 @@ def simulate_gnss(trajectory, t_start, t_end, errors: GnssErrors, rng):
         outside its outages), named as the scenario key the outages come
         from (``[gnss] outages_s``).
     """
-    t = np.arange(t_start, t_end + 1e-9, 1.0 / errors.rate_hz)
-    keep = np.ones(len(t), bool)
-    for a, b in errors.outages:
-        keep &= ~((t >= a) & (t <= b))
+    t, keep = _fix_grid(t_start, t_end, errors)
     if not keep.any():
         shown = [[float(a), float(b)] for a, b in errors.outages]
         raise ConfigError(f"field 'gnss.outages_s': the outages {shown} remove every GNSS fix of the run "
