@@ -108,7 +108,7 @@ def test_a_candidate_the_config_refuses_is_named_before_the_search(tmp_path):
                       ("noise.gyro_arw_deg_sqrt_h=0.1,1.0", r"from_static = true")):
         with pytest.raises(ConfigError, match=msg):
             T.tune(ex / "drive_0708.toml", T.parse_grid([spec]), workers=1)
-    with pytest.raises(ConfigError, match="repeated"):
+    with pytest.raises(ConfigError, match="the value 0.0 repeats 0"):
         T.parse_grid(["gnss.sigma_floor_m=0,0.0"])
 
 
@@ -205,3 +205,14 @@ def test_validation_outages_without_a_fix_between_them_are_refused():
     with pytest.raises(ConfigError, match="no GNSS fix between them"):
         T.tune(ex / "drive_0708.toml", T.parse_grid(["constraints.nhc_sigma_m_s=0.2"]), hold_s=1.0, reaid_s=0.0,
                workers=1)
+
+
+def test_a_boolean_and_a_number_are_not_a_repeat():
+    """`--grid constraints.mounting=true,1` said 'a value is repeated' (True == 1 in Python): the 1 is a
+    number where a boolean is wanted, which the config names per candidate."""
+    assert T.parse_grid(["constraints.mounting=true,1"]) == {"constraints.mounting": [True, 1]}
+    assert T.parse_grid(["constraints.v=[1,0],[true,0]"])["constraints.v"] == [(1, 0), (True, 0)]
+    with pytest.raises(ConfigError, match=r"the value \[0,0,0\.0\] repeats \[0,0,0\]"):
+        T.parse_grid(["constraints.nhc_lever_arm_b_m=[0,0,0],[0,0,0.0]"])
+    with pytest.raises(ConfigError, match="the value TRUE repeats true"):
+        T.parse_grid(["constraints.mounting=true,TRUE"])

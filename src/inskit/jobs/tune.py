@@ -79,12 +79,24 @@ def parse_grid(specs) -> dict:
         if not items:
             raise ConfigError(f"--grid {spec!r}: no values")
         vals = [_value(v) for v in items]
-        if len(set(vals)) != len(vals):
-            raise ConfigError(f"--grid {spec!r}: a value is repeated")
+        seen = {}
+        for text, v in zip(items, vals):
+            if _same_key(v) in seen:
+                raise ConfigError(f"--grid {spec!r}: the value {text} repeats {seen[_same_key(v)]}")
+            seen[_same_key(v)] = text
         grid[key] = vals
     if not grid:
         raise ConfigError("give at least one --grid SECTION.KEY=V1,V2,...")
     return grid
+
+
+def _same_key(v):
+    """What makes two grid values the same candidate: equal numbers (1 and
+    1.0), equal text, but a boolean never a number (Python's ``True == 1``:
+    ``constraints.mounting=true,1`` named the wrong type a repeat)."""
+    if isinstance(v, tuple):
+        return tuple(_same_key(x) for x in v)
+    return (isinstance(v, bool), v)
 
 
 def _split_top(text):
