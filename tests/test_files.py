@@ -217,3 +217,25 @@ def test_staged_files_land_whole_or_leave_the_old_set(tmp_path, monkeypatch):
     assert (out / "b.txt").read_text() == "old b"
     assert not (out / "d.txt").exists()  # the new file of the failed set went
     assert failed and sorted(p.name for p in out.iterdir()) == ["a.txt", "b.txt", "c.txt"]
+
+
+def test_write_json_is_strict_json_whole_or_nothing(tmp_path, monkeypatch):
+    """The result files of reproduce (reproduce.json, schemes.json, bench.json, entries.json, results.json)
+    were written by json.dumps' default, which puts NaN and Infinity into the file: not JSON."""
+    import json
+    from pathlib import Path
+
+    from inskit.files import write_json
+
+    p = write_json(tmp_path / "r.json", {"a": float("nan"), "b": [np.float32(1.5), np.inf, -np.inf],
+                                         "c": np.arange(2), 3: np.bool_(True), "d": Path("x/y"), "e": (1, None)})
+
+    def refuse(name):
+        raise ValueError(name)
+
+    assert json.loads(p.read_text(), parse_constant=refuse) == {"a": None, "b": [1.5, None, None], "c": [0, 1],
+                                                                "3": True, "d": "x/y", "e": [1, None]}
+    monkeypatch.setattr(os, "replace", lambda a, b: (_ for _ in ()).throw(KeyboardInterrupt()))
+    with pytest.raises(KeyboardInterrupt):
+        write_json(tmp_path / "s.json", {"a": 1})
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["r.json"]

@@ -126,6 +126,36 @@ def test_cli_exit_status_is_1_when_an_experiment_fails(tmp_path, monkeypatch):
         assert (tmp_path / "b" / name).is_file()
 
 
+def _strict(path):
+    def refuse(name):
+        raise ValueError(f"{path}: {name} is not JSON")
+
+    return json.loads(path.read_text(), parse_constant=refuse)
+
+
+def test_a_diverged_figure_is_a_failure_and_the_files_stay_json(tmp_path, monkeypatch):
+    """An experiment whose figure came out NaN (a diverged run) wrote 'NaN' into reproduce.json, which a
+    strict JSON reader refuses, and a figure missing (None) made the table an internal error (format of
+    None); now null in the file and '-' / 'nan' in the table, and the experiment fails (exit 1)."""
+    import numpy as np
+
+    def diverged(out, log):
+        return ([RA.claim("a drift that blew up", float("nan"), 1.0, 0.1),
+                 RA.published("a figure not produced", None, 2.0, 0.1)],
+                {"curve": np.array([np.nan, np.inf, 1.0]), "value": np.float64("nan")})
+
+    monkeypatch.setattr(RA, "EXPERIMENTS", {"diverged": ("test", diverged, True)})
+    r = CliRunner().invoke(_cli(), ["all", "--out", str(tmp_path / "a")])
+    assert r.exit_code == 1, r.output
+    assert "FAIL a drift that blew up: ours nan" in r.output and "FAIL a figure not produced: ours -" in r.output
+    saved = _strict(tmp_path / "a" / "reproduce.json")
+    e = saved["experiments"][0]
+    assert e["verdict"] == "fail" and [q["ours"] for q in e["quantities"]] == [None, None]
+    assert e["extra"] == {"curve": [None, None, 1.0], "value": None}
+    r = CliRunner().invoke(_cli(), ["all", "--out", str(tmp_path / "b"), "--json"])
+    assert r.exit_code == 1 and json.loads(r.stdout)["failed"] == ["diverged"]
+
+
 def test_cheap_experiments_match_the_doc(tmp_path):
     """The experiments of a few seconds each (closed-form checks, SPP on ABPO,
     the simulated blockages) rerun and checked against docs/REPRODUCE.md."""

@@ -5,11 +5,10 @@ from __future__ import annotations
 
 import json
 import math
-from pathlib import Path
 
 import click
-import numpy as np
 
+from .files import plain_json
 from .units import MAX_RATE_HZ
 
 
@@ -75,23 +74,8 @@ def log(msg):
     click.echo(msg, err=True)
 
 
-def jsonable(x):
-    """Plain JSON values for numpy scalars and arrays, paths, and non-finite
-    floats (``null``: NaN is not JSON)."""
-    if isinstance(x, dict):
-        return {str(k): jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [jsonable(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return jsonable(x.tolist())
-    if isinstance(x, (np.floating, float)):
-        x = float(x)
-        return x if math.isfinite(x) else None
-    if isinstance(x, (np.integer, np.bool_)):
-        return x.item()
-    if isinstance(x, Path):
-        return str(x)
-    return x
+#: plain JSON values (numpy, paths; non-finite floats as ``null``): :func:`inskit.files.plain_json`
+jsonable = plain_json
 
 
 def emit(obj, as_json, table=None):

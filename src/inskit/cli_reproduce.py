@@ -40,7 +40,7 @@ def reproduce_all(out_dir, only, as_json):
     1 when any experiment fails (a quantity outside its tolerance, or an
     error); the table and the JSON name the failures.
     """
-    from .jobs.reproduce_all import run_all
+    from .jobs.reproduce_all import fmt, run_all
 
     res = run_all(out_dir, only=only, log=_log)
     lines = [f"{'experiment':<22}{'verdict':<9}{'pass':>5}{'differs':>8}{'fail':>5}{'info':>5}{'seconds':>9}"]
@@ -50,8 +50,8 @@ def reproduce_all(out_dir, only, as_json):
                      f"{e['seconds']:>9.1f}")
         for q in e["quantities"]:
             if q["verdict"] == "fail":
-                lines.append(f"    FAIL {q['quantity']}: ours {q['ours']:.6g}, reference {q['reference']:.6g} "
-                             f"+- {q['tolerance']:.3g} {q['unit']}")
+                lines.append(f"    FAIL {q['quantity']}: ours {fmt(q['ours'])}, reference {fmt(q['reference'])} "
+                             f"+- {fmt(q['tolerance'])} {q['unit']}")
         if e["error"]:
             lines.append(f"    ERROR {e['error']}")
     lines.append(f"total {res['seconds']:.0f} s; failed: {', '.join(res['failed']) or 'none'}")

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+import json
+import math
 import os
 from contextlib import contextmanager
 from pathlib import Path
@@ -338,6 +340,34 @@ def write_text(path, text):
     with atomic_write(path) as tmp:
         Path(tmp).write_text(text)
     return Path(path)
+
+
+def plain_json(x):
+    """Plain JSON values for numpy scalars and arrays, paths, and non-finite
+    floats (``null``: NaN and infinity are not JSON, and a strict reader
+    refuses the file); dict keys as text."""
+    if isinstance(x, dict):
+        return {str(k): plain_json(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [plain_json(v) for v in x]
+    if isinstance(x, np.ndarray):
+        return plain_json(x.tolist())
+    if isinstance(x, (np.floating, float)):
+        x = float(x)
+        return x if math.isfinite(x) else None
+    if isinstance(x, (np.integer, np.bool_)):
+        return x.item()
+    if isinstance(x, Path):
+        return str(x)
+    return x
+
+
+def write_json(path, obj, indent=1):
+    """Write ``obj`` as one JSON document, atomically (:func:`write_text`),
+    through :func:`plain_json` (a NaN is ``null``) and strict: never the
+    ``NaN`` or ``Infinity`` of Python's default; anything else JSON has no
+    type for as its text."""
+    return write_text(path, json.dumps(plain_json(obj), indent=indent, allow_nan=False, default=str) + "\n")
 
 
 def save_figure(fig, path, dpi=110):

@@ -9,13 +9,12 @@ to SI here.
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 
 import numpy as np
 
-from ..files import save_figure
+from ..files import save_figure, write_json, write_text
 from ..errors import InputError
 from ..units import DEG, MAX_RATE_HZ, MAX_SAMPLES, MICRO_G, PPM
 
@@ -426,8 +425,8 @@ def reproduce_gyrofree(out_dir, *, quick=False, log=None):
     rows = comp["table"]
     keys = [k for k in rows[0] if k != "unit"]
     lines = ["unit," + ",".join(keys)] + [f"\"{r['unit']}\"," + ",".join(f"{r[k]:.6g}" for k in keys) for r in rows]
-    (out / "growth_60s.csv").write_text("\n".join(lines) + "\n")
-    (out / "entries.json").write_text(json.dumps(res["entries"], indent=1))
+    write_text(out / "growth_60s.csv", "\n".join(lines) + "\n")
+    write_json(out / "entries.json", res["entries"])
     return {"experiment": "gyrofree", "source": "003", "entries": res["entries"],
             "truth_check": _jsonable(res["truth_check"]), "growth_60s": rows, "growth_grades": comp["grades_text"],
             "closest_reading": res["closest_reading"], "random_misalignment": res["random_misalignment"],

@@ -18,14 +18,13 @@ Unstated choices of the reproduction (SOURCES-NOTES §2.4 [unstated]) are in
 
 from __future__ import annotations
 
-import json
 import math
 import time
 from pathlib import Path
 
 import numpy as np
 
-from ..files import save_figure, write_csv
+from ..files import save_figure, write_csv, write_json
 from .. import analysis, earth, io
 from ..errors import ConfigError, InputError
 from ..platform import design as D
@@ -309,16 +308,8 @@ def reproduce_integration_filters(out_dir, *, log=None, quick=False, exp=None):
                                 "rank_drifts_known": ob7.rank, "states_drifts_known": 7, "gap": ob12.gap},
               "stability": {kk: vv for kk, vv in stab.items() if kk not in ("grid", "k1", "k2")},
               "figures": [str(f) for f in figs]}
-    (out / "results.json").write_text(json.dumps(result, indent=1, default=_jsonable))
+    write_json(out / "results.json", result)
     return result
-
-
-def _jsonable(x):
-    if isinstance(x, (np.floating, np.integer, np.bool_)):
-        return x.item()
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    return str(x)
 
 
 def _rerun_time(truth, sns, name, errors, initial, designs):

@@ -58,7 +58,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
-from ..files import write_text
+from ..files import plain_json, write_json, write_text
 
 ROOT = Path(__file__).resolve().parents[3]
 DOC_PATH = ROOT / "docs" / "REPRODUCE.md"
@@ -373,7 +373,7 @@ def _exp_schemes(out, log):
 
     log("schemes: examples/car.toml, outage 1200..1260 s, seed 1")
     rows = {x["scheme"]: x for x in compare_schemes(load_scenario(ROOT / "examples" / "car.toml"), (1200.0, 1260.0), 1)}
-    write_text(Path(out) / "schemes.json", json.dumps(rows, indent=1))
+    write_json(Path(out) / "schemes.json", rows)
     q = [claim("closed loop: horizontal error at the outage end", rows["closed"]["outage_end_horizontal_m"], 3.6, 0.1,
                unit="m"),
          claim("open loop: horizontal error at the outage end", rows["open"]["outage_end_horizontal_m"], 555, 1,
@@ -387,7 +387,7 @@ def _exp_odometer(out, log):
     from .odometer_study import odometer_study
 
     r = odometer_study()
-    write_text(Path(out) / "odometer_study.json", json.dumps(r, indent=1, default=float))
+    write_json(Path(out) / "odometer_study.json", r)
     s = r["summary"]
     return [claim("60 s outages, outage-end horizontal RMS without the odometer",
                   s["without"]["outage_end_horizontal_rms_m"], 4.04, 0.01, unit="m",
@@ -399,7 +399,7 @@ def _exp_bench(out, log):
     from .bench import run_benchmarks
 
     r = run_benchmarks(quick=False, progress=lambda name: log(f"bench: {name} done"))
-    write_text(Path(out) / "bench.json", json.dumps(r, indent=1, default=str))
+    write_json(Path(out) / "bench.json", r)
     q = [info(k, v, unit="1/s", note="machine-dependent: reported, not compared")
          for k, v in r.items() if k.endswith("_per_s") and isinstance(v, (int, float))]
     return q, {"bench": r}
@@ -487,7 +487,7 @@ def run_all(out_dir, *, only=None, log=None) -> dict:
         counts = {k: sum(q["verdict"] == k for q in quantities) for k in ("pass", "differs", "fail", "info")}
         exps.append({"name": name, "source": source, "verdict": v, "seconds": secs, "quantities": quantities,
                      "figures": figs, "error": err, "counts": counts,
-                     "extra": json.loads(json.dumps(extra, default=_jsonable))})
+                     "extra": json.loads(json.dumps(plain_json(extra), allow_nan=False, default=str))})
         log(f"reproduce all [{i}/{len(names)}] {name}: {v.upper()} in {secs:.1f} s ({counts['pass']} pass, "
             f"{counts['differs']} differ, {counts['fail']} fail, {counts['info']} info)" + (f": {err}" if err else ""))
     res = {"experiments": exps, "failed": [e["name"] for e in exps if e["verdict"] == "fail"],
@@ -495,16 +495,8 @@ def run_all(out_dir, *, only=None, log=None) -> dict:
     files = [write_text(out / "REPORT.md", report_markdown(res)),
              write_text(out / "report.html", report_html(res, out))]
     res["files"] = [str(f) for f in files] + [str(out / "reproduce.json")]
-    write_text(out / "reproduce.json", json.dumps(res, indent=1, default=_jsonable))
+    write_json(out / "reproduce.json", res)
     return res
-
-
-def _jsonable(x):
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    if isinstance(x, (np.generic,)):
-        return x.item()
-    return str(x)
 
 
 # --- reports ---------------------------------------------------------------------------

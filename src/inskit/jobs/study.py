@@ -69,7 +69,7 @@ from .. import earth
 from .. import rotations as rot
 from ..config_files import check_magnitude, check_scalar_type, read_toml, validation_message
 from ..errors import ConfigError, InputError
-from ..files import atomic_write, check_folder_writable, check_outputs, save_figure, write_text
+from ..files import atomic_write, check_folder_writable, check_outputs, save_figure, write_json, write_text
 from ..types import ImuData
 from ..units import DEG, DEG_PER_HOUR, G0, MICRO_G, PPM
 from .montecarlo import (CONSISTENCY_GNSS, ConsistencySpec, anees_band, consistency_errors,
@@ -839,20 +839,8 @@ def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None
 
 
 def _finish(res, path):
-    write_text(path, json.dumps(_plain(res), indent=1, allow_nan=False) + "\n")
+    write_json(path, res)
     return res
-
-
-def _plain(x):
-    if isinstance(x, dict):
-        return {str(k): _plain(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_plain(v) for v in x]
-    if isinstance(x, (np.floating, float)):
-        return float(x) if np.isfinite(x) else None
-    if isinstance(x, (np.integer,)):
-        return int(x)
-    return x
 
 
 def _fit_line(r) -> str:
