@@ -264,3 +264,50 @@ def test_an_increment_file_with_time_in_milliseconds_is_not_told_to_rename_to_g(
     _write(p, t, dth, dv)
     with pytest.raises(InputError, match=r"looks like values in deg/s; rename the columns dtheta_\*_deg"):
         C.read_imu(p)
+
+
+def _write_rates(path, t, n=3000, seed=5):
+    """A static rate log (gyro rad/s, accel m/s^2) at the times ``t``."""
+    rng = np.random.default_rng(seed)
+    w = rng.normal(0, 1e-3, (len(t), 3))
+    f = rng.normal(0, 1e-2, (len(t), 3)) + [0.0, 0.0, -9.8]
+    head = "time_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s,accel_x_m_s2,accel_y_m_s2,accel_z_m_s2\n"
+    path.write_text(head + "\n".join(",".join(repr(float(x)) for x in r) for r in np.column_stack([t, w, f])) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("scale, step", [(1e3, "10 s"), (1e6, "1e\\+04 s"), (1e9, "1e\\+07 s")])
+def test_a_rate_log_with_time_in_ms_us_or_ns_is_refused(tmp_path, scale, step):
+    """Rates and specific forces do not depend on the time unit, so a 100 Hz rate log with time_s in
+    milliseconds passed every check: allan reported an ARW sqrt(1000) times too large over a '300000 s'
+    log, align a static interval of days, mechanize failed at a 'pole'.  Its steps give it away."""
+    t = 0.01 * np.arange(3000)
+    p = _write_rates(tmp_path / "imu.csv", scale * t)
+    with pytest.raises(InputError, match=rf"imu\.csv: column 'time_s': the median time step is {step} .* is time_s "
+                                         r"in milliseconds, microseconds or nanoseconds\? it must be seconds"):
+        C.read_imu(p)
+    assert len(C.read_imu(p, check_units=False)) == 3000  # a log truly sampled below 1 Hz: on request
+    assert len(C.read_imu(_write_rates(tmp_path / "ok.csv", t))) == 3000
+    assert len(C.read_imu(_write_rates(tmp_path / "one_hz.csv", np.arange(30.0)))) == 30  # 1 Hz still passes
+
+
+@pytest.mark.parametrize("kind", ["increments", "increments.parquet", "rates"])
+def test_a_one_row_imu_log_is_refused_in_every_reader_path(tmp_path, kind):
+    """A one-row increment file (`head -2 imu.csv`) was mechanized into a zero-length 'solution' (1 epoch
+    over 0 s), and align said '--start 0 s is not before the log's end' of a --start never given; the rate
+    path alone refused it.  Every path (the lean and pandas increment readers, Parquet, rates) says so."""
+    if kind == "rates":
+        p = _write_rates(tmp_path / "imu.csv", np.array([5.0]))
+    else:
+        t, dth, dv = _increments(1)
+        p = tmp_path / "imu.csv"
+        _write(p, t, dth, dv)
+        if kind.endswith(".parquet"):
+            from inskit.io.parquet import write_parquet
+
+            q = tmp_path / "imu.parquet"
+            write_parquet(q, {"time_s": t, **{f"dtheta_{a}_rad": dth[:, j] for j, a in enumerate("xyz")},
+                              **{f"dv_{a}_m_s": dv[:, j] for j, a in enumerate("xyz")}})
+            p = q
+    with pytest.raises(InputError, match=r"imu\.(csv|parquet): holds 1 data row\(s\); an IMU log needs at least two"):
+        io.read_imu(p)

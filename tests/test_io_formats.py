@@ -134,3 +134,16 @@ def test_a_byte_order_mark_does_not_hide_the_format(tmp_path):
     q.write_bytes(b"\xef\xbb\xbf" + gzip.decompress(DRIVE_POS.read_bytes()))
     assert detect_gnss_format(q) == "rtklib-pos"
     assert len(io.read_gnss(q)) == 2197
+
+
+def test_a_one_row_rtklibexplorer_log_is_refused(tmp_path):
+    """`head -2` of the bundled log: one sample, which read_imu turned into a one-epoch log (mechanize then
+    'navigated' 0 s)."""
+    import gzip
+
+    with gzip.open(DRIVE_IMU, "rt") as fh:
+        head = [next(fh) for _ in range(2)]
+    p = tmp_path / "imu_gpst.csv"
+    p.write_text("".join(head))
+    with pytest.raises(InputError, match=r"imu_gpst\.csv: holds 1 data row\(s\); an IMU log needs at least two"):
+        io.read_imu(p)

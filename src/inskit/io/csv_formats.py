@@ -37,6 +37,7 @@ _ACCEL_G_LIKE = 2.0       # median |f| in m/s^2 below this looks like g
 _ACCEL_MS2_LIKE = 3.0     # median |f| in g above this looks like m/s^2
 _GYRO_RAD_MAX = 10.0      # 99th percentile |w| in rad/s above this looks like deg/s
 _GYRO_RAD_MEDIAN = 1.0    # median |w| in rad/s above this looks like deg/s
+_IMU_STEP_MAX_S = 1.0     # a median IMU time step above this [s] (below 1 Hz) looks like ms, us or ns
 
 
 def read_table(path) -> tuple:
@@ -345,6 +346,43 @@ def check_time_column(path, t, column="time_s"):
         )
 
 
+def check_imu_time(path, t, column="time_s", check_units=True):
+    """The time column of an IMU log, after its rows are final: at least two
+    rows (the initial epoch and one interval: a single row holds no motion
+    to integrate), and with ``check_units`` a median step of at most
+    :data:`_IMU_STEP_MAX_S` (1 s).
+
+    A rate log whose times are in milliseconds, microseconds or nanoseconds
+    has plausible rates and specific forces (they do not depend on the time
+    unit), so only its steps give it away: 10 ms written as ms is a "10 s"
+    step, an IMU at 0.1 Hz.  Read as seconds such a log is 1000 times
+    longer: an Allan deviation sqrt(1000) times too noisy, a static interval
+    of days, a mechanization that leaves the Earth.
+
+    Parameters
+    ----------
+    path : Path
+        For the message.
+    t : (n,) ndarray
+        Times [s as read], strictly increasing (:func:`check_time_column`).
+    column : str
+        The time column's name, for the message.
+    check_units : bool
+        Also the step test (``check_units=False`` / ``--no-unit-check``
+        keeps a log sampled slower than 1 Hz).
+    """
+    if len(t) < 2:
+        raise InputError(f"{path}: holds {len(t)} data row(s); an IMU log needs at least two (the initial epoch and "
+                         "one interval to integrate)")
+    dt = float(np.median(np.diff(t)))
+    if check_units and dt > _IMU_STEP_MAX_S:
+        raise InputError(
+            f"{path}: column '{column}': the median time step is {dt:.4g} s (an IMU sampled at {1.0 / dt:.3g} Hz): "
+            f"is {column} in milliseconds, microseconds or nanoseconds? it must be seconds (or pass "
+            "check_units=False / --no-unit-check for a log sampled slower than 1 Hz)"
+        )
+
+
 def _find_triplet(df, prefix, units):
     """Unit of the first complete x/y/z column triplet ``prefix_<axis>_<unit>``."""
     for u in units:
@@ -481,8 +519,7 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", 
         f = f * ACCEL_UNITS[au]
         if check_units:
             check_imu_units(path, w, f, gcols[0], acols[0], gu, au)
-        if len(t) < 2:
-            raise InputError(f"{path}: needs at least two rows to integrate rates")
+        check_imu_time(path, t, check_units=check_units)
         if first_row != "initial":
             raise InputError(f"{path}: first_row={first_row!r} applies to increment files (dtheta/dv columns); this "
                              "file holds rates, which have no first increment to lose")
@@ -499,6 +536,7 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", 
             dt = np.diff(t)
             check_imu_units(path, dth[1:] / dt[:, None], dv[1:] / dt[:, None], tcols[0], vcols[0],
                              "rad_s" if du == "rad" else "deg_s", "m_s2")
+        check_imu_time(path, t, check_units=check_units)
         return ImuData(t, dth, dv)
     raise InputError(
         f"{path}: no complete set of IMU columns: expected gyro_{{x,y,z}}_{{rad_s|deg_s|deg_h}} with "
@@ -582,6 +620,7 @@ def _read_imu_lean(path, check_units, first_row):
         norms[1] *= DV_UNITS[vu] * inv_dt
         check_units_norms(path, norms[0], norms[1], tcols[0], vcols[0], "rad_s" if du == "rad" else "deg_s",
                           "m_s2")
+    check_imu_time(path, t, check_units=check_units)
     return ImuData(t, dth, dv)
 
 

@@ -17,8 +17,8 @@ from ..errors import InputError
 from ..files import require_file
 from ..types import GnssData, ImuData
 from ..units import DEG, G0
-from .csv_formats import (_header_names, check_imu_units, check_time_column, lean_columns, numeric_columns, open_text,
-                          read_table, repeated_rows, require_columns)
+from .csv_formats import (_header_names, check_imu_time, check_imu_units, check_time_column, lean_columns,
+                          numeric_columns, open_text, read_table, repeated_rows, require_columns)
 
 GPS_EPOCH = datetime(1980, 1, 6, tzinfo=timezone.utc)
 WEEK_S = 604800.0
@@ -232,4 +232,5 @@ def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0
     w = a[:, 5:8] * DEG @ C_bs.T
     if check_units:
         check_imu_units(path, w, f, "gyro_x_dps", "acc_x_g", "deg_s", "g")
+    check_imu_time(path, t, "gps_sow_s", check_units)
     return ImuData.from_rates(t, w, f, sampled="average"), week0
