@@ -410,3 +410,17 @@ def test_every_rate_option_is_capped_at_the_scenario_imu_rate_cap(command, capsy
     code, out, err = _in_process(capsys, *command, "0")
     assert code == 2 and f"Invalid value for '{option}': 0 Hz is not a rate within (0, 10000] Hz" in err
     assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".parquet"])
+def test_init_from_a_one_row_state_file(files, tmp_path, capsys, suffix):
+    """A file holding just the initial state (one row at the IMU's first time) was 'inskit: error: `lla` has a
+    NaN or infinite value (nan) at row 0': the interpolation divided by its zero-length interval."""
+    sol = io.read_solution(files / "truth.csv")
+    one = tmp_path / f"init{suffix}"
+    io.write_solution(one, sol.slice(0, 1))
+    code, out, err = _in_process(capsys, "mechanize", files / "imu.csv", "--init-from", one, "--json")
+    assert code == 0, err
+    ref = _in_process(capsys, "mechanize", files / "imu.csv", "--init-from", files / "truth.csv", "--json")
+    got, want = json.loads(out)["final"], json.loads(ref[1])["final"]
+    assert got == pytest.approx(want, rel=1e-12, abs=1e-9)

@@ -142,3 +142,19 @@ def test_a_gap_in_the_truth_is_not_interpolated_across(files, tmp_path):
                                         sol.q_nb[a:a + 700]), cut, gaps) for a in range(0, 3000, 700)]
     assert np.array_equal(np.concatenate([p.time for p in parts]), whole.time)
     assert np.allclose(np.concatenate([p.pos_ned for p in parts]), whole.pos_ned)
+
+
+def test_a_one_row_truth_scores_the_epoch_at_its_time(files, tmp_path):
+    """A truth of one row (a surveyed point at one time) was 'inskit: error: `lla` has a NaN or infinite value
+    (nan) at row 0', no file named: interpolating it divided by a zero-length interval.  It scores the one
+    solution epoch at its time, and the coverage says the rest lie outside its span."""
+    truth = io.read_solution(files / "truth.csv")
+    io.write_solution(tmp_path / "point.csv", truth.slice(1500, 1501))
+    s = evaluate(files / "sol.csv", tmp_path / "point.csv")
+    assert s["epochs"] == 1 and s["first_epoch_s"] == pytest.approx(150.0)
+    full = evaluate(files / "sol.csv", files / "truth.csv", t_from=150.0, t_to=150.0 + 1e-9)
+    assert s["north_m"]["final"] == pytest.approx(full["north_m"]["final"], abs=1e-9)
+    assert s["truth_coverage"]["epochs_outside_truth_span"] == 2999
+    tr = truth.slice(10, 11)
+    one = tr.interpolate(tr.time)
+    assert np.array_equal(one.lla, tr.lla) and np.allclose(one.q_nb, tr.q_nb)

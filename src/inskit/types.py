@@ -368,21 +368,32 @@ class NavSolution:
                 f"requested times {t.min():.3f}..{t.max():.3f} s fall outside the solution span "
                 f"{self.time[0]:.3f}..{self.time[-1]:.3f} s"
             )
-        i = np.clip(np.searchsorted(self.time, t, side="right") - 1, 0, len(self.time) - 2)
-        w = ((t - self.time[i]) / (self.time[i + 1] - self.time[i]))[:, None]
-        q0, q1 = self.q_nb[i], self.q_nb[i + 1]
+        i, j, w = self._bracket(t)
+        w = w[:, None]
+        q0, q1 = self.q_nb[i], self.q_nb[j]
         q1 = np.where((np.sum(q0 * q1, axis=1) < 0)[:, None], -q1, q1)
         q = q0 * (1 - w) + q1 * w
         q /= np.linalg.norm(q, axis=1, keepdims=True)
-        return self.lla[i] * (1 - w) + self.lla[i + 1] * w, self.v_n[i] * (1 - w) + self.v_n[i + 1] * w, q
+        return self.lla[i] * (1 - w) + self.lla[j] * w, self.v_n[i] * (1 - w) + self.v_n[j] * w, q
+
+    def _bracket(self, t):
+        """The rows ``i`` and ``j`` on either side of each of the times ``t``
+        (inside the span) and the weight ``w`` of row ``j``.  A solution of
+        one row (a file holding only the initial state) is its own value at
+        its one time: ``i = j = 0``, ``w = 0`` (the span check leaves no
+        other time), not the NaN of a zero-length interval."""
+        if len(self.time) == 1:
+            z = np.zeros(len(t), dtype=int)
+            return z, z, np.zeros(len(t))
+        i = np.clip(np.searchsorted(self.time, t, side="right") - 1, 0, len(self.time) - 2)
+        return i, i + 1, (t - self.time[i]) / (self.time[i + 1] - self.time[i])
 
     def interpolate(self, t):
         """Solution at increasing times ``t`` inside the span (see :meth:`sample`)."""
         t = np.asarray(t, dtype=float)
         lla, v, q = self.sample(t)
-        i = np.clip(np.searchsorted(self.time, t, side="right") - 1, 0, len(self.time) - 2)
-        w = (t - self.time[i]) / (self.time[i + 1] - self.time[i])
-        extra = {k: (x[i] * (1 - w) + x[i + 1] * w) if x.ndim == 1 else (x[i] * (1 - w)[:, None] + x[i + 1] * w[:, None])
+        i, j, w = self._bracket(t)
+        extra = {k: (x[i] * (1 - w) + x[j] * w) if x.ndim == 1 else (x[i] * (1 - w)[:, None] + x[j] * w[:, None])
                  for k, x in self.extra.items()}
         return NavSolution(t, lla, v, q, extra)
 
