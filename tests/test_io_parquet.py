@@ -304,3 +304,39 @@ def test_a_solution_streamed_in_segments_is_the_file_written_whole(tmp_path, nam
     w2.write(sol, 0)
     w2.abort()
     assert not list(tmp_path.glob("*x" + name + "*"))
+
+
+@pytest.mark.parametrize("kind", ["increments", "rates"])
+def test_a_float32_time_is_refused_by_the_imu_reader_too(tmp_path, kind):
+    """The solution reader refused a float32 time_s; the IMU reader took it.  At t = 1e5 s float32 steps by
+    7.8 ms, so a 100 Hz log read as 7.8 and 15.6 ms steps: allan said 'not regularly sampled', align 'static
+    for only 0.0 s ... accelerometer std 1.63 m/s^2'.  The float64 file of the same log reads."""
+    import pyarrow as pa
+
+    n = 500
+    t = 1e5 + 0.01 * np.arange(n)
+    if kind == "increments":
+        cols = {"time_s": t, **{f"dtheta_{a}_rad": np.zeros(n) for a in "xyz"},
+                "dv_x_m_s": np.zeros(n), "dv_y_m_s": np.zeros(n), "dv_z_m_s": np.r_[0.0, np.full(n - 1, -0.098)]}
+    else:
+        cols = {"time_s": t, **{f"gyro_{a}_rad_s": np.full(n, 1e-4) for a in "xyz"},
+                "accel_x_m_s2": np.zeros(n), "accel_y_m_s2": np.zeros(n), "accel_z_m_s2": np.full(n, -9.8)}
+    for name, wide in (("f64.parquet", True), ("f32.parquet", False)):
+        table = pa.table({k: pa.array(v, type=pa.float32() if (k == "time_s" and not wide) else pa.float64())
+                          for k, v in cols.items()})
+        pq.write_table(table, tmp_path / name)
+    assert len(io.read_imu(tmp_path / "f64.parquet")) == n
+    with pytest.raises(InputError, match=r"f32\.parquet: column 'time_s' holds float; expected float64"):
+        io.read_imu(tmp_path / "f32.parquet")
+
+
+def test_a_float32_truth_is_refused_when_only_its_head_is_read(tmp_path):
+    """mechanize --init-from reads the head of a truth (read_solution(until_s=...)), which took the float32
+    time and latitude that evaluate refuses for the same file."""
+    import pyarrow as pa
+
+    cols = P.solution_columns(solution(n=50))
+    table = pa.table({k: pa.array(v, type=pa.float32() if k == "lat_deg" else pa.float64()) for k, v in cols.items()})
+    pq.write_table(table, tmp_path / "truth.parquet")
+    with pytest.raises(InputError, match=r"truth\.parquet: column 'lat_deg' holds float; expected float64"):
+        io.read_solution(tmp_path / "truth.parquet", until_s=float(cols["time_s"][3]))

@@ -56,10 +56,15 @@ def read_table(path) -> tuple:
             raise InputError(f"{path}: not a readable Parquet file ({str(exc).splitlines()[0]})") from None
         import pyarrow as pa
 
+        from .parquet import narrow_float_message
+
         for name, col in zip(table.column_names, table.columns):  # a timestamp or text column is no number
             if not (pa.types.is_floating(col.type) or pa.types.is_integer(col.type)):
                 raise InputError(f"{path}: column '{name}' is of type {col.type}; expected numbers "
                                  "(float or integer columns, times in seconds)")
+            narrow = narrow_float_message(path, name, col.type)
+            if narrow:
+                raise InputError(narrow)
         df = table.to_pandas()
         if len(df) == 0:
             raise InputError(f"{path}: has columns but no data rows")
@@ -207,7 +212,11 @@ def lean_columns(path, groups):
         if is_parquet(path):
             import pyarrow.parquet as pq
 
+            from .parquet import narrow_float_message
+
             pf = pq.ParquetFile(str(path))
+            if any(narrow_float_message(path, c, pf.schema_arrow.field(c).type) for c in want):
+                return None  # a float32 time: read_table's message
             n = pf.metadata.num_rows
             batches = pf.iter_batches(batch_size=1 << 18, columns=want)
         else:
@@ -941,7 +950,12 @@ def _read_solution_head(path, until_s) -> NavSolution | None:
         if is_parquet(path):
             import pyarrow.parquet as pq
 
-            batches = pq.ParquetFile(str(path)).iter_batches(batch_size=1 << 14)
+            from .parquet import narrow_float_message
+
+            pf = pq.ParquetFile(str(path))
+            if any(narrow_float_message(path, f.name, f.type) for f in pf.schema_arrow):
+                return None  # a float32 time or latitude: the whole read's message
+            batches = pf.iter_batches(batch_size=1 << 14)
         else:
             import pyarrow.csv as pcsv
 
