@@ -311,3 +311,30 @@ def test_a_one_row_imu_log_is_refused_in_every_reader_path(tmp_path, kind):
             p = q
     with pytest.raises(InputError, match=r"imu\.(csv|parquet): holds 1 data row\(s\); an IMU log needs at least two"):
         io.read_imu(p)
+
+
+def test_a_null_or_infinite_parquet_solution_cell_is_named_without_numpy_repr(tmp_path):
+    """A null latitude in a Parquet truth said "holds np.float64(nan)": numpy's repr, and no word that the
+    cell was empty."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from inskit.io.parquet import solution_columns
+    from inskit.types import NavSolution
+
+    n = 20
+    t = np.arange(n) * 0.1
+    sol = NavSolution.from_euler(t, np.tile([0.7, -1.8, 100.0], (n, 1)), np.zeros((n, 3)), np.zeros((n, 3)))
+    cols = solution_columns(sol)
+    lat = list(cols["lat_deg"])
+    lat[7] = None
+    yaw = cols["yaw_deg"].copy()
+    yaw[9] = np.inf
+    for name, key, values in (("null.parquet", "lat_deg", pa.array(lat, pa.float64())),
+                              ("inf.parquet", "yaw_deg", pa.array(yaw))):
+        pq.write_table(pa.table({k: (values if k == key else pa.array(v)) for k, v in cols.items()}), tmp_path / name)
+    with pytest.raises(InputError, match=r"null\.parquet: row 7: column 'lat_deg' is empty \(null\) or NaN; "
+                                         r"expected a finite number$"):
+        io.read_solution(tmp_path / "null.parquet")
+    with pytest.raises(InputError, match=r"inf\.parquet: row 9: column 'yaw_deg' holds inf; expected a finite number$"):
+        io.read_solution(tmp_path / "inf.parquet")

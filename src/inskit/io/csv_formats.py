@@ -1022,7 +1022,8 @@ def _read_solution_parquet(path) -> NavSolution:
         bad = ~np.isfinite(v)
         if bad.any():
             i = int(np.argmax(bad))
-            raise InputError(f"{path}: row {i}: column '{c}' holds {v[i]!r}; expected a finite number")
+            what = "is empty (null) or NaN" if np.isnan(v[i]) else f"holds {plain_number(v[i])}"
+            raise InputError(f"{path}: row {i}: column '{c}' {what}; expected a finite number")
     t = cols["time_s"]
     d = np.diff(t)
     if (d <= 0).any():
