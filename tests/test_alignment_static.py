@@ -191,3 +191,34 @@ def test_a_start_at_or_past_the_logs_end_is_refused(static_log, start):
     with pytest.raises(InputError, match=r"imu\.csv: --start .* s is not before the log's end \(the log spans "
                                          r"0\.000\.\.600\.000 s\)"):
         align_static(static_log, np.radians(45), t_start=start)
+
+
+@pytest.mark.parametrize("given_deg", [0.785, -45.0])
+def test_a_wrong_latitude_is_named_as_the_suspect(given_deg):
+    """--lat in radians (0.785 for 45 deg) or of the wrong sign: the message blamed a turn or a gyro bias
+    only, and sent the user to --start/--end.  The rate fits the Earth rate at the latitude the gyros
+    measure, which the message now gives."""
+    from inskit.units import DEG_PER_HOUR
+
+    lat = np.radians(45.0)
+    t = np.arange(0.0, 60.0 + 1e-9, 0.01)
+    imu = ideal_imu(StationaryTrajectory((lat, 0.0, 0.0), (0.0, 0.0, np.radians(30.0))), t, nodes=1)
+    with pytest.raises(InputError, match=rf"or its gyro bias is larger than assumed \(give --gyro-bias-deg-h\); it "
+                                         rf"fits the Earth rate at latitude 45\.0 deg, not at the {given_deg:g} deg "
+                                         r"given: is the latitude \(--lat\) the log's, in degrees\?$"):
+        align_imu(imu, np.radians(given_deg), method="accel", gyro_bias_sigma=1.0 * DEG_PER_HOUR)
+    r = align_imu(imu, lat, method="accel", gyro_bias_sigma=1.0 * DEG_PER_HOUR)
+    assert abs(r["yaw_deg"] - 30.0) < 0.1
+
+
+def test_a_turn_gets_no_latitude_hint():
+    """A slow turn (1 deg/s) fits the Earth rate at no latitude: the hint would mislead."""
+    from inskit.units import DEG_PER_HOUR
+
+    lat = np.radians(45.0)
+    t = np.arange(0.0, 30.0 + 1e-9, 0.02)
+    ideal = ideal_imu(StationaryTrajectory((lat, 0.0, 0.0), (0.0, 0.0, 0.0)), t, nodes=1)
+    dth = ideal.dtheta_b.copy()
+    dth[1:, 2] += 1.0 * DEG * np.diff(t)
+    with pytest.raises(InputError, match=r"give --gyro-bias-deg-h\)$"):
+        align_imu(ImuData(t, dth, ideal.dv_b), lat, method="accel", t_end=30.0, gyro_bias_sigma=1.0 * DEG_PER_HOUR)

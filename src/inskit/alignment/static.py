@@ -260,17 +260,26 @@ def _check_gyro_consistency(name, seg, w_mean, f_mean, lat, prior, cov_w_noise):
     up = f_mean / np.linalg.norm(f_mean)
     w_up = float(w_mean @ up)
     w_h = float(np.linalg.norm(w_mean - w_up * up))
-    r = float(np.hypot(w_up - earth.OMEGA_IE * np.sin(lat), w_h - earth.OMEGA_IE * np.cos(lat)))
+
+    def misfit(phi):
+        return float(np.hypot(w_up - earth.OMEGA_IE * np.sin(phi), w_h - earth.OMEGA_IE * np.cos(phi)))
+
+    r = misfit(lat)
     var = prior.gyro ** 2 + np.trace(cov_w_noise) / 3.0
     sig = float(np.sqrt(var))
-    if r > GYRO_CONSISTENCY_SIGMAS * sig:
-        lim = GYRO_CONSISTENCY_SIGMAS * sig
+    lim = GYRO_CONSISTENCY_SIGMAS * sig
+    if r > lim:
+        # the rate fits the Earth rate at another latitude: the latitude given is the suspect (radians, a sign)
+        phi = measured_latitude(f_mean, w_mean)
+        hint = ("" if misfit(phi) > lim else
+                f"; it fits the Earth rate at latitude {np.degrees(phi):.1f} deg, not at the {np.degrees(lat):.4g} "
+                "deg given: is the latitude (--lat) the log's, in degrees?")
         raise InputError(
             f"{name}: over [{float(seg.time[0]):.1f}, {float(seg.time[-1]):.1f}] s the mean rate differs from the "
             f"Earth rate by {r / DEG:.4g} deg/s ({r / DEG_PER_HOUR:.4g} deg/h); "
             f"a static IMU with a gyro bias of {prior.gyro / DEG_PER_HOUR:.4g} deg/h (1 sigma) stays within "
             f"{lim / DEG:.4g} deg/s ({GYRO_CONSISTENCY_SIGMAS:g} sigma): the IMU turned during the interval (give "
-            "--start/--end of a static one), or its gyro bias is larger than assumed (give --gyro-bias-deg-h)"
+            f"--start/--end of a static one), or its gyro bias is larger than assumed (give --gyro-bias-deg-h){hint}"
         )
 
 
