@@ -361,8 +361,9 @@ def test_allan_states_the_minimum_of_a_short_log_and_names_a_constant_channel(fi
     (tmp_path / "two.csv").write_text("\n".join(lines[:2]) + "\n")
     code, out, err = _in_process(capsys, "allan", tmp_path / "two.csv")
     assert code == 2 and out == "" and len(err.strip().splitlines()) == 1, err
-    assert "two.csv: the log has 1 sample(s); an Allan deviation needs a static log of at least 101 samples and " \
-           "100 s" in err
+    # refused by the IMU reader now, as by every command that reads the log (the Allan minimum, 101 samples
+    # and 100 s, is test_allan's)
+    assert "two.csv: holds 1 data row(s); an IMU log needs at least two" in err
     from inskit.simulation.sensors import apply_imu_errors, preset
     from inskit.types import ImuData
 
