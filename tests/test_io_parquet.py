@@ -340,3 +340,28 @@ def test_a_float32_truth_is_refused_when_only_its_head_is_read(tmp_path):
     pq.write_table(table, tmp_path / "truth.parquet")
     with pytest.raises(InputError, match=r"truth\.parquet: column 'lat_deg' holds float; expected float64"):
         io.read_solution(tmp_path / "truth.parquet", until_s=float(cols["time_s"][3]))
+
+
+def test_a_parquet_schema_naming_a_column_twice_is_refused_by_every_reader(tmp_path):
+    """pyarrow writes a schema with two 'lat_deg' fields; evaluate said 'not a readable Parquet file (Multiple
+    matches for FieldRef.Name(lat_deg) in time_s: double)', mechanize --init-from (the head reader) failed
+    with an internal KeyError (exit 3).  Refused as a CSV header naming a column twice is."""
+    import pyarrow as pa
+
+    cols = P.solution_columns(solution(n=50))
+    names = list(cols) + ["lat_deg"]
+    arrays = [pa.array(v) for v in cols.values()] + [pa.array(cols["lat_deg"] + 1.0)]
+    pq.write_table(pa.table(arrays, names=names), tmp_path / "truth.parquet")
+    k = names.index("lat_deg") + 1
+    msg = rf"truth\.parquet: the Parquet schema names column 'lat_deg' twice \(columns {k} and {len(names)}\)"
+    with pytest.raises(InputError, match=msg):
+        io.read_solution(tmp_path / "truth.parquet")
+    with pytest.raises(InputError, match=msg):
+        io.read_solution(tmp_path / "truth.parquet", until_s=float(cols["time_s"][3]))
+    n = 20
+    imu = {"time_s": 0.01 * np.arange(n), **{f"dtheta_{a}_rad": np.zeros(n) for a in "xyz"},
+           **{f"dv_{a}_m_s": np.zeros(n) for a in "xyz"}}
+    pq.write_table(pa.table([pa.array(v) for v in imu.values()] + [pa.array(np.zeros(n))],
+                            names=list(imu) + ["dv_z_m_s"]), tmp_path / "imu.parquet")
+    with pytest.raises(InputError, match=r"imu\.parquet: the Parquet schema names column 'dv_z_m_s' twice"):
+        io.read_imu(tmp_path / "imu.parquet")

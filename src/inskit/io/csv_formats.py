@@ -50,6 +50,9 @@ def read_table(path) -> tuple:
     if is_parquet(path):
         import pyarrow.parquet as pq
 
+        from .parquet import parquet_column_names
+
+        parquet_column_names(path)  # a column named twice: said so, before pyarrow's 'Multiple matches'
         try:
             table = pq.read_table(path)
         except Exception as exc:  # pyarrow raises several kinds for a damaged file
@@ -100,14 +103,15 @@ def _refuse_separator(path, header):
                      f"{sep!r}, not by commas; convert it to comma-separated values")
 
 
-def _refuse_repeated_names(path, names):
-    """A header that names a column twice is refused: which of the two a
-    reader took would be a guess (pandas renamed the second 'name.1', the
-    lean path took the first)."""
+def _refuse_repeated_names(path, names, where="the header"):
+    """A header (``where``: or a Parquet schema) that names a column twice
+    is refused: which of the two a reader took would be a guess (pandas
+    renamed the second 'name.1', the lean path took the first, pyarrow
+    raised 'Multiple matches for FieldRef')."""
     seen = {}
     for j, n in enumerate(n.strip() for n in names):
         if n and n in seen:
-            raise InputError(f"{path}: the header names column '{n}' twice (columns {seen[n] + 1} and {j + 1}); "
+            raise InputError(f"{path}: {where} names column '{n}' twice (columns {seen[n] + 1} and {j + 1}); "
                              "each column needs a name of its own")
         seen.setdefault(n, j)
 
@@ -162,13 +166,15 @@ def _header_names(path):
     from .parquet import is_parquet
 
     path = Path(path)
-    try:
-        if is_parquet(path):
-            import pyarrow.parquet as pq
+    if is_parquet(path):
+        import pyarrow.parquet as pq
 
-            return list(pq.ParquetFile(str(path)).schema_arrow.names)
-    except Exception:  # noqa: BLE001 (a damaged file: read_table says what is wrong)
-        return None
+        try:
+            names = list(pq.ParquetFile(str(path)).schema_arrow.names)
+        except Exception:  # noqa: BLE001 (a damaged file: read_table says what is wrong)
+            return None
+        _refuse_repeated_names(path, names, "the Parquet schema")  # as a CSV header naming a column twice
+        return names
     head = _first_line_bytes(path)
     if head is None or not head.endswith(b"\n"):
         return None
@@ -950,8 +956,9 @@ def _read_solution_head(path, until_s) -> NavSolution | None:
         if is_parquet(path):
             import pyarrow.parquet as pq
 
-            from .parquet import narrow_float_message
+            from .parquet import narrow_float_message, parquet_column_names
 
+            parquet_column_names(path)  # a column named twice: refused, not a KeyError below
             pf = pq.ParquetFile(str(path))
             if any(narrow_float_message(path, f.name, f.type) for f in pf.schema_arrow):
                 return None  # a float32 time or latitude: the whole read's message

@@ -370,6 +370,7 @@ def read_parquet_columns(path) -> tuple[dict, dict]:
     import pyarrow.parquet as pq
 
     path = require_file(path)
+    parquet_column_names(path)
     try:
         table = pq.read_table(str(path))
     except (pa.ArrowException, OSError) as exc:
@@ -389,6 +390,31 @@ def read_parquet_columns(path) -> tuple[dict, dict]:
         cols[name] = _column_values(col)
     meta.setdefault("units", {k: column_unit(k) for k in cols})
     return cols, meta
+
+
+def parquet_column_names(path) -> list:
+    """The column names of Parquet file ``path`` from its schema (the data
+    are not read).
+
+    Raises
+    ------
+    InputError
+        Not a readable Parquet file, or a schema that names a column twice
+        (pyarrow writes such a file; reading a column of it by name raised
+        'Multiple matches for FieldRef', or a KeyError): refused as a CSV
+        header naming a column twice is.
+    """
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from .csv_formats import _refuse_repeated_names
+
+    try:
+        names = list(pq.read_schema(str(path)).names)
+    except (pa.ArrowException, OSError) as exc:
+        raise InputError(f"{path}: not a readable Parquet file ({str(exc).splitlines()[0]})") from None
+    _refuse_repeated_names(path, names, "the Parquet schema")
+    return names
 
 
 #: columns (by their name's first word) whose values need all of float64: times and geodetic angles
