@@ -338,3 +338,22 @@ def test_a_null_or_infinite_parquet_solution_cell_is_named_without_numpy_repr(tm
         io.read_solution(tmp_path / "null.parquet")
     with pytest.raises(InputError, match=r"inf\.parquet: row 9: column 'yaw_deg' holds inf; expected a finite number$"):
         io.read_solution(tmp_path / "inf.parquet")
+
+
+def test_a_trailing_comma_on_every_line_of_a_solution_is_no_column(tmp_path):
+    """A spreadsheet export ends each line with a comma: the IMU reader took it, read_solution said "line 2:
+    column 'Unnamed: 10' is empty", a name the file does not hold.  A column of no name and no value is
+    dropped; one of no name that holds values is still read and judged."""
+    from inskit.types import NavSolution
+
+    n = 20
+    sol = NavSolution.from_euler(0.1 * np.arange(n), np.tile([0.7, -1.8, 100.0], (n, 1)), np.zeros((n, 3)),
+                                 np.zeros((n, 3)))
+    io.write_solution(tmp_path / "sol.csv", sol)
+    lines = (tmp_path / "sol.csv").read_text().splitlines()
+    (tmp_path / "comma.csv").write_text("\n".join(line + "," for line in lines) + "\n")
+    back = io.read_solution(tmp_path / "comma.csv")
+    assert np.array_equal(back.time, sol.time) and not back.extra
+    (tmp_path / "text.csv").write_text("\n".join([lines[0] + ","] + [line + ",x" for line in lines[1:]]) + "\n")
+    with pytest.raises(InputError, match=r"text\.csv: line 2: column 'Unnamed: 10' has 'x'"):
+        io.read_solution(tmp_path / "text.csv")

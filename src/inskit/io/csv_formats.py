@@ -94,6 +94,12 @@ def read_table(path) -> tuple:
         _refuse_separator(path, df.columns[0])
     if len(df) == 0:
         raise InputError(f"{path}: has a header but no data rows")
+    # a trailing comma on every line (spreadsheet exports) makes a column of no name and no value: no column
+    # of the file, which pandas named 'Unnamed: 19' and a reader of every column then refused as empty
+    raw = head.split(",") if head is not None else []
+    blank = [c for j, c in enumerate(df.columns) if j < len(raw) and not raw[j].strip() and df[c].isna().all()]
+    if blank:
+        df = df.drop(columns=blank)
     return path, df
 
 
