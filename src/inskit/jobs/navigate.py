@@ -13,7 +13,7 @@ import numpy as np
 from .. import io
 from ..alignment.coarse import Startup, gnss_speed, static_intervals
 from ..errors import InputError
-from ..files import write_text
+from ..files import write_json, write_text
 from ..io.rtklib import read_pos, read_rtklibexplorer_imu
 from ..types import GnssData, ImuData, NavState
 from ..units import DEG, MILLI_G
@@ -1306,5 +1306,5 @@ def write_outputs(res: NavigateResult, out_dir: Path, s: dict) -> list:
         files += plot_all(res, out_dir)
     files.append(out_dir / "summary.json")
     s["files"] = [str(f) for f in files]
-    write_text(out_dir / "summary.json", json.dumps(s, indent=2, default=float))
+    write_json(out_dir / "summary.json", s, indent=2)  # strict JSON: a NaN figure is null, never NaN
     return files
