@@ -228,3 +228,37 @@ def test_an_outage_inside_the_scenarios_own_outage_withholds_nothing():
     assert t[0] == 0.0 and not np.any((t >= a) & (t <= b)) and np.any(t > b)
     with pytest.raises(InputError, match="holds no GNSS fix"):
         compare_schemes(sc, (a + 1.5, b - 1.5))
+
+
+def _summary(mean, inside, above, within=0.99, rms=1.0):
+    block = {"mean": mean, "band_95": [2.36, 3.72], "fraction_of_epochs_inside": inside,
+             "fraction_of_epochs_above": above, "fraction_of_epochs_below": 1.0 - inside - above}
+    return {"anees": {"pos": dict(block), "vel": dict(block), "att": dict(block)},
+            "bias_within_3_sigma": within, "bias_rms_normalized": rms}
+
+
+def test_the_consistency_verdict_follows_the_tests_criteria():
+    from inskit.jobs.montecarlo import consistency_verdict
+
+    assert consistency_verdict(_summary(3.0, 0.9, 0.05)) == {"verdict": "consistent", "reasons": []}
+    v = consistency_verdict(_summary(4.5, 0.4, 0.55))  # NEES above the band: covariance too small
+    assert v["verdict"] == "inconsistent" and len(v["reasons"]) == 3 and "optimistic" in v["reasons"][0]
+    v = consistency_verdict(_summary(2.0, 0.3, 0.0))  # below the band: covariance too large
+    assert "pessimistic" in v["reasons"][0]
+    v = consistency_verdict(_summary(3.0, 0.9, 0.05, rms=0.4))
+    assert v["verdict"] == "inconsistent" and v["reasons"] == [v["reasons"][0]] and "pessimistic" in v["reasons"][0]
+    assert consistency_verdict(_summary(3.0, 0.9, 0.05, within=0.9))["verdict"] == "inconsistent"
+
+
+def test_consistency_says_which_grades_the_filter_is_consistent_with():
+    from inskit.jobs.montecarlo import consistency_study
+
+    sc = load_scenario(EXAMPLES / "car.toml")
+    ok = consistency_study(sc, "tactical", 10, duration=120.0, seed=0)
+    assert ok["verdict"] == "consistent", ok["reasons"]
+    # a consumer gyro's 1 deg/s turn-on bias with GNSS position alone: the heading error leaves the
+    # small-angle error model within a minute and the filter diverges, optimistic
+    bad = consistency_study(sc, "consumer-mems", 5, duration=120.0, seed=0)
+    assert bad["verdict"] == "inconsistent"
+    assert bad["anees"]["att"]["mean"] > 10 * bad["anees"]["att"]["band_95"][1]
+    assert any(r.startswith("att:") and "optimistic" in r for r in bad["reasons"])

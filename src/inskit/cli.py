@@ -679,6 +679,12 @@ def consistency(scenario_file, grade, runs, duration, seed, as_json):
                      f"{a['fraction_of_epochs_inside']:.0%}")
     lines.append(f"final sensor-bias errors: {res['bias_within_3_sigma']:.1%} within 3 sigma, RMS "
                  f"{res['bias_rms_normalized']:.2f} sigma")
+    lines.append(f"verdict: {res['verdict']}")
+    lines += [f"  {r}" for r in res["reasons"]]
+    if as_json:
+        _log(f"verdict: {res['verdict']}")
+        for r in res["reasons"]:
+            _log(f"  {r}")
     _emit(res, as_json, "\n".join(lines))
 
 

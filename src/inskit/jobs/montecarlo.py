@@ -310,7 +310,8 @@ def compare_schemes(scenario, outage, seed=0, schemes=("uncoupled", "open", "clo
 def consistency_study(scenario, grade, runs, duration=None, seed=0, progress=None, map=map):
     """The ``inskit consistency`` job: Monte Carlo NEES of the closed-loop
     filter on a scenario's trajectory with a preset IMU grade and 1 Hz GNSS
-    (1 m horizontal, 2 m vertical white noise).  Returns the JSON summary.
+    (1 m horizontal, 2 m vertical white noise).  Returns the JSON summary,
+    with ``verdict`` and ``reasons`` (:func:`consistency_verdict`).
 
     Raises
     ------
@@ -349,8 +350,54 @@ def consistency_study(scenario, grade, runs, duration=None, seed=0, progress=Non
         a = r["anees"][b]
         lo, hi = r["band"][b]
         res["anees"][b] = {"mean": float(a.mean()), "band_95": [lo, hi],
-                           "fraction_of_epochs_inside": float(((a >= lo) & (a <= hi)).mean())}
+                           "fraction_of_epochs_inside": float(((a >= lo) & (a <= hi)).mean()),
+                           "fraction_of_epochs_above": float((a > hi).mean()),
+                           "fraction_of_epochs_below": float((a < lo).mean())}
     z = r["bias_normalized"]
     res["bias_within_3_sigma"] = float((np.abs(z) < 3).mean())
     res["bias_rms_normalized"] = float(np.sqrt(np.mean(z**2)))
+    res.update(consistency_verdict(res))
     return res
+
+
+#: The criteria of the filter's own consistency tests (tests/test_jobs_montecarlo.py): a block's
+#: average NEES, averaged over the epochs, inside the 95 % band of one epoch, and at least this
+#: fraction of the epochs inside it (0.95 is expected; the epochs' NEES are correlated in time, so
+#: a few stretches move the fraction a lot).
+CONSISTENT_FRACTION_INSIDE = 0.60
+#: Normalised final bias errors are N(0, 1) for a consistent filter: 99.7 % within 3 sigma expected.
+CONSISTENT_BIAS_WITHIN_3_SIGMA = 0.97
+#: ... and their RMS near 1: outside this range the bias covariance is too small or too large.
+CONSISTENT_BIAS_RMS = (0.6, 1.3)
+
+
+def consistency_verdict(res: dict) -> dict:
+    """``verdict`` ("consistent" or "inconsistent") and ``reasons`` of a
+    consistency summary (:func:`consistency_study`), by the criteria of the
+    filter's own consistency tests: each NEES block's mean inside the 95 %
+    band and at least :data:`CONSISTENT_FRACTION_INSIDE` of its epochs
+    inside it (above it the filter is optimistic: its covariance is smaller
+    than its errors; below it pessimistic); the final bias errors at least
+    :data:`CONSISTENT_BIAS_WITHIN_3_SIGMA` within 3 sigma, with an RMS in
+    :data:`CONSISTENT_BIAS_RMS` sigma."""
+    reasons = []
+    for b, a in res["anees"].items():
+        lo, hi = a["band_95"]
+        inside = a["fraction_of_epochs_inside"]
+        if lo <= a["mean"] <= hi and inside >= CONSISTENT_FRACTION_INSIDE:
+            continue
+        above, below = a.get("fraction_of_epochs_above", 0.0), a.get("fraction_of_epochs_below", 0.0)
+        side = ("optimistic: its covariance smaller than its errors" if (a["mean"] > hi or above >= below)
+                else "pessimistic: its covariance larger than its errors")
+        reasons.append(f"{b}: average NEES {a['mean']:.2f} against the 95 % band [{lo:.2f}, {hi:.2f}], inside it at "
+                       f"{inside:.0%} of the epochs (at least {CONSISTENT_FRACTION_INSIDE:.0%} wanted): the filter is "
+                       f"{side}")
+    lo, hi = CONSISTENT_BIAS_RMS
+    rms, within = res["bias_rms_normalized"], res["bias_within_3_sigma"]
+    if within < CONSISTENT_BIAS_WITHIN_3_SIGMA or not lo < rms < hi:
+        side = "optimistic (sigma too small)" if rms >= hi or within < CONSISTENT_BIAS_WITHIN_3_SIGMA else \
+            "pessimistic (sigma too large)"
+        reasons.append(f"final sensor-bias errors: {within:.1%} within 3 sigma (at least "
+                       f"{CONSISTENT_BIAS_WITHIN_3_SIGMA:.0%} wanted), RMS {rms:.2f} sigma ({lo:g} to {hi:g} wanted): "
+                       f"the bias estimates are {side}")
+    return {"verdict": "inconsistent" if reasons else "consistent", "reasons": reasons}
