@@ -161,3 +161,12 @@ def test_a_step_longer_than_the_run_names_the_options(scenario, tmp_path):
     with pytest.raises(InputError, match=r"^--dt 5000 s is longer than the run \(1982 s, the whole scenario\)"):
         run(platform, ["integrate", scenario, "--out", tmp_path / "a", "--dt", 5000])
     assert not (tmp_path / "a").exists()
+
+
+@pytest.mark.parametrize("option, value", [("--gyro-drift-deg-h", "1e8,0,0"), ("--accel-bias-ug", "0,1e12,0")])
+def test_instrument_errors_beyond_the_models_are_refused_naming_the_option(scenario, tmp_path, option, value):
+    """They left the Earth in three steps: "`lla` has a NaN or infinite value (inf) at row 3"."""
+    for sub in ("simulate", "integrate"):
+        with pytest.raises(InputError, match=rf"^{option} .*: at most "):
+            run(platform, [sub, scenario, "--out", tmp_path / "a", option, value, "--duration", 100])
+    assert not (tmp_path / "a").exists()

@@ -520,6 +520,21 @@ def _plot_design(report, path, e):
 
 
 # --- scenario jobs ------------------------------------------------------------------------
+#: The largest platform gyro drift an option may give [deg/h] (1 deg/s).
+MAX_GYRO_DRIFT_DEG_H = 3600.0
+#: The largest platform accelerometer bias an option may give [micro-g] (0.1 g).
+MAX_ACCEL_BIAS_UG = 1.0e5
+
+
+def _check_instrument(option, values, limit, unit, why):
+    """Refuse instrument errors beyond what the platform models describe
+    (before any run: beyond them the solution leaves the Earth in a few
+    steps and ends in a NaN that names no option)."""
+    v = np.asarray(values, float)
+    if np.any(np.abs(v) > limit):
+        raise InputError(f"{option} {','.join(f'{x:g}' for x in v)}: at most {limit:g} {unit} in size ({why})")
+
+
 def _scenario_setup(scenario_file, *, dt, earth_model, seed, gyro_drift_deg_h=None, accel_bias_ug=None,
                     duration=None):
     from ..simulation.scenario import build_trajectory, imu_errors, load_scenario
@@ -545,8 +560,12 @@ def _scenario_setup(scenario_file, *, dt, earth_model, seed, gyro_drift_deg_h=No
     drift = np.asarray(g.fixed_bias) + rng.standard_normal(3) * g.turn_on_bias_sigma
     bias = np.asarray(a.fixed_bias) + rng.standard_normal(3) * a.turn_on_bias_sigma
     if gyro_drift_deg_h is not None:
+        _check_instrument("--gyro-drift-deg-h", gyro_drift_deg_h, MAX_GYRO_DRIFT_DEG_H, "deg/h",
+                          "1 deg/s, a consumer MEMS gyro's turn-on bias; a platform turns away at its drift rate")
         drift = np.asarray(gyro_drift_deg_h, float) * DEG_PER_HOUR
     if accel_bias_ug is not None:
+        _check_instrument("--accel-bias-ug", accel_bias_ug, MAX_ACCEL_BIAS_UG, "micro-g",
+                          "0.1 g, a platform tilt of 5.7 deg, the edge of the platform's small-tilt model")
         bias = np.asarray(accel_bias_ug, float) * MICRO_G
     errors = PlatformErrors(gyro_drift=drift, gyro_noise=g.white_noise, accel_bias=bias,
                             accel_noise=a.white_noise)
