@@ -425,3 +425,21 @@ def test_init_from_a_one_row_state_file(files, tmp_path, capsys, suffix):
     ref = _in_process(capsys, "mechanize", files / "imu.csv", "--init-from", files / "truth.csv", "--json")
     got, want = json.loads(out)["final"], json.loads(ref[1])["final"]
     assert got == pytest.approx(want, rel=1e-12, abs=1e-9)
+
+
+def test_progress_off_a_terminal_is_a_plain_line_now_and_then():
+    import io
+
+    from inskit.cli_output import LineProgress, progress
+
+    buf = io.StringIO()
+    p = LineProgress(40, "monte carlo", unit="run", every_s=0.0, stream=buf)
+    with p:
+        p.update(10)
+    line = buf.getvalue().strip()
+    assert line.startswith("monte carlo: 10 of 40 runs, ") and line.endswith("s left"), line
+    quiet = io.StringIO()
+    q = LineProgress(40, "tune", every_s=3600.0, stream=quiet)
+    q.update(39)
+    assert quiet.getvalue() == ""  # a short job prints no progress
+    assert isinstance(progress(3, "x"), LineProgress)  # pytest's stderr is not a terminal

@@ -31,10 +31,9 @@ from .units import DEG, MAX_RATE_HZ
 
 
 def _progress(total, desc):
-    from tqdm import tqdm
+    from .cli_output import progress
 
-    return tqdm(total=total, desc=desc, unit="epoch", unit_scale=True, file=sys.stderr,
-                disable=not sys.stderr.isatty(), leave=False)
+    return progress(total, desc, unit="epoch", unit_scale=True, leave=False)
 
 
 class _Group(click.Group):
@@ -436,10 +435,9 @@ def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, f
                              inputs=[scenario_file])
     t0 = time.perf_counter()
     steps = ["ideal IMU", "errors and GNSS", "files"]
-    from tqdm import tqdm
+    from .cli_output import progress
 
-    with tqdm(total=len(steps), desc=f"simulate {sc.name}", file=sys.stderr, disable=not sys.stderr.isatty(),
-              leave=False) as bar:
+    with progress(len(steps), f"simulate {sc.name}", unit="step", leave=False) as bar:
         sim = run_sim(sc, seed, truth_rate_hz=truth_rate, progress=lambda _: bar.update(1))
         bar.update(1)
         files = write_simulation(sim, Path(out_dir), overwrite=force, plot=not no_plot, file_format=file_format,
@@ -668,9 +666,9 @@ def consistency(scenario_file, grade, runs, duration, seed, as_json):
     from .simulation.scenario import load_scenario
 
     sc = load_scenario(scenario_file)
-    from tqdm import tqdm
+    from .cli_output import progress
 
-    with tqdm(total=runs, desc="monte carlo", file=sys.stderr, disable=not sys.stderr.isatty(), leave=False) as bar:
+    with progress(runs, "monte carlo", unit="run", leave=False) as bar:
         res = consistency_study(sc, grade, runs, duration, seed, progress=bar.update)
     lines = [f"{sc.name}, {grade}, {runs} runs over {res['duration_s']:.0f} s: average NEES (3 dof each)"]
     for b, a in res["anees"].items():

@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import json
 import math
+import sys
+import time
 
 import click
 
@@ -72,6 +74,58 @@ RATE_HZ = RateHz()
 def log(msg):
     """A log line on stderr."""
     click.echo(msg, err=True)
+
+
+class LineProgress:
+    """Progress for a stderr that is not a terminal (a log file, CI, a pipe):
+    a plain line at most every ``every_s`` seconds, the first only after
+    ``every_s`` (a short job prints none), with the count, the rate and the
+    time left.  A terminal gets tqdm's bar instead (:func:`progress`)."""
+
+    def __init__(self, total, desc, unit="it", initial=0, every_s=10.0, stream=None):
+        self.total, self.desc, self.unit, self.n = total, desc, unit, initial
+        self.every_s, self.stream = every_s, stream if stream is not None else sys.stderr
+        self.t0 = self.last = time.monotonic()
+        self.n0 = initial
+
+    def update(self, n=1):
+        self.n += n
+        now = time.monotonic()
+        if now - self.last >= self.every_s:
+            self.last = now
+            self.stream.write(self.line(now) + "\n")
+            self.stream.flush()
+
+    def line(self, now=None):
+        """The progress line at time ``now`` (monotonic seconds)."""
+        el = (time.monotonic() if now is None else now) - self.t0
+        done = self.n - self.n0
+        rate = done / el if el > 0 else 0.0
+        text = f"{self.desc}: {self.n:,.0f}" + (f" of {self.total:,.0f}" if self.total else "") + f" {self.unit}s"
+        text += f", {el:.0f} s"
+        if self.total and rate > 0:
+            text += f", about {max(self.total - self.n, 0) / rate:.0f} s left"
+        return text
+
+    def close(self):
+        pass
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+
+def progress(total, desc, unit="it", initial=0, **tqdm_kw):
+    """A progress bar on stderr: tqdm's on a terminal, :class:`LineProgress`
+    lines elsewhere (long work shows progress in a log too).  Use as a
+    context manager; ``.update(n)``."""
+    if sys.stderr.isatty():
+        from tqdm import tqdm
+
+        return tqdm(total=total, desc=desc, unit=unit, initial=initial, file=sys.stderr, **tqdm_kw)
+    return LineProgress(total, desc, unit, initial)
 
 
 #: plain JSON values (numpy, paths; non-finite floats as ``null``): :func:`inskit.files.plain_json`

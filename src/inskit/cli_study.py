@@ -13,7 +13,6 @@ go to stderr; user errors raise :class:`~inskit.errors.InputError` or
 
 from __future__ import annotations
 
-import sys
 
 import click
 
@@ -22,9 +21,9 @@ from .cli_output import log as _log
 
 
 def _bar(total, initial):
-    from tqdm import tqdm
+    from .cli_output import progress
 
-    bar = tqdm(total=total, initial=initial, desc="study", unit="run", file=sys.stderr, smoothing=0.05)
+    bar = progress(total, "study", unit="run", initial=initial, smoothing=0.05)
     return bar.update
 
 

@@ -6,7 +6,6 @@ fixes).  ``--json`` prints one JSON object on stdout; progress goes to stderr.
 
 from __future__ import annotations
 
-import sys
 
 import click
 
@@ -37,13 +36,11 @@ def tune(config_file, grids, hold_s, reaid_s, start_after_s, shifts, workers, as
     """Choose filter settings by cross-validation: each candidate is run with
     the config's own outages withheld plus validation outages placed where the
     protocol keeps GNSS on, and ranked by its error at their ends."""
-    from tqdm import tqdm
-
+    from .cli_output import progress
     from .jobs.tune import candidates, parse_grid, table_text, tune as run_tune
 
     grid = parse_grid(grids)
-    with tqdm(total=len(candidates(grid)), desc="tune", unit="run", file=sys.stderr,
-              disable=not sys.stderr.isatty()) as bar:
+    with progress(len(candidates(grid)), "tune", unit="candidate") as bar:
         res = run_tune(config_file, grid, hold_s=hold_s, reaid_s=reaid_s, start_after_s=start_after_s,
                        workers=workers, progress=bar.update, shifts=shifts)
     _emit(res, as_json, table=table_text(res))
