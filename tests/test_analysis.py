@@ -121,3 +121,60 @@ def test_per_epoch_columns():
     assert cols["err_vertical_m"] == pytest.approx([1.0] * len(t), abs=1e-6)  # |down|
     assert cols["err_down_m"] == pytest.approx([-1.0] * len(t), abs=1e-6)
     assert cols["err_3d_m"] == pytest.approx([np.sqrt(26.0)] * len(t), abs=1e-6)
+
+
+def _kept_figure(monkeypatch, module):
+    """Capture the figure ``module.save_figure`` would write (and close)."""
+    figs = []
+
+    def keep(fig, path, dpi=110):
+        figs.append(fig)
+        return path
+
+    monkeypatch.setattr(module, "save_figure", keep)
+    return figs
+
+
+def test_line_breaks_at_time_gaps_and_angle_wraps():
+    t = np.array([0.0, 1.0, 2.0, 3.0, 10.0, 11.0])
+    y = np.array([170.0, 178.0, -178.0, -170.0, -160.0, -150.0])
+    tb, yb = analysis.line_breaks(t, y, period=360.0)
+    # one break at the wrap (between 1 s and 2 s: 178 -> -178), one at the 7 s gap
+    assert len(tb) == len(t) + 2 and np.isnan(yb).sum() == 2
+    assert np.isnan(yb[2]) and tb[2] == 1.5 and np.isnan(yb[5]) and tb[5] == 6.5
+    # not an angle: the jump stays joined, the gap does not
+    tb, yb = analysis.line_breaks(t, y)
+    assert np.isnan(yb).sum() == 1 and tb[4] == 6.5
+    # nothing to break: the arrays as given
+    tb, yb = analysis.line_breaks(t[:4], np.arange(4.0))
+    assert np.array_equal(tb, t[:4]) and not np.isnan(yb).any()
+
+
+def test_plot_draws_no_line_across_a_truth_gap_or_a_yaw_wrap(monkeypatch, tmp_path):
+    """A truth with a 20 s hole leaves those epochs unscored, and a yaw error
+    near 180 deg wraps: neither is joined by a line (it would draw errors
+    nobody computed, and a swing through the whole circle)."""
+    import inskit.analysis.errors as E
+
+    ref = np.array([0.5, 0.5, 0.0])
+    t = np.arange(0.0, 60.0, 1.0)
+    yaw = np.radians(170.0 + t)  # crosses 180 deg at 10 s
+    sol = NavSolution.from_euler(t, np.tile(ref, (len(t), 1)), np.zeros((len(t), 3)),
+                                 np.column_stack([0 * t, 0 * t, yaw]))
+    keep = (t < 20) | (t > 40)
+    truth = NavSolution(t[keep], np.tile(ref, (keep.sum(), 1)), np.zeros((keep.sum(), 3)),
+                        np.tile([1.0, 0, 0, 0], (keep.sum(), 1)))
+    err = analysis.nav_error(sol, truth)
+    assert err.time.max() - err.time.min() == 59.0 and len(err.time) == keep.sum()
+    figs = _kept_figure(monkeypatch, E)
+    analysis.plot_errors(err, tmp_path / "e.png")
+    pos, _, att = figs[0].axes
+    x, y = pos.get_lines()[0].get_data()
+    gap = (x > 19) & (x < 41)
+    assert np.isnan(y[gap]).all() and gap.any()           # the hole: undrawn
+    yaw_line = att.get_lines()[2]
+    _, yy = yaw_line.get_data()
+    ok = ~np.isnan(yy)
+    assert (np.abs(np.diff(yy))[ok[1:] & ok[:-1]] < 180).all()  # no segment jumps across the wrap
+    assert ok.sum() == len(err.time)                       # every epoch still drawn
+    assert np.nanmax(yy) > 175 and np.nanmin(yy) < -175   # the wrap is there, undrawn

@@ -187,3 +187,23 @@ def test_a_gap_in_the_array_file_is_reported(tmp_path):
     r = invoke(gyrofree, "navigate", tmp_path / "gf" / "array.csv", "--omega0", "1,2,3", "--out",
                tmp_path / "nav2", "--json")
     assert json.loads(r.stdout)["warnings"] == []
+
+
+def test_fig11_euler_angles_are_not_joined_across_the_wrap(tmp_path, monkeypatch):
+    """fig11: the yaw of the spinning unit wraps at +-180 deg every 1.7 s; the
+    wrap is not drawn as a vertical line."""
+    import numpy as np
+
+    from inskit.jobs import gyrofree as JG
+
+    figs = {}
+    monkeypatch.setattr(JG, "save_figure", lambda fig, path, dpi=110: figs.setdefault(Path(path).name, fig))
+    JG.reproduce_gyrofree(tmp_path, quick=True, log=lambda *a, **k: None)
+    lines = figs["fig11_euler_angles.png"].axes[0].get_lines()
+    assert len(lines) == 6
+    for ln in lines:
+        _, y = ln.get_data()
+        ok = ~np.isnan(y)
+        assert (np.abs(np.diff(y))[ok[1:] & ok[:-1]] < 180).all()
+    _, yaw = lines[4].get_data()
+    assert np.isnan(yaw).sum() >= 5  # the truth yaw wraps 6 times in the 10 s

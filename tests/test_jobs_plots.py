@@ -68,3 +68,27 @@ def test_a_failing_plot_of_the_parent_is_raised_and_the_child_reaped(run, tmp_pa
     if forked:  # the child was waited for: no zombie left behind
         with pytest.raises(ChildProcessError):
             os.waitpid(forked[0], os.WNOHANG)
+
+
+def test_errors_plot_draws_no_line_across_a_gap_of_the_fixes(run, tmp_path, monkeypatch):
+    """errors.png: where the GNSS file has no fix for 30 s, nothing was
+    measured, and no line joins the errors on either side."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from inskit.types import GnssData
+
+    g = run.gnss
+    t0 = g.time[0]
+    keep = ~((g.time - t0 > 60.0) & (g.time - t0 < 90.0))
+    res = SimpleNamespace(**{k: getattr(run, k) for k in ("forward", "smoothed", "config", "windows")},
+                          gnss=GnssData(g.time[keep], g.lla[keep], g.sigma_ned[keep]), used=run.used[keep])
+    figs = []
+    monkeypatch.setattr(PL, "save_figure", lambda fig, path, dpi=110: figs.append(fig))
+    PL._errors(PL._Context(res), tmp_path / "errors.png", PL._plt())
+    for ax in figs[0].axes:
+        for ln in ax.get_lines():
+            x, y = ln.get_data()
+            inside = (x > 61.0) & (x < 89.0)
+            assert inside.any() and np.isnan(y[inside]).all()

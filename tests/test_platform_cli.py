@@ -170,3 +170,25 @@ def test_instrument_errors_beyond_the_models_are_refused_naming_the_option(scena
         with pytest.raises(InputError, match=rf"^{option} .*: at most "):
             run(platform, [sub, scenario, "--out", tmp_path / "a", option, value, "--duration", 100])
     assert not (tmp_path / "a").exists()
+
+
+def test_gimbal_angles_are_not_joined_across_their_wrap(tmp_path, monkeypatch):
+    """platform.png: a gimbal yaw passing +-180 deg is drawn as the angle it
+    is, not as a vertical line swinging through the whole circle."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from inskit.jobs import platform as JP
+
+    figs = []
+    monkeypatch.setattr(JP, "save_figure", lambda fig, path, dpi=110: figs.append(fig))
+    t = np.arange(0.0, 100.0, 1.0)
+    yaw = np.radians((170.0 + t + 180.0) % 360.0 - 180.0)  # 170 deg on, wrapping at 10 s and 370 s
+    extra = {f"tilt_{a}_rad": 1e-4 * t for a in "enu"}
+    extra.update({"gimbal_roll_rad": 0 * t, "gimbal_pitch_rad": 0 * t, "gimbal_yaw_rad": yaw})
+    run = SimpleNamespace(truth=SimpleNamespace(time=t), solution=SimpleNamespace(extra=extra))
+    JP._plot_platform(run, tmp_path / "p.png", "wrap")
+    _, y = figs[0].axes[1].get_lines()[2].get_data()
+    ok = ~np.isnan(y)
+    assert (np.abs(np.diff(y))[ok[1:] & ok[:-1]] < 180).all() and ok.sum() == len(t)

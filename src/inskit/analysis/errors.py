@@ -68,6 +68,53 @@ def truth_gaps(truth_time, factor=TRUTH_GAP_FACTOR):
     return np.column_stack([tt[big], tt[big + 1]]) if len(big) else np.zeros((0, 2)), limit
 
 
+def line_breaks(t, y, *, gap_factor=TRUTH_GAP_FACTOR, period=None):
+    """``(t, y)`` with a NaN point inserted wherever a plotted line must not
+    join two neighbouring samples.
+
+    Two samples are not joined when the time step between them exceeds
+    ``gap_factor`` median steps (no data there: a line across the gap
+    would draw values nobody computed) or, with ``period``, when ``y``
+    jumps by more than half a period (an angle wrapped to one period: the
+    jump is the wrap, not motion, and a line would draw a swing through
+    the whole circle).
+
+    Parameters
+    ----------
+    t : (n,) array_like
+        Increasing times [s] (any unit: only ratios of steps count).
+    y : (n,) array_like
+        Values.
+    gap_factor : float or None
+        Steps longer than this many median steps break the line; ``None``:
+        never on time.
+    period : float, optional
+        The period ``y`` is wrapped to (360 for degrees, ``2 pi`` for
+        radians); ``None``: ``y`` is not an angle.
+
+    Returns
+    -------
+    t, y : (m,) ndarray
+        ``m >= n``; each break adds one point at the midpoint time with a
+        NaN value, which matplotlib leaves undrawn.
+    """
+    t = np.asarray(t, dtype=float)
+    y = np.asarray(y, dtype=float)
+    if len(t) < 2:
+        return t, y
+    dt = np.diff(t)
+    cut = np.zeros(len(dt), dtype=bool)
+    if gap_factor is not None:
+        cut |= dt > gap_factor * float(np.median(dt))
+    if period is not None:
+        with np.errstate(invalid="ignore"):
+            cut |= np.abs(np.diff(y)) > 0.5 * period
+    if not cut.any():
+        return t, y
+    k = np.nonzero(cut)[0] + 1
+    return np.insert(t, k, 0.5 * (t[k - 1] + t[k])), np.insert(y, k, np.nan)
+
+
 def truth_covers(t, truth_time, factor=TRUTH_GAP_FACTOR, gaps=None):
     """Which times ``t`` a truth sampled at ``truth_time`` can score: inside
     its span and not strictly inside one of its gaps (:func:`truth_gaps`,
@@ -309,6 +356,10 @@ def per_epoch_columns(err: NavError) -> dict:
 def plot_errors(err: NavError, path, *, title="Navigation error", sigma=None):
     """Plot position, velocity and attitude errors against time to a PNG.
 
+    The lines break across gaps of the epochs (those a truth gap left
+    unscored) and across the wrap of an attitude error at +-180 deg
+    (:func:`line_breaks`).
+
     Parameters
     ----------
     err : NavError
@@ -331,11 +382,13 @@ def plot_errors(err: NavError, path, *, title="Navigation error", sigma=None):
     ]
     for ax, (data, label, names, scale, key) in zip(axes, groups):
         for j, name in enumerate(names):
-            (line,) = ax.plot(t, data[:, j], lw=0.8, label=name)
+            # no line across a gap of the epochs scored (a truth gap, say) nor across an angle's wrap
+            (line,) = ax.plot(*line_breaks(t, data[:, j], period=360.0 if key == "att" else None), lw=0.8,
+                              label=name)
             if sigma is not None and key in sigma:
                 s = 3.0 * np.asarray(sigma[key])[:, j] * scale
-                ax.plot(t, s, lw=0.6, ls="--", color=line.get_color())
-                ax.plot(t, -s, lw=0.6, ls="--", color=line.get_color())
+                ax.plot(*line_breaks(t, s), lw=0.6, ls="--", color=line.get_color())
+                ax.plot(*line_breaks(t, -s), lw=0.6, ls="--", color=line.get_color())
         ax.set_ylabel(label)
         ax.grid(True, alpha=0.3)
         ax.legend(loc="upper left", fontsize=8)

@@ -449,6 +449,7 @@ def _plots(out, res):
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from ..analysis import line_breaks
     from .reproduce_gyrofree import PUBLISHED_ANALYTIC, PUBLISHED_SIMULATED
 
     paths = []
@@ -467,8 +468,10 @@ def _plots(out, res):
     fig, ax = plt.subplots(figsize=(8, 4.5))
     e_t, e_n = np.degrees(truth.euler[::step]), np.degrees(nav.euler[::step])
     for j, nme in enumerate(("roll", "pitch", "yaw")):
-        ax.plot(t[::step], e_t[:, j], color=f"C{j}", lw=1.2, label=f"{nme} (truth)")
-        ax.plot(t[::step], e_n[:, j], "--", color="k", lw=0.6, label="array, errors of fig. 14" if j == 0 else None)
+        # broken at the +-180 deg wrap: no vertical line drawn there
+        ax.plot(*line_breaks(t[::step], e_t[:, j], period=360.0), color=f"C{j}", lw=1.2, label=f"{nme} (truth)")
+        ax.plot(*line_breaks(t[::step], e_n[:, j], period=360.0), "--", color="k", lw=0.6,
+                label="array, errors of fig. 14" if j == 0 else None)
     ax.set_xlabel("time [s]")
     ax.set_ylabel("Euler angle of C_ib (ZYX) [deg]")
     ax.set_title("fig. 11: Euler angles, rate [1, 2, 3] rad/s")

@@ -704,8 +704,8 @@ def _plot_platform(run, path, title):
     for a, lab in zip(("e", "n", "u"), ("east", "north", "up")):
         ax[0].plot(t, x[f"tilt_{a}_rad"] / ARCMIN, lw=0.8, label=lab)
     ax[0].set_ylabel("platform tilt [arcmin]")
-    for a in ("roll", "pitch", "yaw"):
-        ax[1].plot(t, np.degrees(x[f"gimbal_{a}_rad"]), lw=0.8, label=a)
+    for a in ("roll", "pitch", "yaw"):  # broken at the +-180 deg wrap: no swing drawn there
+        ax[1].plot(*analysis.line_breaks(t, np.degrees(x[f"gimbal_{a}_rad"]), period=360.0), lw=0.8, label=a)
     ax[1].set_ylabel("gimbal pick-off angles [deg]")
     ax[1].set_xlabel("time [s]")
     ax[0].set_title(title)

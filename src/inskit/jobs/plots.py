@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import earth
+from ..analysis import line_breaks
 from ..files import save_figure
 from ..units import DEG
 from .outages import antenna_positions
@@ -92,12 +93,13 @@ def _errors(c, path, plt):
         si = s.interpolate(tg)
         for j, name in enumerate(("north", "east", "down")):
             ax = axes[j]
-            ax.plot(tg - t0, d[:, j], lw=0.7, color=color, label=f"{label} - GNSS")
+            # no line across a gap of the fixes: nothing was measured there
+            ax.plot(*line_breaks(tg - t0, d[:, j]), lw=0.7, color=color, label=f"{label} - GNSS")
             if len(d):
                 worst[j] = max(worst[j], float(np.nanmax(np.abs(d[:, j]))))
             sig = si.extra[("sigma_n_m", "sigma_e_m", "sigma_d_m")[j]]
-            ax.plot(tg - t0, 3 * sig, lw=0.5, ls="--", color=color)
-            ax.plot(tg - t0, -3 * sig, lw=0.5, ls="--", color=color)
+            ax.plot(*line_breaks(tg - t0, 3 * sig), lw=0.5, ls="--", color=color)
+            ax.plot(*line_breaks(tg - t0, -3 * sig), lw=0.5, ls="--", color=color)
             ax.set_ylabel(f"{name} [m]")
     for j, ax in enumerate(axes):
         _shade(ax, res.windows, t0)

@@ -124,6 +124,7 @@ def _plot(sim, path):
     import matplotlib.pyplot as plt
 
     from .. import earth
+    from ..analysis import line_breaks
 
     tr = sim.truth
     p = earth.lla_to_ned(tr.lla[::10], tr.lla[0])
@@ -141,8 +142,8 @@ def _plot(sim, path):
     ax[1, 0].plot(tt, tr.lla[::10, 2])
     ax[1, 0].set_ylabel("height [m]")
     rpy = np.degrees(tr.euler[::10])
-    for j, nme in enumerate(("roll", "pitch", "yaw")):
-        ax[1, 1].plot(tt, rpy[:, j], lw=0.8, label=nme)
+    for j, nme in enumerate(("roll", "pitch", "yaw")):  # broken at the +-180 deg wrap: no swing drawn there
+        ax[1, 1].plot(*line_breaks(tt, rpy[:, j], period=360.0), lw=0.8, label=nme)
     ax[1, 1].legend(fontsize=8)
     ax[1, 1].set_ylabel("attitude [deg]")
     for a in (ax[0, 1], ax[1, 0], ax[1, 1]):
