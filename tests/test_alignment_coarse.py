@@ -59,6 +59,22 @@ def test_motion_and_static_detection(drive):
     assert abs(np.degrees(rot.wrap_angle(course - np.radians(130.0)))) < 1.0
 
 
+def test_a_standstill_is_one_interval_at_any_fix_rate():
+    """Receiver velocities of 0.05 m/s noise over 60 s of rest: tested fix by
+    fix against 3 sigma, 20 Hz fixes broke the rest into 7 pieces covering
+    33 of its 60 s (1 Hz: one piece of 59 s); averaged over 1 s, one piece
+    at either rate."""
+    tr = SegmentTrajectory((np.radians(40), np.radians(-3), 150.0))
+    tr.static(60).accelerate(10, 6).cruise(10)
+    for rate_hz in (1.0, 20.0):
+        gnss, _ = simulate_gnss(tr, 0.0, tr.duration, GnssErrors(rate_hz=rate_hz, white_h_m=0.5, white_v_m=1.0,
+                                                                  velocity_sigma_m_s=0.05),
+                                np.random.default_rng(2))
+        iv = static_intervals(gnss)
+        assert len(iv) == 1 and iv[0][0] < 2.0 and 58.5 < iv[0][1] < 60.5, (rate_hz, iv)
+        assert 19.5 < detect_motion_start(gnss) < 61.5
+
+
 def test_refuses_a_log_that_does_not_start_at_rest(drive):
     imu, gnss, _ = drive
     k = int(np.searchsorted(imu.time, 21.0))
