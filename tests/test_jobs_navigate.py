@@ -551,3 +551,50 @@ def test_an_odometer_in_the_wrong_unit_is_refused_by_its_speed():
         check_odometer_speed("odo.csv", to, v * 3.6, gnss)
     with pytest.raises(InputError, match=r"2\.24 times .*mph"):
         check_odometer_speed("odo.csv", to, v * 2.237, gnss)
+
+
+@pytest.mark.parametrize("windows", [[[100.0, 120.0], [120.0, 140.0]],    # touching: the fix at 120 s withheld twice
+                                     [[130.0, 140.0], [100.0, 120.0], [120.5, 129.0]],  # unsorted, 0.5 s apart
+                                     [[100.0, 120.0], [121.0, 140.0]]])   # 1 s apart: the fix at 121 s is withheld
+def test_outage_windows_without_a_used_fix_between_are_refused(windows):
+    """Windows 100-120 and 120-140 were scored as two outages: both took the
+    truth figures of the one 40 s outage they make (end at 140.99 s), and
+    the fix at 120 s was scored in each.  Two windows that withhold fixes
+    need a used fix between them."""
+    from inskit.errors import InputError
+    from inskit.jobs.navigate import outage_windows
+    from inskit.types import GnssData
+
+    t = np.arange(1000.0, 1400.0, 1.0)
+    gnss = GnssData(t, np.tile([0.7, 0.1, 100.0], (len(t), 1)), np.full((len(t), 3), 0.5))
+    cfg = load_config(EXAMPLE, {"outages": {"protocol": "windows", "windows_s": windows}})
+    with pytest.raises(InputError, match=r"outages: windows \[\d+(\.5)?, \d+\] and \[\d+(\.5)?, \d+\] s after the "
+                                         r"first GNSS epoch leave no used fix between them .*merge them"):
+        outage_windows(cfg, gnss)
+    ok = load_config(EXAMPLE, {"outages": {"protocol": "windows", "windows_s": [[100.0, 120.0], [121.5, 140.0],
+                                                                              [500.0, 600.0], [600.0, 700.0]]}})
+    assert outage_windows(ok, gnss)[:2] == [(1100.0, 1120.0), (1121.5, 1140.0)]  # the fix at 121 s is used;
+    # beyond the fixes the windows withhold nothing and are reported as not scored, not refused
+
+
+def test_a_speed_course_log_outside_the_imu_span_is_refused(tmp_path):
+    """A speed-and-course log on another time base gave 0 updates and a
+    healthy run, as if it had been used; the odometer and height logs were
+    refused already."""
+    from inskit.errors import InputError
+    from inskit.files import write_csv
+    from inskit.jobs.navigate import speed_course_measurement
+    from inskit.types import ImuData
+
+    t = np.arange(10000.0, 10100.0, 1.0)
+    write_csv(tmp_path / "sc.csv", {"time_s": t, "speed_m_s": np.full(len(t), 5.0), "course_deg": np.zeros(len(t)),
+                                    "sigma_speed_m_s": np.full(len(t), 0.05), "sigma_course_deg": np.ones(len(t))})
+    cfg = load_config(EXAMPLE, {"gnss": {"speed_course": str(tmp_path / "sc.csv")}})  # its time_offset_s: 0.001 s
+    ti = np.arange(0.0, 200.0, 0.01)
+    imu = ImuData(ti, np.zeros((len(ti), 3)), np.zeros((len(ti), 3)))
+    with pytest.raises(InputError, match=r"sc\.csv: speed and course times 10000\.001\.\.10099\.001 s do not overlap "
+                                         r"the IMU's 0\.000\.\.199\.990 s: mismatched time bases\? "
+                                         r"\(gnss\.time_offset_s\)"):
+        speed_course_measurement(cfg, [], np.zeros(3), imu)
+    imu_on = ImuData(ti + 10050.0, imu.dtheta_b, imu.dv_b)
+    assert speed_course_measurement(cfg, [], np.zeros(3), imu_on) is not None

@@ -403,6 +403,17 @@ def check_odometer_speed(path, t, v, gnss: GnssData, min_speed_m_s=2.0):
                          "within it is estimated): the speed column must be m/s")
 
 
+def refuse_no_overlap(path, what, t, imu: ImuData, offset_key):
+    """Refuse an aiding log (``what``: "odometer", "speed and course")
+    whose time tags ``t`` [s, after its offset] all lie outside the IMU's
+    span: none of its readings could be used, and a run without them would
+    pass for one with them.  ``offset_key`` names the config key that
+    shifts its time tags."""
+    if t[-1] < imu.time[0] or t[0] > imu.time[-1]:
+        raise InputError(f"{Path(path).name}: {what} times {t[0]:.3f}..{t[-1]:.3f} s do not overlap the IMU's "
+                         f"{imu.time[0]:.3f}..{imu.time[-1]:.3f} s: mismatched time bases? ({offset_key})")
+
+
 def odometer_measurement(cfg: NavigateConfig, imu: ImuData, gnss: GnssData | None = None):
     """The odometer plug-in over the ``[odometer]`` log, thinned to
     ``rate_hz``; refuses a log that does not overlap the IMU's, or whose
@@ -414,9 +425,7 @@ def odometer_measurement(cfg: NavigateConfig, imu: ImuData, gnss: GnssData | Non
     path = cfg.resolve(o.file)
     t, v = io.read_speed(path)
     t = t + o.time_offset_s
-    if t[-1] < imu.time[0] or t[0] > imu.time[-1]:
-        raise InputError(f"{path.name}: odometer times {t[0]:.3f}..{t[-1]:.3f} s do not overlap the IMU's "
-                         f"{imu.time[0]:.3f}..{imu.time[-1]:.3f} s: mismatched time bases? (odometer.time_offset_s)")
+    refuse_no_overlap(path, "odometer", t, imu, "odometer.time_offset_s")
     if o.rate_hz is not None and len(t) > 1:
         keep = np.r_[True, np.diff(np.floor(t * o.rate_hz)) > 0]
         t, v = t[keep], v[keep]
@@ -426,14 +435,16 @@ def odometer_measurement(cfg: NavigateConfig, imu: ImuData, gnss: GnssData | Non
                     nhc_sigma_m_s=o.nhc_sigma_m_s)
 
 
-def speed_course_measurement(cfg: NavigateConfig, windows, lever):
+def speed_course_measurement(cfg: NavigateConfig, windows, lever, imu: ImuData):
     """GNSS speed and course over ground as horizontal-velocity updates,
-    withheld inside the outage windows like the fixes."""
+    withheld inside the outage windows like the fixes; refuses a log that
+    does not overlap the IMU's (:func:`refuse_no_overlap`)."""
     from ..integration import GnssSpeedCourse
 
     path = cfg.resolve(cfg.gnss.speed_course)
     t, s, c, ss, sc = io.read_speed_course(path)
     t = t + cfg.gnss.time_offset_s
+    refuse_no_overlap(path, "speed and course", t, imu, "gnss.time_offset_s")
     return GnssSpeedCourse(t, s, c, ss, sc, lever_arm_b=lever, use=~withheld_mask(t, windows),
                            min_speed_m_s=cfg.gnss.speed_course_min_speed_m_s)
 
@@ -519,12 +530,36 @@ def clock_blocks(cfg: NavigateConfig, raw: RawGnss, initial: NavState, lever, us
 
 
 def outage_windows(cfg: NavigateConfig, gnss: GnssData):
+    """The outage windows of ``cfg`` in absolute time [s] (time zero: the
+    first fix of ``gnss``).
+
+    Raises
+    ------
+    InputError
+        Two windows that both withhold fixes with no used fix between them
+        (touching windows, or a gap shorter than the fixes' interval): the
+        first has no end, its scores would be the second's over again and
+        the fix they share would be counted twice.
+    """
     t0 = gnss.time[0]
     if cfg.outages.protocol == "rtklibexplorer":
         return rtklibexplorer_outages(t0)
-    if cfg.outages.protocol == "windows":
-        return [(t0 + a, t0 + b) for a, b in cfg.outages.windows_s]
-    return []
+    if cfg.outages.protocol != "windows":
+        return []
+    windows = [(t0 + a, t0 + b) for a, b in cfg.outages.windows_s]
+    t = gnss.time
+    used = ~withheld_mask(t, windows)
+    w = sorted(windows)
+    for (a0, b0), (a1, b1) in zip(w, w[1:]):
+        if (withheld_mask(t, [(a0, b0)]).any() and withheld_mask(t, [(a1, b1)]).any()
+                and not (used & (t > b0) & (t < a1)).any()):
+            step = float(np.median(np.diff(t))) if len(t) > 1 else float("nan")
+            raise InputError(
+                f"outages: windows [{a0 - t0:g}, {b0 - t0:g}] and [{a1 - t0:g}, {b1 - t0:g}] s after the first GNSS "
+                f"epoch leave no used fix between them (the fixes come every {step:.3g} s): they are one outage, "
+                f"and the first would have no end of its own; merge them into [{a0 - t0:g}, {b1 - t0:g}] or leave "
+                "a fix between them")
+    return windows
 
 
 def _noise_used(layout, measured):
@@ -752,7 +787,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         if odo is not None:
             meas.append(odo)
         if cfg.gnss.speed_course is not None:
-            meas.append(speed_course_measurement(cfg, windows, lever))
+            meas.append(speed_course_measurement(cfg, windows, lever, imu))
         if height is not None:
             meas.append(height)
         extra = {g.row: gap_process_noise(settings.layout, g.length_s, np.radians(cfg.imu.gap_rate_sigma_deg_s),
