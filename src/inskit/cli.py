@@ -19,6 +19,7 @@ from . import __version__
 from .cli_output import emit as _emit
 from .cli_output import FINITE, RATE_HZ
 from .cli_output import log as _log
+from .cli_output import log_health
 from .cli_output import SEED
 from .errors import InputError, InskitError
 from .units import DEG, MAX_RATE_HZ
@@ -394,11 +395,7 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
         files.append(Path(rep["report"]))
     _log(f"wrote {len(files)} files to {target}/")
     h = s["health"]
-    _log(f"health: {h['verdict']}")
-    for line in h["reasons"]:
-        _log(f"  unhealthy: {line}")
-    for line in h["warnings"]:
-        _log(f"  warning: {line}")
+    log_health(h)
     if as_json:
         _emit(s, True)
     if strict and h["verdict"] != "healthy":

@@ -20,6 +20,7 @@ import click
 from .cli_output import emit as _emit
 from .cli_output import FINITE
 from .cli_output import log as _log
+from .cli_output import log_health
 from .cli_output import SEED
 
 
@@ -75,11 +76,7 @@ def spp(obs, nav, reference, mask_deg, iono, tropo, systems, no_raim, out_dir, f
     res = run_spp(obs, nav, reference=reference, mask_deg=mask_deg, iono=iono, tropo=tropo, systems=systems,
                   out=out_dir, overwrite=force, raim=not no_raim, log=_log)
     h = res["health"]
-    _log(f"health: {h['verdict']}")
-    for line in h["reasons"]:
-        _log(f"  unhealthy: {line}")
-    for line in h["warnings"]:
-        _log(f"  warning: {line}")
+    log_health(h)
     _emit(res, as_json, _table(res))
     if strict and h["verdict"] != "healthy":
         sys.exit(3)

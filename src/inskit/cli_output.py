@@ -76,6 +76,15 @@ def log(msg):
     click.echo(msg, err=True)
 
 
+def log_health(h):
+    """A health verdict on stderr: the verdict, each reason, each warning."""
+    log(f"health: {h['verdict']}")
+    for line in h["reasons"]:
+        log(f"  unhealthy: {line}")
+    for line in h["warnings"]:
+        log(f"  warning: {line}")
+
+
 class LineProgress:
     """Progress for a stderr that is not a terminal (a log file, CI, a pipe):
     a plain line at most every ``every_s`` seconds, the first only after

@@ -15,7 +15,6 @@ Output folder (``out``), each file written whole or not at all, and
 
 from __future__ import annotations
 
-import json
 import time
 import warnings
 from pathlib import Path
@@ -23,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError, InputError
-from ..files import check_folder_writable, write_csv, write_text
+from ..files import check_folder_writable, write_csv, write_json
 
 IONO = ("klobuchar", "iono-free", "none")
 TROPO = ("saastamoinen", "none")
@@ -287,22 +286,8 @@ def _write(out, files, sol, enu, obs_path, nav_path, s, write_pos, log):
     write_csv(epochs, cols, "%.10g")
     written += [epochs, summary]
     s["files"] = [str(f) for f in written]
-    write_text(summary, json.dumps(_jsonable(s), indent=2, allow_nan=False))
+    write_json(summary, s, indent=2)  # strict JSON: a NaN figure is null
     return written
-
-
-def _jsonable(x):
-    if isinstance(x, dict):
-        return {str(k): _jsonable(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [_jsonable(v) for v in x]
-    if isinstance(x, np.ndarray):
-        return _jsonable(x.tolist())
-    if isinstance(x, (float, np.floating)):
-        return float(x) if np.isfinite(x) else None
-    if isinstance(x, (np.integer, np.bool_)):
-        return x.item()
-    return x
 
 
 def spp_throughput(obs_path, nav_path, repeats=5, *, systems=("G", "E")):
