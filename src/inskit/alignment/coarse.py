@@ -139,6 +139,10 @@ class Startup:
     at_yaw : callable or None
         ``at_yaw(yaw) -> NavState``: the same start-up with another initial
         yaw [rad] (what the bank tries).
+    axes : dict or None
+        Where the vehicle's axes were found in the IMU's
+        (:func:`inskit.alignment.vehicle_axes.vehicle_axes`, its summary and
+        what was done), when the check ran.
     """
 
     state: NavState
@@ -151,6 +155,7 @@ class Startup:
     sigma: dict | None = None
     bank: dict | None = None
     at_yaw: object = field(default=None, repr=False, compare=False)
+    axes: dict | None = None
 
     def summary(self, t0) -> dict:
         """The ``startup`` entry of the job summary (times relative to ``t0`` [s])."""
@@ -162,6 +167,8 @@ class Startup:
             out["sigma"] = {k: float(v) for k, v in self.sigma.items()}
         if self.bank:
             out["yaw_bank"] = self.bank
+        if self.axes:
+            out["vehicle_axes"] = self.axes
         return out
 
 

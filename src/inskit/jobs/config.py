@@ -397,6 +397,14 @@ class InitSection(_Strict):
                                 "over 360 deg (1: no bank); after it the yaw sigma is half their spacing")
     bank_s: float = Field(40.0, gt=0, description="data each yaw hypothesis is run over before the best (smallest "
                           "mean NIS of the GNSS updates) is kept [s]")
+    vehicle_axes: Literal["find", "given"] = Field(
+        "find", description="static-then-track, in-motion, auto (heading from the track): where the vehicle's "
+        "forward and down axes lie in the IMU's (after imu.mount_rpy_deg) is measured at start-up from the GNSS "
+        "acceleration against the specific force (the summary's startup.vehicle_axes); find: when the direction "
+        "of travel lies more than 20 deg off the IMU's x axis, or its z axis points up, the readings are rotated "
+        "into the vehicle's axes (reported, with the imu.mount_rpy_deg that says so; lever arms are taken in the "
+        "vehicle's axes); given: the IMU's axes are taken for the vehicle's, and a mismatch makes the run "
+        "unhealthy")
     sigma_pos_m: float = Field(0.05, gt=0, description="initial position sigma per axis")
     sigma_vel_m_s: float = Field(0.05, gt=0, description="initial velocity sigma per axis")
     sigma_roll_pitch_deg: float = Field(1.0, gt=0, description="initial roll and pitch sigma")
@@ -423,7 +431,7 @@ class InitSection(_Strict):
                 raise ValueError(f"mode 'given' needs {', '.join(missing)}")
             if abs(self.lat_deg) > 90:
                 raise ValueError(f"lat_deg {self.lat_deg} is outside [-90, 90]")
-            bad = _changed(self, INIT_STATIC_KEYS + inmotion_keys + ("yaw_hypotheses", "bank_s"))
+            bad = _changed(self, INIT_STATIC_KEYS + inmotion_keys + ("yaw_hypotheses", "bank_s", "vehicle_axes"))
             if bad:
                 raise _key_error(bad[0], f"{_names(bad, 'init')} would be ignored: "
                                  f"{_they(bad, 'it tunes', 'they tune')} mode \"static-then-track\", "

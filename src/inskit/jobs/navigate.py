@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import time
 from contextlib import contextmanager
@@ -11,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import io
+from .. import rotations as rot
 from ..alignment.coarse import Startup, gnss_speed, static_intervals
 from ..errors import InputError
 from ..files import write_json, write_text
@@ -705,19 +707,29 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
                              f"({imu.time[0]:.3f}..{imu.time[-1]:.3f} s) overlaps {int(span.sum())} used GNSS "
                              "fix(es); the start-up needs the fixes while the IMU runs (mismatched time bases, "
                              "or logs of different runs?)")
-        try:  # the start-up sees only the fixes while the IMU runs (a short IMU log claimed a static start it lacked)
-            startup = auto_startup(imu, gnss_used if span.all() else gnss_used.select(span), lever, mode=i.mode,
-                                   min_static_s=i.min_static_s, heading_speed_m_s=i.heading_speed_m_s,
-                                   course_average_s=i.course_average_s, level_window_s=i.level_window_s,
-                                   yaw_guess=None if i.yaw_deg is None else i.yaw_deg * DEG,
-                                   gyro_bias_sigma=turn_on_sigmas(cfg)[0], accel_bias_sigma=turn_on_sigmas(cfg)[1],
-                                   floors={k: getattr(i, k) for k in STARTUP_SIGMAS})
-        except InputError as e:
-            if span.all():
-                raise
-            raise InputError(f"{e} (the start-up looks only at the {int(span.sum())} fixes inside the IMU log's span "
-                             f"{imu.time[0]:.3f}..{imu.time[-1]:.3f} s; {int((~span).sum())} fixes lie outside it)"
-                             ) from None
+        g_start = gnss_used if span.all() else gnss_used.select(span)
+
+        def start(imu):
+            try:  # the start-up sees only the fixes while the IMU runs (a short IMU log claimed a static start it lacked)
+                return auto_startup(imu, g_start, lever, mode=i.mode,
+                                    min_static_s=i.min_static_s, heading_speed_m_s=i.heading_speed_m_s,
+                                    course_average_s=i.course_average_s, level_window_s=i.level_window_s,
+                                    yaw_guess=None if i.yaw_deg is None else i.yaw_deg * DEG,
+                                    gyro_bias_sigma=turn_on_sigmas(cfg)[0], accel_bias_sigma=turn_on_sigmas(cfg)[1],
+                                    floors={k: getattr(i, k) for k in STARTUP_SIGMAS})
+            except InputError as e:
+                if span.all():
+                    raise
+                raise InputError(f"{e} (the start-up looks only at the {int(span.sum())} fixes inside the IMU log's "
+                                 f"span {imu.time[0]:.3f}..{imu.time[-1]:.3f} s; {int((~span).sum())} fixes lie "
+                                 "outside it)") from None
+
+        startup = start(imu)
+        if i.yaw_deg is None and not bank_needed(startup, dict(startup.sigma or {}).get(
+                "sigma_yaw_deg", i.sigma_yaw_deg) * DEG, i.yaw_hypotheses):
+            # the heading comes from the track: is the IMU's x axis the direction of travel, its z axis down?
+            imu, startup, cfg = _check_vehicle_axes(cfg, imu, g_start, startup, start, log)
+            scfg = cfg
         initial = startup.state
         sig = dict(startup.sigma or {})
         bank_on = (cfg.filter.scheme != "uncoupled"
@@ -817,6 +829,63 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     return NavigateResult(cfg, imu, gnss, windows, used, startup, settings, out, sm, score_f, score_s,
                           time.perf_counter() - t_start, measured, gaps, raw, clock_start, rate_changes, truth,
                           streams, pending, truth_parts, imu_notes)
+
+
+def _check_vehicle_axes(cfg: NavigateConfig, imu: ImuData, gnss: GnssData, startup: Startup, start, log):
+    """The start-up's check of the vehicle's axes in the IMU's
+    (:mod:`inskit.alignment.vehicle_axes`): with ``[init] vehicle_axes =
+    "find"`` a mismatch rotates the readings into the vehicle's axes, folds
+    the rotation into the config's ``imu.mount_rpy_deg`` (so that what the
+    summary suggests composes with it) and runs the start-up again
+    (``start(imu)``).  Returns ``(imu, startup, cfg)``, the start-up
+    carrying the check's record in ``axes``."""
+    from ..alignment.vehicle_axes import axes_rotation, rotate_imu, vehicle_axes
+
+    e = startup.state.euler
+    found = vehicle_axes(imu, gnss, e[0], e[1], gyro_bias=startup.gyro_bias,
+                         heading_speed_m_s=cfg.init.heading_speed_m_s)
+    rec = {**found.summary(), "differ": bool(found.vehicle_axes_differ), "rotated": False}
+    if found.vehicle_axes_differ:
+        D = axes_rotation(found)
+        m0 = list(cfg.imu.mount_rpy_deg)
+        C = rot.dcm_from_euler(np.radians(m0)) @ rot.dcm_from_euler(D)
+        m1 = np.degrees(rot.euler_from_dcm(C))
+        m1 += 360.0 * np.round((np.asarray(m0, float) - m1) / 360.0)
+        rec["rotation_rpy_deg"] = [float(v) for v in np.degrees(D)]
+        rec["mount_rpy_deg_suggested"] = [round(float(v), 2) for v in m1]
+        if cfg.init.vehicle_axes == "find":
+            imu = rotate_imu(imu, D)
+            cfg = cfg.model_copy(update={"imu": cfg.imu.model_copy(update={"mount_rpy_deg": tuple(
+                float(v) for v in m1)})})
+            startup = start(imu)
+            rec["rotated"] = True
+            rec["mount_rpy_deg_configured"] = [float(v) for v in m0]
+        if log:
+            log("start-up: " + vehicle_axes_message(rec))
+    return imu, dataclasses.replace(startup, axes=rec), cfg
+
+
+def vehicle_axes_message(rec) -> str:
+    """What the vehicle-axes check found and did, in words (the log and the health verdict)."""
+    from ..alignment.vehicle_axes import SNAP_SE
+
+    what = []
+    if rec["upside_down"]:
+        what.append(f"the IMU's z axis points up (levelled roll {rec['roll_deg']:.1f} deg)")
+    if rec["off_axis"]:
+        what.append(f"the direction of travel lies {rec['travel_yaw_deg']:+.1f} deg (+-{rec['travel_yaw_se_deg']:.1f}) "
+                    f"off the IMU's x axis over {rec['moving_epochs']} moving fixes"
+                    + (f", taken as {rec['rotation_yaw_deg']:+.0f} deg (a right angle within "
+                       f"{SNAP_SE:g} standard errors)" if rec["rotation_yaw_deg"] != rec["travel_yaw_deg"] else ""))
+    m = rec["mount_rpy_deg_suggested"]
+    ms = f"[{m[0]:.2f}, {m[1]:.2f}, {m[2]:.2f}]"
+    if rec["rotated"]:
+        return (f"vehicle axes: {'; '.join(what)}: the readings were rotated into the vehicle's axes "
+                f"([init] vehicle_axes = \"find\"), as [imu] mount_rpy_deg = {ms} does; set it to say so (the lever "
+                "arms are taken in the vehicle's axes: forward, right, down)")
+    return (f"vehicle axes: {'; '.join(what)}, and the start-up takes the IMU's axes for the vehicle's ([init] "
+            f"vehicle_axes = \"given\"): its heading from the track is off by as much; set [imu] mount_rpy_deg = "
+            f"{ms}, or [init] vehicle_axes = \"find\"")
 
 
 def _run_streamed(cfg, imu, gnss, windows, initial, meas, settings, extra, smooth, progress, stream_dir, log,
@@ -1056,6 +1125,13 @@ def summary(res: NavigateResult) -> dict:
         constrained=res.config.filter.scheme != "uncoupled" and (c.nhc or (odo is not None and odo.with_nhc)))
     if warn:
         out["health"]["warnings"].append(warn)
+    axes = res.startup.axes if res.startup is not None else None
+    if axes and axes["differ"]:  # rotated: said; not rotated ("given"): the heading from the track is off
+        if axes["rotated"]:
+            out["health"]["warnings"].append(vehicle_axes_message(axes))
+        else:
+            out["health"]["reasons"].append(vehicle_axes_message(axes))
+            out["health"]["verdict"] = "unhealthy"
     for u in out.get("outages_unscored") or ():
         out["health"]["warnings"].append(f"outage {u['k']} ({u['start_s']:.2f} .. {u['end_s']:.2f} s after the first "
                                          f"fix) not scored: {u['reason']}")
