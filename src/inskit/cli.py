@@ -290,7 +290,8 @@ def bench(quick, no_cli, long_runs, as_json):
               "first GNSS epoch (e.g. windows:15-25,30-40); replaces the config's [outages] protocol and windows.")
 @click.option("--smooth", is_flag=True, help="Add the RTS smoother; the summary keys then describe it.")
 @click.option("--calibrate-time-offset", is_flag=True,
-              help="First find the IMU time offset that minimises the GNSS innovations, then run with it.")
+              help="First find the IMU time offset that minimises the GNSS innovations, then run with it "
+              "(sets [imu] time_offset_search = \"calibrate\").")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Output folder (default from config).")
 @click.option("--force", is_flag=True, help="Overwrite an output folder that already holds results.")
 @click.option("--no-plots", is_flag=True, help="Skip the PNG plots.")
@@ -326,6 +327,8 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
         over.setdefault("imu", {})["format"] = imu_format
     if imu_time_offset is not None:
         over.setdefault("imu", {})["time_offset_s"] = imu_time_offset
+    if calibrate_time_offset:
+        over.setdefault("imu", {})["time_offset_search"] = "calibrate"
     if gnss_file:
         over.setdefault("gnss", {})["file"] = str(Path(gnss_file).resolve())
     if gnss_format:
@@ -367,17 +370,13 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
             if same_file(target / name, inp):
                 raise InputError(f"{target / name}: would overwrite an input of this run; choose another --out")
     check_folder_writable(target)  # before the computation, not after it
-    extra = {}
-    if calibrate_time_offset:
-        best, evals = N.calibrate_time_offset(cfg, log=_log)
-        _log(f"calibrate: best IMU time offset {best:+.4f} s")
-        cfg = cfg.model_copy(update={"imu": cfg.imu.model_copy(update={"time_offset_s": best})})
-        extra["time_offset_calibration"] = {"best_s": best, "evaluations": [list(e) for e in evals]}
+    cfg, extra = N.calibrated_config(cfg, log=_log)
     with _progress(None, "navigate") as bar:
         res = N.navigate(cfg, smooth=smooth, progress=bar.update, log=_log, stream_dir=target)
     try:
         s = N.summary(res)
         s.update(extra)
+        N.check_time_offset(cfg, s, log=_log)
         text_extra = N.truth_errors_text(s["truth_errors"]) if "truth_errors" in s else ""
         if not as_json:  # the result first: the files and plots (a second or two) follow
             _emit(s, False, N.outage_table_text(s) + text_extra)

@@ -958,23 +958,22 @@ def _run_streamed(cfg, imu, gnss, windows, initial, meas, settings, extra, smoot
     return out, sm, streams, pending, truth_parts
 
 
-def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, log=None):
-    """IMU time offset [s] that minimises the mean NIS of the GNSS position
-    updates, by a bounded scalar search (scipy).  Only the fixes the filter
-    uses enter, never the withheld ones.  The files are read once; each
-    evaluation shifts the IMU time tags."""
-    from scipy.optimize import minimize_scalar
-
-    # read with the largest offset: it keeps every sample any offset in the bounds needs
+def _offset_objective(cfg: NavigateConfig, lo: float, hi: float, log=None):
+    """``(f, evals)``: ``f(offset)`` runs the filter with the IMU time tags
+    shifted by ``offset`` [s] (absolute, as ``[imu] time_offset_s``; within
+    ``[lo, hi]``) and returns the mean NIS per degree of freedom of the GNSS
+    updates (position fixes, or pseudoranges when tightly coupled), every
+    evaluation appended to ``evals``.  Only the fixes the filter uses enter,
+    never the withheld ones; the files are read once."""
     cfg = cfg.model_copy(update={"truth": None})  # the search never looks at a truth
     tight = cfg.gnss.coupling == "tight"
     raw = load_raw_gnss(cfg, log) if (tight or cfg.gnss.file is None) else None
-    imu0, gnss = load_inputs(cfg, bounds[1], raw)
+    imu0, gnss = load_inputs(cfg, hi, raw)  # read with the largest offset: it keeps every sample any offset needs
     key = "pseudorange" if tight else "gnss_pos"
     evals = []
 
     def f(off):
-        imu = ImuData(imu0.time + (off - bounds[1]), imu0.dtheta_b, imu0.dv_b)
+        imu = ImuData(imu0.time + (off - hi), imu0.dtheta_b, imu0.dv_b)
         k0 = int(np.searchsorted(imu.time, max(gnss.time[0], cfg.imu.start_s if cfg.imu.start_s is not None
                                                  else -np.inf)))
         res = navigate(cfg, inputs=(imu.slice(k0), gnss, raw))
@@ -985,8 +984,123 @@ def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, lo
             log(f"calibrate: offset {off:+.4f} s -> mean NIS {v:.3f}")
         return v
 
+    return f, evals
+
+
+def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, log=None):
+    """IMU time offset [s] that minimises the mean NIS of the GNSS position
+    updates, by a bounded scalar search (scipy).  Only the fixes the filter
+    uses enter, never the withheld ones.  The files are read once; each
+    evaluation shifts the IMU time tags."""
+    from scipy.optimize import minimize_scalar
+
+    f, evals = _offset_objective(cfg, bounds[0], bounds[1], log)
     r = minimize_scalar(f, bounds=bounds, method="bounded", options={"xatol": tol})
     return float(r.x), sorted(evals)
+
+
+def calibrated_config(cfg: NavigateConfig, log=None):
+    """``(cfg, extra)``: with ``[imu] time_offset_search = "calibrate"``
+    (``--calibrate-time-offset``), the config with the IMU time offset that
+    fits the fixes best (:func:`calibrate_time_offset`) and the summary's
+    record of the search (``{"time_offset_calibration": {"best_s",
+    "evaluations"}}``); otherwise ``cfg`` unchanged and an empty dict."""
+    if cfg.imu.time_offset_search != "calibrate":
+        return cfg, {}
+    best, evals = calibrate_time_offset(cfg, log=log)
+    if log:
+        log(f"calibrate: best IMU time offset {best:+.4f} s")
+    cfg = cfg.model_copy(update={"imu": cfg.imu.model_copy(update={"time_offset_s": best})})
+    return cfg, {"time_offset_calibration": {"best_s": best, "evaluations": [list(e) for e in evals]}}
+
+
+#: the IMU time offsets the check of an unhealthy run searches: this far [s] either side of the given one
+TIME_OFFSET_CHECK_SPAN_S = 0.5
+#: ... on a grid of this step [s] first (the mean NIS need not have one minimum over the span), then refined
+TIME_OFFSET_CHECK_GRID_S = 0.1
+#: an offset is named when it moves this far [s] from the given one at least
+TIME_OFFSET_CHECK_MIN_S = 0.01
+
+
+def gnss_updates_unhealthy(h: dict, cfg: NavigateConfig) -> str | None:
+    """The name of the GNSS measurement whose updates made the verdict
+    unhealthy (mean NIS above :data:`HEALTH_MAX_MEAN_NIS_PER_DOF` per degree
+    of freedom, or more than :data:`HEALTH_MAX_REJECTED_FRACTION` rejected),
+    else None."""
+    key = "pseudorange" if cfg.gnss.coupling == "tight" else "gnss_pos"
+    m = (h.get("measurements") or {}).get(key)
+    if not m or not m.get("updates") or not m.get("dof"):
+        return None
+    frac = m.get("rejected_row_fraction", m["rejected_fraction"])
+    nis = m["mean_nis"] / m["dof"] if m["mean_nis"] is not None else 0.0
+    return key if (frac > HEALTH_MAX_REJECTED_FRACTION or nis > HEALTH_MAX_MEAN_NIS_PER_DOF) else None
+
+
+def search_time_offset(cfg: NavigateConfig, span=TIME_OFFSET_CHECK_SPAN_S, step=TIME_OFFSET_CHECK_GRID_S,
+                       tol=0.005, log=None):
+    """``(best, evals)``: the IMU time offset [s] within ``span`` of the
+    configured one whose run fits the GNSS updates best (least mean NIS per
+    degree of freedom, :func:`_offset_objective`): a grid of ``step`` over
+    the span (robust to a mean NIS with several dips), then a bounded scalar
+    search (scipy) within a step of the grid's best.  The fixes the filter
+    uses only, never the withheld ones."""
+    from scipy.optimize import minimize_scalar
+
+    c = float(cfg.imu.time_offset_s)
+    lo, hi = c - span, c + span
+    f, evals = _offset_objective(cfg, lo, hi, log)
+    n = int(round(2 * span / step))
+    grid = [lo + i * (hi - lo) / n for i in range(n + 1)]
+    vals = [f(x) for x in grid]
+    j = int(np.argmin(vals))
+    a, b = grid[max(j - 1, 0)], grid[min(j + 1, n)]
+    minimize_scalar(f, bounds=(a, b), method="bounded", options={"xatol": tol})
+    return min(evals, key=lambda e: e[1])[0], sorted(evals)
+
+
+def check_time_offset(cfg: NavigateConfig, s: dict, log=None) -> dict | None:
+    """``[imu] time_offset_search = "check"``: when the run's GNSS updates
+    are unhealthy (:func:`gnss_updates_unhealthy`), look for an IMU time
+    offset that fits the fixes (:func:`search_time_offset`) and say what was
+    found in the summary's health verdict (a reason naming the offset to set
+    when one brings the GNSS updates' mean NIS into the band, a warning that
+    none does otherwise).  IMU time tags late or early by a fraction of a
+    second (a logger's buffering, UTC against GPS time) make the filter
+    reject fixes and lose its way while every file reads well; the verdict
+    alone did not name the cause.  Returns the record put into
+    ``s["time_offset_check"]`` (None when nothing was searched)."""
+    h = s["health"]
+    key = gnss_updates_unhealthy(h, cfg)
+    if key is None or cfg.imu.time_offset_search != "check" or cfg.filter.scheme == "uncoupled":
+        return None
+    m = h["measurements"][key]
+    now = m["mean_nis"] / m["dof"]
+    given = float(cfg.imu.time_offset_s)
+    if log:
+        log(f"health: the {key} updates are unhealthy (mean NIS {now:.2f} per degree of freedom): searching an IMU "
+            f"time offset within {given:+g} +- {TIME_OFFSET_CHECK_SPAN_S:g} s that fits them "
+            "([imu] time_offset_search = \"off\" skips this)")
+    best, evals = search_time_offset(cfg, log=log)
+    best_nis = min(v for _, v in evals)
+    at_given = [v for o, v in evals if abs(o - given) < 1e-9]
+    rec = {"measurement": key, "given_s": given, "best_s": round(best, 4), "mean_nis_per_dof_given":
+           at_given[0] if at_given else now, "mean_nis_per_dof_best": best_nis,
+           "evaluations": [list(e) for e in evals]}
+    fits = (abs(best - given) >= TIME_OFFSET_CHECK_MIN_S and best_nis <= HEALTH_MAX_MEAN_NIS_PER_DOF
+            and best_nis < 0.5 * rec["mean_nis_per_dof_given"])
+    rec["found"] = bool(fits)
+    if fits:  # the cause first, then the symptoms it explains
+        h["reasons"].insert(0, 
+            f"{key}: the fixes fit an IMU time offset of {best:+.3f} s (mean NIS {best_nis:.2f} per degree of "
+            f"freedom against {rec['mean_nis_per_dof_given']:.2f} at the given {given:+g} s): the IMU's time tags "
+            f"seem off; set [imu] time_offset_s = {best:.3f} (or run with --calibrate-time-offset)")
+    else:
+        h["warnings"].append(
+            f"{key}: no IMU time offset within {given:+g} +- {TIME_OFFSET_CHECK_SPAN_S:g} s fits the fixes better "
+            f"(best {best:+.3f} s, mean NIS {best_nis:.2f} per degree of freedom): the cause of the rejections "
+            "lies elsewhere")
+    s["time_offset_check"] = rec
+    return rec
 
 
 #: fixes reaching further than this [s] beyond the IMU log's ends are worth a warning

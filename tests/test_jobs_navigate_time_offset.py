@@ -1,0 +1,114 @@
+"""The IMU time offset checked when a run's GNSS updates are unhealthy
+(``[imu] time_offset_search``, :func:`inskit.jobs.navigate.check_time_offset`).
+
+IMU time tags a fraction of a second late or early read well and look like
+any other log, yet the filter rejects fixes and loses its way; the verdict
+named the symptoms (rejections, NIS, recoveries) but not the cause.  A short
+simulated car, its IMU tags taken as 0.3 s late (``time_offset_s = 0.3``
+given, the truth 0): the check must name an offset within 0.01 s of 0."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from inskit import api
+from inskit.jobs.config import config_from_dict
+from inskit.jobs.navigate import check_time_offset, gnss_updates_unhealthy, navigate, summary
+from inskit.jobs.reproduce_tight import BLOCKAGE_NAVIGATE
+from inskit.jobs.simulate import write_simulation
+from inskit.simulation.scenario import Scenario, simulate
+
+CAR = {"name": "short car", "start": {"lat_deg": 40.0966, "lon_deg": -105.1474, "height_m": 1600.0},
+       "imu": {"rate_hz": 100.0, "grade": "industrial-mems"},
+       "gnss": {"rate_hz": 1.0, "white_h_m": 0.5, "white_v_m": 1.0, "velocity_sigma_m_s": 0.0,
+                "lever_arm_b_m": [0.0, 0.0, -1.2]},
+       "segment": [{"type": "static", "duration_s": 30.0},
+                   {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 8.0},
+                   {"type": "turn", "angle_deg": 90.0, "radius_m": 30.0},
+                   {"type": "cruise", "duration_s": 10.0},
+                   {"type": "turn", "angle_deg": -90.0, "radius_m": 30.0},
+                   {"type": "decelerate", "speed_m_s": 8.0, "duration_s": 5.0},
+                   {"type": "turn", "angle_deg": 180.0, "radius_m": 20.0},
+                   {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 5.0},
+                   {"type": "cruise", "duration_s": 10.0}]}
+LATE_S = 0.3  # the offset given; the IMU's tags are right (0)
+
+
+@pytest.fixture(scope="module")
+def drive(tmp_path_factory):
+    d = tmp_path_factory.mktemp("toff")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        write_simulation(simulate(Scenario.model_validate(CAR), seed=2), d, plot=False, overwrite=True)
+    return d
+
+
+def config(d, offset, search="check"):
+    cfg = {k: (dict(v) if isinstance(v, dict) else v) for k, v in BLOCKAGE_NAVIGATE.items()}
+    cfg.update(name="short car", imu={"file": "imu.csv", "time_offset_s": offset, "time_offset_search": search},
+               outages={"protocol": "none"})
+    return config_from_dict(cfg, base_dir=d, source=str(d))
+
+
+@pytest.fixture(scope="module")
+def late(drive):
+    cfg = config(drive, LATE_S)
+    s = summary(navigate(cfg))
+    assert gnss_updates_unhealthy(s["health"], cfg) == "gnss_pos", s["health"]  # the premise
+    rec = check_time_offset(cfg, s)
+    return s, rec
+
+
+def test_an_unhealthy_run_names_the_offset_that_fits_the_fixes(late):
+    s, rec = late
+    assert rec is s["time_offset_check"] and rec["found"], rec
+    assert abs(rec["best_s"]) < 0.01, rec  # the truth: 0 s
+    assert rec["mean_nis_per_dof_best"] <= 3.0 < rec["mean_nis_per_dof_given"], rec
+    first = s["health"]["reasons"][0]  # the cause first, then the symptoms
+    assert first.startswith("gnss_pos: the fixes fit an IMU time offset of") and "[imu] time_offset_s" in first, first
+    assert s["health"]["verdict"] == "unhealthy"
+    offs = [o for o, _ in rec["evaluations"]]
+    assert min(offs) == pytest.approx(LATE_S - 0.5) and max(offs) == pytest.approx(LATE_S + 0.5)
+
+
+def test_the_named_offset_makes_the_run_healthy(drive, late):
+    _, rec = late
+    s = summary(navigate(config(drive, rec["best_s"])))
+    assert s["health"]["verdict"] == "healthy", s["health"]["reasons"]
+
+
+def test_a_healthy_run_searches_nothing(drive):
+    cfg = config(drive, 0.0)
+    s = summary(navigate(cfg))
+    assert s["health"]["verdict"] == "healthy", s["health"]["reasons"]
+    assert check_time_offset(cfg, s) is None and "time_offset_check" not in s
+
+
+def test_off_searches_nothing(drive):
+    cfg = config(drive, LATE_S, "off")
+    s = summary(navigate(cfg))
+    assert s["health"]["verdict"] == "unhealthy"
+    assert check_time_offset(cfg, s) is None and "time_offset_check" not in s
+
+
+def test_an_offset_that_explains_nothing_is_said_to_be_elsewhere(drive):
+    """Fixes made wrong by a wrong lever arm (3 m forward of where they are):
+    no time offset fits them, and the warning says so instead of naming one."""
+    cfg = config(drive, 0.0)
+    cfg = cfg.model_copy(update={"gnss": cfg.gnss.model_copy(update={"lever_arm_b_m": (3.0, 2.0, -1.2)})})
+    s = summary(navigate(cfg))
+    assert gnss_updates_unhealthy(s["health"], cfg) == "gnss_pos", s["health"]  # the premise
+    rec = check_time_offset(cfg, s)
+    assert not rec["found"], rec  # a lever arm sideways and along the track, through the turns: no offset fits
+    assert any("the cause of the rejections lies elsewhere" in w for w in s["health"]["warnings"])
+
+
+def test_calibrate_runs_with_the_best_offset(drive):
+    run = api.navigate(config(drive, LATE_S, "calibrate"))
+    cal = run.summary["time_offset_calibration"]
+    assert abs(cal["best_s"]) < 0.01, cal
+    assert run.summary["imu_time_offset_s"] == pytest.approx(cal["best_s"])
+    assert run.summary["health"]["verdict"] == "healthy", run.summary["health"]["reasons"]
+    assert "time_offset_check" not in run.summary
+    assert np.isfinite(run.summary["imu_time_offset_s"])
