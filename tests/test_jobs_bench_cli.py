@@ -1,5 +1,7 @@
 """The end-to-end bench: its drives are what it says, its command figures are measured."""
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -29,6 +31,39 @@ def test_bench_drive_has_the_rate_and_length_asked(tmp_path):
     assert B.bench_drive(20.0, 200.0, root=tmp_path) == d  # cached
 
 
+def test_simulate_floor_times_the_imports_and_the_writes_of_the_commands_own_files(tmp_path):
+    """The floor writes the tables the command wrote (same columns, same rows), and its parts add up."""
+    import pyarrow.parquet as pq
+
+    from inskit.jobs.simulate import write_simulation
+    from inskit.simulation.scenario import Scenario, simulate
+
+    sc = Scenario.model_validate({"name": "s", "start": {"lat_deg": 45.0, "lon_deg": 7.0},
+                                  "segment": [{"type": "static", "duration_s": 20.0}]})
+    write_simulation(simulate(sc, seed=1), tmp_path / "sim", plot=False, file_format="parquet")
+    calls = []
+    real = B.subprocess.run
+
+    def spy(args, **kw):
+        r = real(args, **kw)
+        dst = Path(args[-1])
+        calls.append({f.name: pq.read_table(f) for f in dst.glob("*.parquet")})
+        return r
+
+    B.subprocess.run = spy
+    try:
+        r = B.simulate_floor(tmp_path / "sim", 2000, 1)
+    finally:
+        B.subprocess.run = real
+    assert len(calls) == 2  # a warm-up and one repeat
+    for name in ("imu.parquet", "gnss.parquet", "truth.parquet"):
+        assert calls[-1][name].equals(pq.read_table(tmp_path / "sim" / name))
+    assert 0 < r["simulate_cli_floor_import_s"] < 30 and 0 < r["simulate_cli_floor_write_s"] < 30
+    assert r["simulate_cli_floor_s"] == pytest.approx(r["simulate_cli_floor_import_s"]
+                                                      + r["simulate_cli_floor_write_s"], abs=2e-3)
+    assert r["simulate_cli_floor_epochs_per_s"] == pytest.approx(2000 / r["simulate_cli_floor_s"], rel=1e-2)
+
+
 @pytest.mark.slow
 def test_cli_figures_are_measured(tmp_path):
     r = B.cli_benchmarks(quick=True, repeats=1, root=tmp_path)
@@ -36,6 +71,7 @@ def test_cli_figures_are_measured(tmp_path):
         assert r[k] > 0 and r[f"{k}_spread"][0] <= r[k] <= r[f"{k}_spread"][1]
     assert 50 < r["navigate_peak_rss_mb"] < 24000
     assert r["navigate_cli_fixes_used"] >= 100
+    assert 0 < r["simulate_cli_floor_s"] < r["simulate_cli_wall_s"]  # the floor leaves the simulation out
 
 
 @pytest.mark.slow

@@ -14,6 +14,10 @@ cache folder once, and reports the median of the repeats with the spread
   ``navigate_peak_rss_mb``.
 * ``simulate_cli_epochs_per_s``: ``inskit simulate`` of the same hour of
   car (``car.toml``, segments repeated, ``duration_limit_s``) at 100 Hz writing Parquet (``--format parquet --no-plot``).
+* ``simulate_cli_floor_s`` (:func:`simulate_floor`): the interpreter, the
+  libraries that command cannot do without and the writing of its own three
+  Parquet tables, with no simulation: the time no implementation goes below
+  here, beside ``simulate_cli_wall_s``.
 * ``mechanize_cli_epochs_per_s``: ``inskit mechanize`` of that 100 Hz IMU
   file from the truth's first state, writing the solution CSV.
 
@@ -157,6 +161,52 @@ def _measure(name, args, n, repeats, out):
     return runs[-1][2]
 
 
+#: the floor of ``inskit simulate --format parquet``: a child that starts the interpreter, imports the libraries
+#: the command cannot do without (numpy, pyarrow's Parquet writer, pydantic for the scenario, click, tomllib; not
+#: numba, not inskit) and writes the command's own three tables with the writer's own settings
+_FLOOR = """
+import sys, time
+t_start = float(sys.argv[1])
+import json, tomllib
+import numpy, click, pydantic
+import pyarrow as pa, pyarrow.parquet as pq
+t_import = time.time() - t_start
+src, dst = sys.argv[2], sys.argv[3]
+tables = [(name, pq.read_table(src + "/" + name)) for name in ("imu.parquet", "gnss.parquet", "truth.parquet")]
+tables = [(n, pa.table({c: t.column(c).to_numpy() for c in t.column_names}, schema=t.schema)) for n, t in tables]
+t0 = time.perf_counter()
+for name, t in tables:
+    pq.write_table(t, dst + "/" + name, compression="zstd", use_dictionary=False, use_byte_stream_split=True)
+print(json.dumps({"import_s": t_import, "write_s": time.perf_counter() - t0}))
+"""
+
+
+def simulate_floor(sim_dir: Path, n: int, repeats: int) -> dict:
+    """What no implementation of ``inskit simulate --format parquet`` can go
+    below on this machine (``_FLOOR``): the interpreter's start with the
+    imports of the libraries it cannot do without, plus writing the
+    command's own three Parquet tables (``sim_dir``: its last run) with the
+    writer's settings; the simulation itself counts zero.  Medians of
+    ``repeats`` runs after one warm-up: ``simulate_cli_floor_import_s``,
+    ``simulate_cli_floor_write_s``, their sum ``simulate_cli_floor_s`` and
+    the rate it would allow, ``simulate_cli_floor_epochs_per_s``."""
+    import shutil
+
+    dst = Path(tempfile.mkdtemp(prefix="inskit-floor-"))
+    try:
+        runs = []
+        for _ in range(repeats + 1):
+            p = subprocess.run([sys.executable, "-c", _FLOOR, repr(time.time()), str(sim_dir), str(dst)],
+                               capture_output=True, check=True)
+            runs.append(json.loads(p.stdout))
+    finally:
+        shutil.rmtree(dst, ignore_errors=True)
+    imp = float(np.median([r["import_s"] for r in runs[1:]]))
+    wr = float(np.median([r["write_s"] for r in runs[1:]]))
+    return {"simulate_cli_floor_import_s": round(imp, 3), "simulate_cli_floor_write_s": round(wr, 3),
+            "simulate_cli_floor_s": round(imp + wr, 3), "simulate_cli_floor_epochs_per_s": round(n / (imp + wr))}
+
+
 def cli_benchmarks(quick=False, repeats=3, progress=None, root=None) -> dict:
     """The end-to-end figures (see the module docstring) as a flat dict."""
     if not (_EXAMPLES / "car.toml").is_file():
@@ -180,6 +230,7 @@ def cli_benchmarks(quick=False, repeats=3, progress=None, root=None) -> dict:
         cut.write_text(_scenario_text(duration))
         sim = ["simulate", cut, "--out", Path(tmp) / "sim", "--force", "--no-plot", "--format", "parquet", "--seed", "1"]
         _measure("simulate", sim, n100, repeats, out)
+        out.update(simulate_floor(Path(tmp) / "sim", n100, repeats))
         if progress:
             progress("simulate")
         mech = ["mechanize", d100 / "imu.csv", "--init-from", d100 / "truth.csv", "--out", Path(tmp) / "mech.csv",
