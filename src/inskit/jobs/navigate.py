@@ -1086,19 +1086,26 @@ def check_time_offset(cfg: NavigateConfig, s: dict, log=None) -> dict | None:
     rec = {"measurement": key, "given_s": given, "best_s": round(best, 4), "mean_nis_per_dof_given":
            at_given[0] if at_given else now, "mean_nis_per_dof_best": best_nis,
            "evaluations": [list(e) for e in evals]}
-    fits = (abs(best - given) >= TIME_OFFSET_CHECK_MIN_S and best_nis <= HEALTH_MAX_MEAN_NIS_PER_DOF
-            and best_nis < 0.5 * rec["mean_nis_per_dof_given"])
+    better = abs(best - given) >= TIME_OFFSET_CHECK_MIN_S and best_nis < 0.5 * rec["mean_nis_per_dof_given"]
+    fits = better and best_nis <= HEALTH_MAX_MEAN_NIS_PER_DOF
     rec["found"] = bool(fits)
+    rec["better"] = bool(better)
     if fits:  # the cause first, then the symptoms it explains
         h["reasons"].insert(0, 
             f"{key}: the fixes fit an IMU time offset of {best:+.3f} s (mean NIS {best_nis:.2f} per degree of "
             f"freedom against {rec['mean_nis_per_dof_given']:.2f} at the given {given:+g} s): the IMU's time tags "
             f"seem off; set [imu] time_offset_s = {best:.3f} (or run with --calibrate-time-offset)")
+    elif better:  # one cause among others, perhaps: said, not claimed
+        h["warnings"].append(
+            f"{key}: an IMU time offset of {best:+.3f} s fits the fixes better (mean NIS {best_nis:.2f} per degree "
+            f"of freedom against {rec['mean_nis_per_dof_given']:.2f} at the given {given:+g} s) but not into the "
+            f"band (at most {HEALTH_MAX_MEAN_NIS_PER_DOF:g}): another cause remains, alone or beside a time offset "
+            "(the other reasons and warnings name what they can)")
     else:
         h["warnings"].append(
             f"{key}: no IMU time offset within {given:+g} +- {TIME_OFFSET_CHECK_SPAN_S:g} s fits the fixes better "
-            f"(best {best:+.3f} s, mean NIS {best_nis:.2f} per degree of freedom): the cause of the rejections "
-            "lies elsewhere")
+            f"(best {best:+.3f} s, mean NIS {best_nis:.2f} per degree of freedom): a time offset does not "
+            "explain them (look first at what the other reasons and warnings name)")
     s["time_offset_check"] = rec
     return rec
 
