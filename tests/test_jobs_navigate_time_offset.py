@@ -129,3 +129,39 @@ def test_an_offset_that_helps_but_not_enough_is_a_warning_not_a_cause(drive):
     assert abs(rec["best_s"]) < 0.05, rec
     assert not any("fit an IMU time offset" in r for r in s["health"]["reasons"])
     assert any("but not into the band" in w for w in s["health"]["warnings"]), s["health"]["warnings"]
+
+
+def test_the_search_runs_on_the_first_minutes_only(drive, monkeypatch):
+    """A long log is searched over its first TIME_OFFSET_CHECK_MAX_S seconds:
+    every evaluation runs that much of the IMU, and the offset is found in it."""
+    import inskit.jobs.navigate as N
+
+    spans = []
+    real = N.navigate
+
+    def spy(cfg, *a, **kw):
+        imu = kw["inputs"][0]
+        spans.append(float(imu.time[-1] - imu.time[0]))
+        return real(cfg, *a, **kw)
+
+    monkeypatch.setattr(N, "navigate", spy)
+    best, evals = N.search_time_offset(config(drive, LATE_S), max_s=55.0)
+    assert len(spans) == len(evals) and max(spans) <= 55.0 + 0.02, spans
+    assert abs(best) < 0.02, (best, evals)
+
+
+def test_a_search_that_fails_is_said_and_the_run_stands(drive, monkeypatch):
+    import inskit.jobs.navigate as N
+    from inskit.errors import InputError
+
+    cfg = config(drive, LATE_S)
+    s = summary(navigate(cfg))
+
+    def boom(*a, **kw):
+        raise InputError("imu.csv: something the search could not read")
+
+    monkeypatch.setattr(N, "search_time_offset", boom)
+    rec = check_time_offset(cfg, s)
+    assert rec["error"] == "imu.csv: something the search could not read"
+    assert any("could not run: imu.csv: something" in w for w in s["health"]["warnings"])
+    assert s["health"]["verdict"] == "unhealthy"
