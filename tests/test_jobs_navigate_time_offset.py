@@ -165,3 +165,22 @@ def test_a_search_that_fails_is_said_and_the_run_stands(drive, monkeypatch):
     assert rec["error"] == "imu.csv: something the search could not read"
     assert any("could not run: imu.csv: something" in w for w in s["health"]["warnings"])
     assert s["health"]["verdict"] == "unhealthy"
+
+
+def test_the_bundled_drive_without_its_offset_is_told_it(tmp_path):
+    """examples/drive_0708.toml with its time_offset_s = -0.26 left out: the
+    run is lost (hundreds of fixes rejected) and the verdict's first reason
+    names the offset the config's own calibration found (-0.261 s)."""
+    from pathlib import Path
+
+    from inskit.jobs.config import load_config
+
+    root = Path(__file__).resolve().parents[1]
+    cfg = load_config(root / "examples" / "drive_0708.toml")
+    cfg = cfg.model_copy(update={"imu": cfg.imu.model_copy(update={"time_offset_s": 0.0}),
+                                 "output": cfg.output.model_copy(update={"plots": False})})
+    s = summary(navigate(cfg))
+    assert s["health"]["measurements"]["gnss_pos"]["rejected_fraction"] > 0.2  # lost
+    rec = check_time_offset(cfg, s)
+    assert rec["found"] and abs(rec["best_s"] - (-0.26)) < 0.01, rec
+    assert s["health"]["reasons"][0].startswith("gnss_pos: the fixes fit an IMU time offset of -0.26")
