@@ -1104,10 +1104,10 @@ def check_time_offset(cfg: NavigateConfig, s: dict, log=None) -> dict | None:
     rec["found"] = bool(fits)
     rec["better"] = bool(better)
     if fits:  # the cause first, then the symptoms it explains
-        h["reasons"].insert(0, 
+        h["reasons"].insert(0, (
             f"{key}: the fixes fit an IMU time offset of {best:+.3f} s (mean NIS {best_nis:.2f} per degree of "
             f"freedom against {rec['mean_nis_per_dof_given']:.2f} at the given {given:+g} s): the IMU's time tags "
-            f"seem off; set [imu] time_offset_s = {best:.3f} (or run with --calibrate-time-offset)")
+            f"seem off; set [imu] time_offset_s = {best:.3f} (or run with --calibrate-time-offset)"))
     elif better:  # one cause among others, perhaps: said, not claimed
         h["warnings"].append(
             f"{key}: an IMU time offset of {best:+.3f} s fits the fixes better (mean NIS {best_nis:.2f} per degree "
