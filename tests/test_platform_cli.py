@@ -192,3 +192,41 @@ def test_gimbal_angles_are_not_joined_across_their_wrap(tmp_path, monkeypatch):
     _, y = figs[0].axes[1].get_lines()[2].get_data()
     ok = ~np.isnan(y)
     assert (np.abs(np.diff(y))[ok[1:] & ok[:-1]] < 180).all() and ok.sum() == len(t)
+
+
+def test_outage_plot_spans_the_errors_below_a_centimetre_and_names_its_zeros(tmp_path, monkeypatch):
+    """outage.png: the errors were floored at 1 cm (np.maximum(hz, 1e-2)), so
+    any below were drawn at 1 cm (the 8 h run's 1st-order open loop dips to
+    8.3 mm).  The axis spans the data; an exact zero, which a log axis cannot
+    show, is drawn below the smallest positive error and the legend says so."""
+    import numpy as np
+
+    from inskit.jobs import platform as JP
+
+    figs = []
+    monkeypatch.setattr(JP, "save_figure", lambda fig, path, dpi=110: figs.append(fig))
+    e = {"outage_s": (3600.0, 4500.0), "duration_s": 7200.0}
+    t = np.arange(0.0, 7201.0, 1.0)
+    runs = {}
+    for i, name in enumerate(("kalman", "first-order", "second-order")):
+        lo = 10.0 ** -(3 + i)  # 1 mm, 0.1 mm, 10 um: all below the old 1 cm floor
+        runs[(name, "open")] = (t, np.geomspace(lo, 300.0, len(t)), None)
+        closed = np.geomspace(5.0, 2 * lo, len(t))
+        if name == "first-order":
+            closed[:3] = 0.0  # an exact zero (e.g. the start with no initial error)
+        runs[(name, "closed")] = (t, closed, None)
+    JP._plot_outage(runs, tmp_path / "outage.png", e)
+    for i, (ax, name) in enumerate(zip(figs[0].axes, ("kalman", "first-order", "second-order"))):
+        lo, hi = ax.get_ylim()
+        plotted = np.concatenate([ln.get_ydata() for ln in ax.get_lines() if len(ln.get_ydata())])
+        assert lo <= plotted.min() and hi >= plotted.max(), name
+        assert lo <= 10.0 ** -(3 + i) and hi >= 300.0, name  # the whole of the errors, not clipped at 1 cm
+        labels = ax.get_legend_handles_labels()[1]
+        assert labels[:2] == ["open loop", "closed loop"] and "satellite outage" in labels
+        zero_labels = [lab for lab in labels if "exact zero" in lab]
+        if name == "first-order":
+            y = ax.get_lines()[1].get_ydata()
+            assert zero_labels == [f"3 exact zero(s) drawn at {y[0]:.2g} m"]
+            assert 0 < y[0] < 1e-4 and (y[:3] == y[0]).all()  # below every positive error of the panel
+        else:
+            assert not zero_labels

@@ -456,9 +456,16 @@ def _plot_outage(outage_runs, path, e):
     fig, ax = plt.subplots(3, 1, figsize=(10, 9), sharex=True)
     a, b = e["outage_s"]
     for j, name in enumerate(("kalman", "first-order", "second-order")):
-        for scheme, ls in (("open", "--"), ("closed", "-")):
-            t, hz, _ = outage_runs[(name, scheme)]
-            ax[j].semilogy(t / HOUR, np.maximum(hz, 1e-2), ls, lw=0.8, label=f"{scheme} loop")
+        curves = [(scheme, ls, *outage_runs[(name, scheme)][:2]) for scheme, ls in (("open", "--"), ("closed", "-"))]
+        # the axis spans the data; an exact zero, which a log axis cannot show, is drawn at half the smallest
+        # positive error of the panel, and the legend says so
+        positive = np.concatenate([hz[hz > 0] for *_, hz in curves])
+        floor = 0.5 * float(positive.min()) if len(positive) else 1.0
+        zeros = sum(int(np.sum(hz == 0)) for *_, hz in curves)
+        for scheme, ls, t, hz in curves:
+            ax[j].semilogy(t / HOUR, np.where(hz == 0, floor, hz), ls, lw=0.8, label=f"{scheme} loop")
+        if zeros:
+            ax[j].plot([], [], lw=0, label=f"{zeros} exact zero(s) drawn at {floor:.2g} m")
         ax[j].axvspan(a / HOUR, b / HOUR, color="0.85", label="satellite outage")
         ax[j].set_ylabel("horizontal error [m]")
         ax[j].set_title(ESTIMATOR_NAMES[name], fontsize=9)
