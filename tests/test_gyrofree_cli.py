@@ -207,3 +207,30 @@ def test_fig11_euler_angles_are_not_joined_across_the_wrap(tmp_path, monkeypatch
         assert (np.abs(np.diff(y))[ok[1:] & ok[:-1]] < 180).all()
     _, yaw = lines[4].get_data()
     assert np.isnan(yaw).sum() >= 5  # the truth yaw wraps 6 times in the 10 s
+
+
+def test_reproduce_gyrofree_returns_plain_json_values(tmp_path, monkeypatch):
+    """reproduce_gyrofree's truth_check went through a copy of files.plain_json
+    that left a NaN as NaN (not JSON: a strict reader refuses it); it goes
+    through plain_json itself: numpy scalars and arrays as plain numbers and
+    lists, as before, and NaN or infinity as None."""
+    import math
+
+    import numpy as np
+
+    from inskit.jobs import gyrofree as JG
+    from inskit.jobs import reproduce_gyrofree as RG
+
+    tc = {"r_10s_m": np.array([350.07, np.nan, 1006.63]), "rate_hz": np.float64(500.0), "d_m": 0.1,
+          "closed_form": {"position_error_max_m": np.float32(0.5), "samples": np.int64(5001), "ok": np.bool_(True),
+                          "rate_error_max_rad_s": float("nan"), "force_error_max_m_s2": np.float64(np.inf)}}
+    res = {"truth_check": tc, "entries": [], "closest_reading": {}, "random_misalignment": {},
+           "comparison": {"table": [{"unit": "u", "rms_10s_m": 1.0}], "grades_text": ""}}
+    monkeypatch.setattr(RG, "run", lambda log, quick=False: res)
+    monkeypatch.setattr(JG, "_plots", lambda out, res: [])
+    got = JG.reproduce_gyrofree(tmp_path, quick=True)["truth_check"]
+    assert got == {"r_10s_m": [350.07, None, 1006.63], "rate_hz": 500.0, "d_m": 0.1,
+                   "closed_form": {"position_error_max_m": 0.5, "samples": 5001, "ok": True,
+                                   "rate_error_max_rad_s": None, "force_error_max_m_s2": None}}
+    assert [type(v) for v in got["closed_form"].values()][:3] == [float, int, bool] and type(got["rate_hz"]) is float
+    json.dumps(got, allow_nan=False)  # strict JSON (it raised on the NaN)

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..files import save_figure, write_json, write_text
+from ..files import plain_json, save_figure, write_json, write_text
 from ..errors import InputError
 from ..units import DEG, MAX_RATE_HZ, MAX_SAMPLES, MICRO_G, PPM
 
@@ -428,19 +428,9 @@ def reproduce_gyrofree(out_dir, *, quick=False, log=None):
     write_text(out / "growth_60s.csv", "\n".join(lines) + "\n")
     write_json(out / "entries.json", res["entries"])
     return {"experiment": "gyrofree", "source": "003", "entries": res["entries"],
-            "truth_check": _jsonable(res["truth_check"]), "growth_60s": rows, "growth_grades": comp["grades_text"],
+            "truth_check": plain_json(res["truth_check"]), "growth_60s": rows, "growth_grades": comp["grades_text"],
             "closest_reading": res["closest_reading"], "random_misalignment": res["random_misalignment"],
             "figures": [str(p) for p in figs], "tables": [str(out / "growth_60s.csv"), str(out / "entries.json")]}
-
-
-def _jsonable(x):
-    if isinstance(x, dict):
-        return {k: _jsonable(v) for k, v in x.items()}
-    if isinstance(x, np.ndarray):
-        return x.tolist()
-    if isinstance(x, np.generic):
-        return x.item()
-    return x
 
 
 def _plots(out, res):
