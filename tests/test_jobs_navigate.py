@@ -598,3 +598,23 @@ def test_a_speed_course_log_outside_the_imu_span_is_refused(tmp_path):
         speed_course_measurement(cfg, [], np.zeros(3), imu)
     imu_on = ImuData(ti + 10050.0, imu.dtheta_b, imu.dv_b)
     assert speed_course_measurement(cfg, [], np.zeros(3), imu_on) is not None
+
+
+@pytest.mark.parametrize("outages,first", [
+    ({"protocol": "none"}, "outages: none (no GNSS fix withheld), so no outage table"),
+    ({"protocol": "windows", "windows_s": [[9000.0, 9020.0]]},  # past the drive's last fix: withholds none
+     "outages: none scored (1 window(s) withheld no GNSS fix: see the health warnings), so no outage table")])
+def test_a_run_without_outages_prints_no_outage_table_header(drive_inputs, outages, first):
+    """`inskit navigate --outages none` printed the outage table's two header
+    lines over no row; now a line says there are no outages (or none scored)
+    and the figures that do exist follow."""
+    from inskit.jobs.navigate import outage_table_text
+
+    _, imu, gnss, _ = drive_inputs
+    cfg = load_config(EXAMPLE, {"output": {"plots": False}, "outages": outages})
+    s = summary(navigate(cfg, inputs=(imu, gnss)))
+    assert s["outage_table"] == []
+    lines = outage_table_text(s).splitlines()
+    assert lines[0] == first
+    assert not [ln for ln in lines if "window [s after first fix]" in ln or "--- against the withheld" in ln], lines
+    assert lines[1].startswith("fit to the used fixes") and lines[-1].startswith("updates: gnss_pos")

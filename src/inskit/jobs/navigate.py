@@ -1403,14 +1403,21 @@ def _mg(a_m_s2):
 def outage_table_text(s: dict) -> str:
     """The outage table and its figures, each named by its reference: the
     withheld fixes (their noise included), the truth when one was given, and
-    the fit to the used fixes (not an accuracy)."""
+    the fit to the used fixes (not an accuracy).  No outage (protocol
+    "none", or no window withheld a fix): no table, a line that says so."""
     rows = s["outage_table"]
     truth = "outages_vs_truth" in s
     head = (f"{'outage':>6} {'window [s after first fix]':>27} {'end horiz [m]':>14} {'end vert [m]':>13} "
             f"{'worst horiz [m]':>16} {'along [m]':>10} {'cross [m]':>10} {'accel fit [mg]':>15}")
     lines = [f"{'':>6} {'':>27} {'--- against the withheld fixes (noise included) ---':>45}"
              + (f"{'':>38}  {'--- against the truth ---':>31}" if truth else ""),
-             head + (f" {'end horiz [m]':>14} {'worst horiz [m]':>16}" if truth else "")]
+             head + (f" {'end horiz [m]':>14} {'worst horiz [m]':>16}" if truth else "")] if rows else []
+    unscored = len(s.get("outages_unscored") or ())
+    if not rows and not unscored:
+        lines.append("outages: none (no GNSS fix withheld), so no outage table")
+    elif not rows:
+        lines.append(f"outages: none scored ({unscored} window(s) withheld no GNSS fix: see the health warnings), "
+                     "so no outage table")
     for r in rows:
         line = (f"{r['k']:>6} {r['start_s']:>12.2f} .. {r['end_s']:>9.2f}   {r['horizontal_m']:>13.3f} "
                 f"{r['vertical_m']:>13.3f} {r['worst_horizontal_m']:>16.3f} "
