@@ -207,6 +207,20 @@ def test_nan_and_inf_cells(capsys, sim, tmp_path, cell, shown):
     assert empty_or_absent(tmp_path / "nav")
 
 
+def test_a_blank_line_does_not_shift_the_line_of_a_later_message(capsys, sim, tmp_path):
+    """The parsers skip a blank line: a NaN on line 501 after a blank line 300 was said to be on line 500."""
+    rows = lines_of(sim / "imu.csv")
+    cells = rows[499].rstrip("\n").split(",")
+    cells[3] = "nan"  # dtheta_z_rad of the row shown on line 501 once the blank line is in
+    rows[499] = ",".join(cells) + "\n"
+    rows.insert(299, "\n")
+    bad = tmp_path / "imu.csv"
+    bad.write_text("".join(rows))
+    assert bad.read_text().splitlines()[500].split(",")[3] == "nan"
+    refused(navigate(capsys, sim, tmp_path, imu=bad), str(bad), "line 501: column 'dtheta_z_rad' has 'nan'")
+    assert empty_or_absent(tmp_path / "nav")
+
+
 def test_nan_in_a_gnss_file_and_a_solution(capsys, sim, tmp_path):
     rows = lines_of(sim / "gnss.csv")
     rows[10] = rows[10].replace(rows[10].split(",")[2], "NaN", 1)

@@ -357,3 +357,68 @@ def test_a_trailing_comma_on_every_line_of_a_solution_is_no_column(tmp_path):
     (tmp_path / "text.csv").write_text("\n".join([lines[0] + ","] + [line + ",x" for line in lines[1:]]) + "\n")
     with pytest.raises(InputError, match=r"text\.csv: line 2: column 'Unnamed: 10' has 'x'"):
         io.read_solution(tmp_path / "text.csv")
+
+
+def _with_blank_lines(rows, at=(4,)):
+    """``rows`` (the header first) as file text with a blank line inserted
+    before each line number in ``at`` (1-based, as the file then shows it);
+    a whitespace-only line for every second one."""
+    out = list(rows)
+    for k, n in enumerate(sorted(at)):
+        out.insert(n - 1, "" if k % 2 == 0 else "  \t")
+    return "\n".join(out) + "\n"
+
+
+@pytest.mark.parametrize("path_kind", ["increments", "rates", "gnss", "solution", "speed", "height", "gz"])
+def test_a_blank_line_does_not_shift_the_line_numbers_of_later_messages(tmp_path, path_kind):
+    """pandas and pyarrow skip a blank line, so a bad value after one was
+    said to be on the line above it: the message names the line an editor
+    shows (blank lines at lines 4 and 7, the bad value on line 11)."""
+    import gzip
+
+    t = [round(0.01 * i, 2) for i in range(20)]
+    if path_kind in ("increments", "gz"):
+        head = "time_s,dtheta_x_rad,dtheta_y_rad,dtheta_z_rad,dv_x_m_s,dv_y_m_s,dv_z_m_s"
+        rows = [f"{x!r},0,0,0,0,0,0" if i == 0 else f"{x!r},1e-5,2e-5,3e-5,1e-3,2e-3,-0.098" for i, x in enumerate(t)]
+        read, bad = C.read_imu, ("time_s", "0.05")  # goes back in time
+    elif path_kind == "rates":
+        head = "time_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s,accel_x_m_s2,accel_y_m_s2,accel_z_m_s2"
+        rows = [f"{x!r},0.001,0.002,0.003,0.1,0.2,-9.8" for x in t]
+        read, bad = C.read_imu, ("gyro_y_rad_s", "nan")
+    elif path_kind == "gnss":
+        head = ",".join(C.GNSS_COLUMNS)
+        rows = [f"{x!r},45,7,300,1,1,2" for x in t]
+        read, bad = C.read_gnss, ("lat_deg", "91")
+    elif path_kind == "solution":
+        head = ",".join(C.SOLUTION_COLUMNS)
+        rows = [f"{x!r},45,7,300,0,0,0,0,0,0" for x in t]
+        read, bad = C.read_solution, ("lon_deg", "inf")
+    elif path_kind == "speed":
+        head = "time_s,speed_m_s"
+        rows = [f"{x!r},10" for x in t]
+        read, bad = C.read_speed, ("speed_m_s", "200")
+    else:
+        head = "time_s,height_m,sigma_m"
+        rows = [f"{x!r},300,1" for x in t]
+        read, bad = C.read_height, ("sigma_m", "0")
+    names = head.split(",")
+    j = names.index(bad[0])
+    r = 11 - 2 - 2  # data row shown on line 11 after two blank lines (header = line 1)
+    cells = rows[r].split(",")
+    cells[j] = bad[1]
+    rows[r] = ",".join(cells)
+    text = _with_blank_lines([head] + rows, at=(4, 7))
+    assert text.splitlines()[10] == rows[r]  # line 11 as an editor shows it
+    p = tmp_path / ("f.csv.gz" if path_kind == "gz" else "f.csv")
+    p.write_bytes(gzip.compress(text.encode()) if path_kind == "gz" else text.encode())
+    with pytest.raises(InputError, match=r"f\.csv(\.gz)?: line 11: ") as e:
+        read(p)
+    if bad[0] == "time_s":
+        assert "from line 10 " in str(e.value)  # the row before it, also past the blank lines
+
+
+def test_data_line_counts_blank_lines_before_the_header_and_quoted_cells_over_two_lines(tmp_path):
+    p = tmp_path / "f.csv"
+    p.write_text('\n\na,b\r\n1,2\r\n\r\n3,"x\ny"\n4,5\n')
+    assert [C.data_line(p, i) for i in range(3)] == [4, 6, 8]
+    assert C.data_line(tmp_path / "absent.csv", 5) == 7  # unreadable: the plain count

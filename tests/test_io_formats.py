@@ -147,3 +147,28 @@ def test_a_one_row_rtklibexplorer_log_is_refused(tmp_path):
     p.write_text("".join(head))
     with pytest.raises(InputError, match=r"imu_gpst\.csv: holds 1 data row\(s\); an IMU log needs at least two"):
         io.read_imu(p)
+
+
+def test_blank_lines_before_the_header_or_between_rows_keep_the_format_and_the_line_numbers(tmp_path):
+    """The readers skip a blank line; the header recognition read the first line only (a log with a blank
+    first line was given to the inskit reader, which asked for time_s), and the messages counted the rows,
+    so every line after a blank one was named as the line above it."""
+    import gzip
+
+    lines = gzip.decompress(DRIVE_IMU.read_bytes()).decode().splitlines()[:400]
+    p = tmp_path / "imu.csv"
+    p.write_text("\n" + "\n".join(lines[:100] + [""] + lines[100:]) + "\n")
+    assert detect_imu_format(p) == "rtklibexplorer"
+    assert len(io.read_imu(p)) == 399
+    shown = p.read_text().splitlines()
+    k = 250  # the week of the row an editor shows on line 251: half a week
+    cells = shown[k - 1].split(",")
+    cells[0] += ".5"
+    shown[k - 1] = ",".join(cells)
+    p.write_text("\n".join(shown) + "\n")
+    with pytest.raises(InputError, match=rf"imu\.csv: line {k}: gps_week=\d+\.5; expected a whole GPS week"):
+        io.read_imu(p)
+    q = tmp_path / "gnss.pos"
+    q.write_bytes(b"\n\n" + gzip.decompress(DRIVE_POS.read_bytes()))
+    assert detect_gnss_format(q) == "rtklib-pos"
+    assert len(io.read_gnss(q)) == 2197

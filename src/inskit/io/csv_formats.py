@@ -4,8 +4,10 @@ Every file has one header line; units are part of the column names
 (``gyro_x_deg_s``, ``accel_z_g``, ``lat_deg``).  Degrees and g appear only
 here: what the readers return is SI and radians.
 
-Line numbers in messages count the header as line 1, so data row ``i``
-(0-based) is line ``i + 2``, as a text editor shows it.
+Line numbers in messages are those a text editor shows: the header is line
+1 when nothing is above it, so data row ``i`` (0-based) is line ``i + 2``
+unless blank lines, which the parsers skip, come before it
+(:func:`data_line`).
 """
 
 from __future__ import annotations
@@ -101,6 +103,40 @@ def read_table(path) -> tuple:
     if blank:
         df = df.drop(columns=blank)
     return path, df
+
+
+def data_line(path, row) -> int:
+    """The line of data row ``row`` (0-based, as the parsers number the rows)
+    of CSV file ``path``, as a text editor numbers it (from 1).
+
+    pandas and pyarrow skip a blank (or whitespace-only) line, before the
+    header or between rows, so ``row + 2`` names the line above the right
+    one once for every blank line before it.  The file (plain or gzip) is
+    read up to that row, for a message only; a quoted cell that spans
+    lines (an odd count of ``"`` on a line) continues its row.  A file that
+    cannot be read as text gives ``row + 2``.
+    """
+    row = int(row)
+    from .parquet import is_parquet
+
+    if is_parquet(path):
+        return row + 2
+    try:
+        with open_text(path) as fh:
+            seen = -2  # the header is row -1
+            open_quote = False
+            for lineno, line in enumerate(fh, start=1):
+                if not open_quote:
+                    if not line.strip():
+                        continue
+                    seen += 1
+                    if seen == row:
+                        return lineno
+                if line.count('"') % 2:
+                    open_quote = not open_quote
+    except Exception:  # noqa: BLE001 (a damaged file: the message keeps the row's plain count)
+        pass
+    return row + 2
 
 
 def _refuse_separator(path, header):
@@ -341,7 +377,7 @@ def numeric_columns(path, df, columns):
             raw = df[c].iloc[i]
             shown = plain_number(raw) if isinstance(raw, (int, float, np.number)) else repr(raw)
             what = "is empty" if (isinstance(raw, float) and np.isnan(raw)) else f"has {shown}"
-            raise InputError(f"{path}: line {i + 2}: column '{c}' {what}; expected a finite number")
+            raise InputError(f"{path}: line {data_line(path, i)}: column '{c}' {what}; expected a finite number")
         out[:, j] = col
     return out
 
@@ -360,9 +396,11 @@ def check_time_column(path, t, column="time_s"):
     if bad.any():
         i = int(np.argmax(bad)) + 1
         if d[i - 1] == 0:
-            raise InputError(f"{path}: line {i + 2}: duplicate timestamp {column}={float(t[i])!r} (same as line {i + 1})")
+            raise InputError(f"{path}: line {data_line(path, i)}: duplicate timestamp {column}={float(t[i])!r} (same as "
+                             f"line {data_line(path, i - 1)})")
         raise InputError(
-            f"{path}: line {i + 2}: {column}={float(t[i])!r} goes back in time from line {i + 1} ({float(t[i - 1])!r}); "
+            f"{path}: line {data_line(path, i)}: {column}={float(t[i])!r} goes back in time from line "
+            f"{data_line(path, i - 1)} ({float(t[i - 1])!r}); "
             "timestamps must strictly increase"
         )
 
@@ -685,12 +723,12 @@ def first_row_rule(path, t, inc, columns, first_row="initial"):
         if not empty:
             held = ", ".join(f"{c}={plain_number(v)}" for c, v in zip(columns, inc[0]) if v != 0)
             raise InputError(
-                f"{path}: line 2 (the first data row) holds increments ({held}); in an increment file the first "
-                "row is the initial epoch and its increments are not used (docs/formats.md), so this file seems to "
-                "lack that row and would lose its first increment.  Say what the row is: first_row=\"increment\" "
-                "(its increments are real: an initial epoch one median interval earlier is prepended) or "
-                "first_row=\"discard\" (it is the initial epoch: its increments are dropped); [imu] first_row in a "
-                "navigate config, --first-row on the command line"
+                f"{path}: line {data_line(path, 0)} (the first data row) holds increments ({held}); in an increment "
+                "file the first row is the initial epoch and its increments are not used (docs/formats.md), so this "
+                "file seems to lack that row and would lose its first increment.  Say what the row is: "
+                "first_row=\"increment\" (its increments are real: an initial epoch one median interval earlier is "
+                "prepended) or first_row=\"discard\" (it is the initial epoch: its increments are dropped); [imu] "
+                "first_row in a navigate config, --first-row on the command line"
             )
         return t, inc
     if first_row == "discard":
@@ -699,8 +737,8 @@ def first_row_rule(path, t, inc, columns, first_row="initial"):
         return t, inc
     if empty:
         raise InputError(
-            f"{path}: line 2 (the first data row) holds zero increments: it is the initial epoch, not an "
-            "increment; read the file with first_row=\"initial\" (the default) rather than \"increment\""
+            f"{path}: line {data_line(path, 0)} (the first data row) holds zero increments: it is the initial "
+            "epoch, not an increment; read the file with first_row=\"initial\" (the default) rather than \"increment\""
         )
     if len(t) < 2:
         raise InputError(f"{path}: first_row=\"increment\" needs at least two rows (the initial epoch is put one "
@@ -784,8 +822,8 @@ def check_units_norms(path, wn, f_norm, gcol, acol, gunit, aunit):
         if (med > _GYRO_RAD_MAX).any():
             i = int(np.argmax(med > _GYRO_RAD_MAX))
             raise InputError(
-                f"{path}: column '{gcol}': {k} consecutive samples (near line {i * k + 2}) turn at a median "
-                f"{float(med[i]):.1f} rad/s ({float(med[i]) / DEG:.0f} deg/s), more than a vehicle or a person "
+                f"{path}: column '{gcol}': {k} consecutive samples (near line {data_line(path, i * k)}) turn at a "
+                f"median {float(med[i]):.1f} rad/s ({float(med[i]) / DEG:.0f} deg/s), more than a vehicle or a person "
                 f"can; it looks like values in deg/s; {hint}"
             )
 
@@ -849,18 +887,19 @@ def _check_latlon(path, lat, lon):
     bad = np.abs(lat) > 90
     if bad.any():
         i = int(np.argmax(bad))
-        raise InputError(f"{path}: line {i + 2}: lat_deg={float(lat[i])!r} is outside [-90, 90] degrees")
+        raise InputError(f"{path}: line {data_line(path, i)}: lat_deg={float(lat[i])!r} is outside [-90, 90] degrees")
     bad = (lon < -180) | (lon > 360)
     if bad.any():
         i = int(np.argmax(bad))
-        raise InputError(f"{path}: line {i + 2}: lon_deg={float(lon[i])!r} is outside [-180, 360] degrees")
+        raise InputError(f"{path}: line {data_line(path, i)}: lon_deg={float(lon[i])!r} is outside [-180, 360] degrees")
 
 
 def _check_positive(path, df, a, columns):
     bad = a <= 0
     if bad.any():
         i, j = np.argwhere(bad)[0]
-        raise InputError(f"{path}: line {i + 2}: column '{columns[j]}' is {float(a[i, j])!r}; sigmas must be > 0")
+        raise InputError(f"{path}: line {data_line(path, i)}: column '{columns[j]}' is {float(a[i, j])!r}; "
+                         "sigmas must be > 0")
 
 
 def write_gnss(path, gnss: GnssData, *, overwrite=False):
@@ -1104,8 +1143,8 @@ def read_speed(path):
     check_time_column(path, a[:, 0])
     if (np.abs(a[:, 1]) > 150.0).any():
         i = int(np.argmax(np.abs(a[:, 1]) > 150.0))
-        raise InputError(f"{path}: line {i + 2}: column 'speed_m_s' holds {plain_number(a[i, 1])}, above 150 m/s: "
-                         "km/h or another unit? expected metres per second")
+        raise InputError(f"{path}: line {data_line(path, i)}: column 'speed_m_s' holds {plain_number(a[i, 1])}, "
+                         "above 150 m/s: km/h or another unit? expected metres per second")
     return a[:, 0].copy(), a[:, 1].copy()
 
 
@@ -1127,8 +1166,8 @@ def read_speed_course(path):
     check_time_column(path, a[:, 0])
     if (a[:, 1] < 0).any():
         i = int(np.argmax(a[:, 1] < 0))
-        raise InputError(f"{path}: line {i + 2}: column 'speed_m_s' is {plain_number(a[i, 1])}; a speed over "
-                         "ground is >= 0 (the direction is in course_deg)")
+        raise InputError(f"{path}: line {data_line(path, i)}: column 'speed_m_s' is {plain_number(a[i, 1])}; a "
+                         "speed over ground is >= 0 (the direction is in course_deg)")
     _check_positive(path, df, a[:, 3:5], SPEED_COURSE_COLUMNS[3:5])
     return a[:, 0].copy(), a[:, 1].copy(), np.radians(a[:, 2]), a[:, 3].copy(), np.radians(a[:, 4])
 
@@ -1162,8 +1201,8 @@ def read_height(path):
     big = np.abs(a[:, 1]) > HEIGHT_LIMIT_M
     if big.any():
         i = int(np.argmax(big))
-        raise InputError(f"{path}: line {i + 2}: column 'height_m' holds {plain_number(a[i, 1])}, beyond 100 km: "
-                         "a pressure or another unit? expected a height in metres")
+        raise InputError(f"{path}: line {data_line(path, i)}: column 'height_m' holds {plain_number(a[i, 1])}, "
+                         "beyond 100 km: a pressure or another unit? expected a height in metres")
     sigma = None
     if len(cols) == 3:
         _check_positive(path, df, a[:, 2:3], ["sigma_m"])

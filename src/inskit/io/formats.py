@@ -58,12 +58,15 @@ def _open(path):
 
 
 def _first_lines(path, n=_PEEK_LINES) -> list:
-    """Up to ``n`` first lines of ``path`` (``[]`` when it cannot be read:
-    the reader then says why)."""
+    """Up to ``n`` first lines of ``path`` from its first that is not blank
+    (the readers skip blank lines before the header too); ``[]`` when it
+    cannot be read: the reader then says why."""
     try:
         with _open(path) as fh:
             out = []
             for line in fh:
+                if not out and not line.strip():
+                    continue
                 out.append(line.rstrip("\r\n"))
                 if len(out) >= n:
                     break

@@ -179,7 +179,9 @@ def read_innovations(path):
     blank = df[need].isna().any(axis=1).to_numpy()
     if blank.any():  # a file cut short (a copy interrupted, a disk filled) or edited: not plotted as if whole
         i = int(np.argmax(blank))
-        raise InputError(f"{path}: line {i + 2}: empty field(s) in {', '.join(c for c in need if pd.isna(df[c].iloc[i]))}"
+        from ..io.csv_formats import data_line
+
+        raise InputError(f"{path}: line {data_line(path, i)}: empty field(s) in {', '.join(c for c in need if pd.isna(df[c].iloc[i]))}"
                          f"{' (the file ends mid-row: cut short?)' if i == len(df) - 1 else ''}")
     out = {}
     for name, g in df.groupby("measurement", sort=False):
