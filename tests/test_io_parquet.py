@@ -3,6 +3,7 @@ units, CSV at a chosen rate equal to the former ``%.15g`` files, readers that
 take both, column selection, and the navigate outputs."""
 
 import json
+import re
 
 import numpy as np
 import pandas as pd
@@ -155,6 +156,61 @@ def test_reader_tells_the_format_by_content(tmp_path):
     (tmp_path / "cut.parquet").write_bytes((tmp_path / "s.parquet").read_bytes()[:300])
     with pytest.raises(InputError, match=r"cut.parquet: not a readable Parquet file"):
         io.read_solution(tmp_path / "cut.parquet")
+
+
+@pytest.mark.parametrize("kind", ["increments", "rates", "first-row", "gnss", "speed", "height", "solution-head"])
+def test_every_parquet_reader_names_a_row_counted_from_0_never_a_line(tmp_path, kind):
+    """The solution reader said 'row 7' of a Parquet file, the IMU, fixes, odometer and height readers
+    'line 9' of the same row (a CSV's line, header = line 1): a Parquet file has rows, counted from 0."""
+    import pyarrow as pa
+
+    n = 20
+    t = np.round(0.01 * np.arange(n), 2)
+    one = np.ones(n)
+    read = io.read_imu
+    if kind in ("increments", "first-row"):
+        d = 1e-5 * one
+        d[0] = 0.0 if kind == "increments" else 1e-5
+        cols = {"time_s": t, **{f"dtheta_{a}_rad": d for a in "xyz"}, "dv_x_m_s": d, "dv_y_m_s": d,
+                "dv_z_m_s": -0.098 * one}
+        if kind == "increments":
+            cols["time_s"] = np.r_[t[:7], t[5], t[8:]]  # row 7 goes back to row 5's time
+            want = r"row 7: time_s=0\.05 goes back in time from row 6 \(0\.06\)"
+        else:
+            want = r"row 0 \(the first data row\) holds increments"
+    elif kind == "rates":
+        gz = 0.003 * one
+        gz[11] = np.nan
+        cols = {"time_s": t, "gyro_x_rad_s": 0.001 * one, "gyro_y_rad_s": 0.002 * one, "gyro_z_rad_s": gz,
+                "accel_x_m_s2": 0.1 * one, "accel_y_m_s2": 0.2 * one, "accel_z_m_s2": -9.8 * one}
+        want = r"row 11: column 'gyro_z_rad_s' is empty \(null\) or NaN; expected a finite number"
+    elif kind == "gnss":
+        lat = [45.0] * n
+        lat[5] = None
+        cols = {"time_s": t, "lat_deg": pa.array(lat, pa.float64()), "lon_deg": 7 * one, "height_m": 300 * one,
+                "sigma_n_m": one, "sigma_e_m": one, "sigma_d_m": 2 * one}
+        read, want = io.read_gnss, r"row 5: column 'lat_deg' is empty \(null\) or NaN"
+    elif kind == "speed":
+        v = 10 * one
+        v[4] = 200.0
+        cols, read = {"time_s": t, "speed_m_s": v}, io.read_speed
+        want = r"row 4: column 'speed_m_s' holds 200(\.0)?, above 150 m/s"
+    elif kind == "height":
+        sg = one.copy()
+        sg[13] = 0.0
+        cols, read = {"time_s": t, "height_m": 300 * one, "sigma_m": sg}, io.read_height
+        want = r"row 13: column 'sigma_m' is 0\.0; sigmas must be > 0"
+    else:  # the head of a solution (mechanize --init-from)
+        cols = P.solution_columns(solution(n=n))
+        cols["lat_deg"] = cols["lat_deg"].copy()
+        cols["lat_deg"][1] = 91.0
+        read = lambda p: io.read_solution(p, until_s=float(cols["time_s"][3]))  # noqa: E731
+        want = r"row 1: lat_deg=91\.0 is outside \[-90, 90\] degrees"
+    p = tmp_path / "f.parquet"
+    pq.write_table(pa.table(cols), p)
+    with pytest.raises(InputError, match=r"f\.parquet: " + want) as e:
+        read(p)
+    assert not re.search(r"line \d", str(e.value))
 
 
 def test_parquet_reader_validates_rows(tmp_path):

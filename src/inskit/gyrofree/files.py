@@ -28,7 +28,7 @@ import pandas as pd
 
 from ..errors import InputError
 from ..files import write_csv, write_text
-from ..io.csv_formats import check_time_column, data_line, numeric_columns, read_table, require_columns, check_writable
+from ..io.csv_formats import at_row, check_time_column, numeric_columns, read_table, require_columns, check_writable
 from ..units import G0
 from .layout import ArrayLayout
 from .model import ArrayData
@@ -214,7 +214,7 @@ def read_inertial(path):
     bad = np.abs(nq - 1) > 1e-6
     if bad.any():
         i = int(np.argmax(bad))
-        raise InputError(f"{path}: line {data_line(path, i)}: q0..q3 have norm {nq[i]:.9g}; expected a unit quaternion")
+        raise InputError(f"{path}: {at_row(path, i)}: q0..q3 have norm {nq[i]:.9g}; expected a unit quaternion")
     extra = {c: numeric_columns(path, df, [c])[:, 0] for c in df.columns if c not in INERTIAL_COLUMNS}
     return InertialSolution(a[:, 0], a[:, 1:4], a[:, 4:7], a[:, 7:] / nq[:, None]), extra
 

@@ -7,7 +7,8 @@ here: what the readers return is SI and radians.
 Line numbers in messages are those a text editor shows: the header is line
 1 when nothing is above it, so data row ``i`` (0-based) is line ``i + 2``
 unless blank lines, which the parsers skip, come before it
-(:func:`data_line`).
+(:func:`data_line`).  A Parquet file has rows, not lines: its messages say
+``row i``, counted from 0 (:func:`at_row`).
 """
 
 from __future__ import annotations
@@ -45,7 +46,8 @@ _IMU_STEP_MAX_S = 1.0     # a median IMU time step above this [s] (below 1 Hz) l
 def read_table(path) -> tuple:
     """Read a comma-separated table with one header line, or a Parquet file;
     gzip and Parquet data are recognised by their content whatever the file
-    is called.  (In messages about a Parquet table, "line" n is row n - 2.)"""
+    is called.  (Messages name a CSV file's line, a Parquet file's row:
+    :func:`at_row`.)"""
     path = require_file(path)
     from .parquet import is_parquet
 
@@ -117,10 +119,6 @@ def data_line(path, row) -> int:
     cannot be read as text gives ``row + 2``.
     """
     row = int(row)
-    from .parquet import is_parquet
-
-    if is_parquet(path):
-        return row + 2
     try:
         with open_text(path) as fh:
             seen = -2  # the header is row -1
@@ -137,6 +135,16 @@ def data_line(path, row) -> int:
     except Exception:  # noqa: BLE001 (a damaged file: the message keeps the row's plain count)
         pass
     return row + 2
+
+
+def at_row(path, row) -> str:
+    """Where data row ``row`` (0-based) of table file ``path`` is, for a
+    message: ``"line N"`` in a CSV file, the line a text editor shows
+    (:func:`data_line`), ``"row N"`` in a Parquet file, which has rows, not
+    lines, counted from 0 as pyarrow and pandas count them."""
+    from .parquet import is_parquet
+
+    return f"row {int(row)}" if is_parquet(path) else f"line {data_line(path, row)}"
 
 
 def _refuse_separator(path, header):
@@ -363,7 +371,8 @@ def read_numeric_table(path, wanted):
 
 
 def numeric_columns(path, df, columns):
-    """The named columns as a float array; names the line of a bad value."""
+    """The named columns as a float array; names the line (CSV) or the row
+    (Parquet) of a bad value (:func:`at_row`)."""
     if isinstance(df, LeanFrame):
         return np.column_stack([df.data[c] for c in columns])
     import pandas as pd
@@ -376,8 +385,12 @@ def numeric_columns(path, df, columns):
             i = int(np.argmax(bad))
             raw = df[c].iloc[i]
             shown = plain_number(raw) if isinstance(raw, (int, float, np.number)) else repr(raw)
-            what = "is empty" if (isinstance(raw, float) and np.isnan(raw)) else f"has {shown}"
-            raise InputError(f"{path}: line {data_line(path, i)}: column '{c}' {what}; expected a finite number")
+            what = f"has {shown}"
+            if isinstance(raw, float) and np.isnan(raw):  # an empty CSV cell; a null or a NaN in Parquet
+                from .parquet import is_parquet
+
+                what = "is empty (null) or NaN" if is_parquet(path) else "is empty"
+            raise InputError(f"{path}: {at_row(path, i)}: column '{c}' {what}; expected a finite number")
         out[:, j] = col
     return out
 
@@ -396,11 +409,11 @@ def check_time_column(path, t, column="time_s"):
     if bad.any():
         i = int(np.argmax(bad)) + 1
         if d[i - 1] == 0:
-            raise InputError(f"{path}: line {data_line(path, i)}: duplicate timestamp {column}={float(t[i])!r} (same as "
-                             f"line {data_line(path, i - 1)})")
+            raise InputError(f"{path}: {at_row(path, i)}: duplicate timestamp {column}={float(t[i])!r} (same as "
+                             f"{at_row(path, i - 1)})")
         raise InputError(
-            f"{path}: line {data_line(path, i)}: {column}={float(t[i])!r} goes back in time from line "
-            f"{data_line(path, i - 1)} ({float(t[i - 1])!r}); "
+            f"{path}: {at_row(path, i)}: {column}={float(t[i])!r} goes back in time from "
+            f"{at_row(path, i - 1)} ({float(t[i - 1])!r}); "
             "timestamps must strictly increase"
         )
 
@@ -723,7 +736,7 @@ def first_row_rule(path, t, inc, columns, first_row="initial"):
         if not empty:
             held = ", ".join(f"{c}={plain_number(v)}" for c, v in zip(columns, inc[0]) if v != 0)
             raise InputError(
-                f"{path}: line {data_line(path, 0)} (the first data row) holds increments ({held}); in an increment "
+                f"{path}: {at_row(path, 0)} (the first data row) holds increments ({held}); in an increment "
                 "file the first row is the initial epoch and its increments are not used (docs/formats.md), so this "
                 "file seems to lack that row and would lose its first increment.  Say what the row is: "
                 "first_row=\"increment\" (its increments are real: an initial epoch one median interval earlier is "
@@ -737,7 +750,7 @@ def first_row_rule(path, t, inc, columns, first_row="initial"):
         return t, inc
     if empty:
         raise InputError(
-            f"{path}: line {data_line(path, 0)} (the first data row) holds zero increments: it is the initial "
+            f"{path}: {at_row(path, 0)} (the first data row) holds zero increments: it is the initial "
             "epoch, not an increment; read the file with first_row=\"initial\" (the default) rather than \"increment\""
         )
     if len(t) < 2:
@@ -822,7 +835,7 @@ def check_units_norms(path, wn, f_norm, gcol, acol, gunit, aunit):
         if (med > _GYRO_RAD_MAX).any():
             i = int(np.argmax(med > _GYRO_RAD_MAX))
             raise InputError(
-                f"{path}: column '{gcol}': {k} consecutive samples (near line {data_line(path, i * k)}) turn at a "
+                f"{path}: column '{gcol}': {k} consecutive samples (near {at_row(path, i * k)}) turn at a "
                 f"median {float(med[i]):.1f} rad/s ({float(med[i]) / DEG:.0f} deg/s), more than a vehicle or a person "
                 f"can; it looks like values in deg/s; {hint}"
             )
@@ -887,18 +900,18 @@ def _check_latlon(path, lat, lon):
     bad = np.abs(lat) > 90
     if bad.any():
         i = int(np.argmax(bad))
-        raise InputError(f"{path}: line {data_line(path, i)}: lat_deg={float(lat[i])!r} is outside [-90, 90] degrees")
+        raise InputError(f"{path}: {at_row(path, i)}: lat_deg={float(lat[i])!r} is outside [-90, 90] degrees")
     bad = (lon < -180) | (lon > 360)
     if bad.any():
         i = int(np.argmax(bad))
-        raise InputError(f"{path}: line {data_line(path, i)}: lon_deg={float(lon[i])!r} is outside [-180, 360] degrees")
+        raise InputError(f"{path}: {at_row(path, i)}: lon_deg={float(lon[i])!r} is outside [-180, 360] degrees")
 
 
 def _check_positive(path, df, a, columns):
     bad = a <= 0
     if bad.any():
         i, j = np.argwhere(bad)[0]
-        raise InputError(f"{path}: line {data_line(path, i)}: column '{columns[j]}' is {float(a[i, j])!r}; "
+        raise InputError(f"{path}: {at_row(path, i)}: column '{columns[j]}' is {float(a[i, j])!r}; "
                          "sigmas must be > 0")
 
 
@@ -1143,7 +1156,7 @@ def read_speed(path):
     check_time_column(path, a[:, 0])
     if (np.abs(a[:, 1]) > 150.0).any():
         i = int(np.argmax(np.abs(a[:, 1]) > 150.0))
-        raise InputError(f"{path}: line {data_line(path, i)}: column 'speed_m_s' holds {plain_number(a[i, 1])}, "
+        raise InputError(f"{path}: {at_row(path, i)}: column 'speed_m_s' holds {plain_number(a[i, 1])}, "
                          "above 150 m/s: km/h or another unit? expected metres per second")
     return a[:, 0].copy(), a[:, 1].copy()
 
@@ -1166,7 +1179,7 @@ def read_speed_course(path):
     check_time_column(path, a[:, 0])
     if (a[:, 1] < 0).any():
         i = int(np.argmax(a[:, 1] < 0))
-        raise InputError(f"{path}: line {data_line(path, i)}: column 'speed_m_s' is {plain_number(a[i, 1])}; a "
+        raise InputError(f"{path}: {at_row(path, i)}: column 'speed_m_s' is {plain_number(a[i, 1])}; a "
                          "speed over ground is >= 0 (the direction is in course_deg)")
     _check_positive(path, df, a[:, 3:5], SPEED_COURSE_COLUMNS[3:5])
     return a[:, 0].copy(), a[:, 1].copy(), np.radians(a[:, 2]), a[:, 3].copy(), np.radians(a[:, 4])
@@ -1201,7 +1214,7 @@ def read_height(path):
     big = np.abs(a[:, 1]) > HEIGHT_LIMIT_M
     if big.any():
         i = int(np.argmax(big))
-        raise InputError(f"{path}: line {data_line(path, i)}: column 'height_m' holds {plain_number(a[i, 1])}, "
+        raise InputError(f"{path}: {at_row(path, i)}: column 'height_m' holds {plain_number(a[i, 1])}, "
                          "beyond 100 km: a pressure or another unit? expected a height in metres")
     sigma = None
     if len(cols) == 3:

@@ -17,7 +17,7 @@ from ..errors import InputError
 from ..files import require_file
 from ..types import GnssData, ImuData
 from ..units import DEG, G0
-from .csv_formats import (_header_names, check_imu_time, check_imu_units, check_time_column, data_line,
+from .csv_formats import (_header_names, at_row, check_imu_time, check_imu_units, check_time_column,
                           lean_columns, numeric_columns, open_text, read_table, repeated_rows, require_columns)
 
 GPS_EPOCH = datetime(1980, 1, 6, tzinfo=timezone.utc)
@@ -217,7 +217,7 @@ def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0
     bad = (a[:, 0] != np.floor(a[:, 0])) | (a[:, 0] < 0)
     if bad.any():  # astype(int) would truncate 2374.5 to week 2374 without a word
         i = int(np.argmax(bad))
-        raise InputError(f"{path}: line {data_line(path, i)}: gps_week={float(a[i, 0]):g}; expected a whole GPS week "
+        raise InputError(f"{path}: {at_row(path, i)}: gps_week={float(a[i, 0]):g}; expected a whole GPS week "
                          "number >= 0")
     week = a[:, 0].astype(int)
     if week0 is None:
