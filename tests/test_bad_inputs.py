@@ -342,9 +342,17 @@ def test_bad_toml(capsys, sim, tmp_path, text, needles):
      ["field 'init'", "lat_deg 95", "outside [-90, 90]"]),
     ("[noise]\ngyro_arw_deg_sqrt_h = -0.3\n", ["field 'noise.gyro_arw_deg_sqrt_h'", "greater than 0"]),
     ("[init]\nsigma_pos_m = 0\n", ["field 'init.sigma_pos_m'", "greater than 0"]),
+    # an angle beyond a full turn: a typo (370 for 37.0), taken modulo 360 without a word
+    ("", ["field 'imu.mount_rpy_deg'", "pitch 370 is outside [-360, 360] degrees", "a typo"]),
+    ('[init]\nmode = "given"\nlat_deg = 45\nlon_deg = 7\nheight_m = 300\nrpy_deg = [0, 0, -400]\n',
+     ["field 'init.rpy_deg'", "yaw -400 is outside [-360, 360] degrees"]),
+    ('[init]\nmode = "given"\nlat_deg = 45\nlon_deg = 700\nheight_m = 300\nrpy_deg = [0, 0, 0]\n',
+     ["field 'init.lon_deg'", "700 is outside [-180, 360] degrees"]),
 ])
 def test_impossible_navigate_configuration(capsys, sim, tmp_path, text, needles):
     cfg = config(tmp_path, sim, text)
+    if "imu.mount_rpy_deg" in needles[0]:
+        cfg.write_text(cfg.read_text().replace("[gnss]", "mount_rpy_deg = [0, 370, 0]\n[gnss]", 1))
     refused(run(capsys, "navigate", cfg), str(cfg), *needles)
     assert not (tmp_path / "nav").exists()
 
@@ -369,6 +377,16 @@ def test_impossible_navigate_configuration(capsys, sim, tmp_path, text, needles)
     ('[[segment]]\ntype = "static"', ('[[vibration]]\ntarget = "down"\namplitude = 0.001\nfrequency_hz = 60\n'
                                       '[[segment]]\ntype = "static"'),
      ["vibration 1 (down, sinusoidal): frequency_hz 60 Hz", "Nyquist"]),
+    # angles beyond a full turn (a turn's angle_deg is a heading change and may be more)
+    ("grade = \"industrial-mems\"", "grade = \"industrial-mems\"\nmount_rpy_deg = [370, 0, 0]",
+     ["field 'imu.mount_rpy_deg'", "roll 370 is outside [-360, 360] degrees"]),
+    ("height_m = 300", "height_m = 300\nyaw_deg = 450", ["field 'start.yaw_deg'", "450 is outside [-360, 360]"]),
+    ("lon_deg = 7", "lon_deg = -190", ["field 'start.lon_deg'", "-190 is outside [-180, 360]"]),
+    ('type = "cruise"\nduration_s = 20', 'type = "roll"\namplitude_deg = 3600\nduration_s = 20',
+     ["field 'segment.3.amplitude_deg'", "3600 is outside [-360, 360]"]),
+    ('[[segment]]\ntype = "static"', ('[[vibration]]\ntarget = "yaw"\namplitude = 500\nfrequency_hz = 1\n'
+                                      '[[segment]]\ntype = "static"'),
+     ["vibration 1 (yaw, sinusoidal): amplitude 500 is outside [-360, 360] degrees"]),
 ])
 def test_impossible_scenario(capsys, tmp_path, old, new, needles):
     sc = tmp_path / "s.toml"

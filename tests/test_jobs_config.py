@@ -478,3 +478,33 @@ def test_the_output_rate_is_capped_as_every_rate():
     assert _cfg(LOOSE, output={"rate_hz": MAX_RATE_HZ}).output.rate_hz == MAX_RATE_HZ
     with pytest.raises(ConfigError, match=r"c\.toml: field 'output\.rate_hz': .*less than or equal to 10000"):
         _cfg(LOOSE, output={"rate_hz": 1e300})
+
+
+# --- angles ----------------------------------------------------------------------------
+@pytest.mark.parametrize("section, key, value, shown", [
+    ("imu", "mount_rpy_deg", [0.0, 370.0, 0.0], "pitch 370"),
+    ("imu", "mount_rpy_deg", [-360.5, 0.0, 0.0], "roll -360.5"),
+    ("init", "yaw_deg", 725.0, "725"),
+])
+def test_an_angle_beyond_a_full_turn_is_refused_naming_the_field_and_the_value(section, key, value, shown):
+    """[imu] mount_rpy_deg = [0, 370, 0] was taken (the rotation of 10 deg): 370 is a typo or another unit."""
+    with pytest.raises(ConfigError, match=rf"^c\.toml: field '{section}\.{key}': {shown} is outside \[-360, 360\] "
+                                          r"degrees: no angle needs more than a full turn either way \(a typo"):
+        _cfg(LOOSE, **{section: {key: value}})
+
+
+def test_angles_up_to_a_full_turn_either_way_are_taken_and_documented():
+    cfg = _cfg(LOOSE, imu={"mount_rpy_deg": [-360.0, 359.9, 360.0]})
+    assert cfg.imu.mount_rpy_deg == (-360.0, 359.9, 360.0)
+    given = {"mode": "given", "lat_deg": 45.0, "height_m": 0.0}
+    assert _cfg(LOOSE, init={**given, "lon_deg": 359.0, "rpy_deg": [0.0, -90.0, 360.0]}).init.rpy_deg[2] == 360.0
+    with pytest.raises(ConfigError, match=r"field 'init\.rpy_deg': yaw 361 is outside \[-360, 360\]"):
+        _cfg(LOOSE, init={**given, "lon_deg": 7.0, "rpy_deg": [0.0, 0.0, 361.0]})
+    with pytest.raises(ConfigError, match=r"field 'init\.lon_deg': -180\.5 is outside \[-180, 360\] degrees"):
+        _cfg(LOOSE, init={**given, "lon_deg": -180.5, "rpy_deg": [0.0, 0.0, 0.0]})
+    from inskit.jobs.config import ImuSection, InitSection
+
+    assert {r["key"]: r for r in config_doc.rows(ImuSection)}["mount_rpy_deg"]["allowed"] == ">= -360.0, <= 360.0"
+    init = {r["key"]: r for r in config_doc.rows(InitSection)}
+    assert init["rpy_deg"]["allowed"] == init["yaw_deg"]["allowed"] == ">= -360.0, <= 360.0"
+    assert init["lon_deg"]["allowed"] == ">= -180.0, <= 360.0"

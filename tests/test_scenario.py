@@ -313,7 +313,8 @@ def test_mount_must_be_angles(tmp_path):
     p = tmp_path / "bad.toml"
     p.write_text('name = "x"\n[start]\nlat_deg = 1.0\nlon_deg = 2.0\n[imu]\nmount_rpy_deg = [0.0, 400.0, 0.0]\n'
                  '[[segment]]\ntype = "static"\nduration_s = 1.0\n')
-    with pytest.raises(ConfigError, match="mount_rpy_deg"):
+    with pytest.raises(ConfigError, match=r"bad\.toml: field 'imu\.mount_rpy_deg': pitch 400 is outside \[-360, 360\] "
+                                          r"degrees"):
         load_scenario(p)
 
 

@@ -63,6 +63,43 @@ def check_magnitude(v):
                              "an exponent slipped?)")
     return v
 
+#: an angle setting [deg] beyond a full turn either way is refused: no orientation needs more, and 370 for 37.0
+#: (or a value in another unit) would be taken without a word, the angle modulo 360
+ANGLE_LIMIT_DEG = 360.0
+#: the longitudes a setting may hold [deg], as the readers of positions take them (east positive; 180..360 the
+#: western half counted eastward)
+LONGITUDE_RANGE_DEG = (-180.0, 360.0)
+
+
+def _angle_names(v):
+    """The components of an angle setting for a message: roll, pitch, yaw of a triple; none of a scalar."""
+    if isinstance(v, (tuple, list)):
+        return ("roll ", "pitch ", "yaw ") if len(v) == 3 else tuple(f"item {k + 1} " for k in range(len(v)))
+    return ("",)
+
+
+def check_angles(v):
+    """A pydantic after-validator of an angle field [deg] (a scalar or a
+    roll, pitch, yaw triple; None passes): each value within
+    +-:data:`ANGLE_LIMIT_DEG`, else refused naming the component and the
+    value (the field is named by the caller's location)."""
+    if v is None:
+        return v
+    for name, x in zip(_angle_names(v), v if isinstance(v, (tuple, list)) else (v,)):
+        if isinstance(x, (int, float)) and abs(x) <= MAX_SETTING and not abs(x) <= ANGLE_LIMIT_DEG:
+            raise ValueError(f"{name}{x:g} is outside [-{ANGLE_LIMIT_DEG:g}, {ANGLE_LIMIT_DEG:g}] degrees: no "
+                             "angle needs more than a full turn either way (a typo, or another unit?)")
+    return v
+
+
+def check_longitude(v):
+    """A pydantic after-validator of a longitude field [deg] (None passes):
+    within :data:`LONGITUDE_RANGE_DEG`, as the position readers take it."""
+    lo, hi = LONGITUDE_RANGE_DEG
+    if v is not None and abs(v) <= MAX_SETTING and not lo <= v <= hi:
+        raise ValueError(f"{v:g} is outside [{lo:g}, {hi:g}] degrees (a longitude, east positive; a typo?)")
+    return v
+
 
 def _leaf_kinds(tp):
     """The scalar kinds an annotation admits: a set of 'bool', 'number',

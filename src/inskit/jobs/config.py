@@ -24,7 +24,8 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 from pydantic_core import PydanticCustomError
 
-from ..config_files import check_magnitude, check_scalar_type, read_toml, validation_message
+from ..config_files import (check_angles, check_longitude, check_magnitude, check_scalar_type, read_toml,
+                            validation_message)
 from ..errors import ConfigError, InputError
 from ..units import MAX_RATE_HZ
 
@@ -99,6 +100,7 @@ class ImuSection(_Strict):
     gap_factor: float = Field(5.0, gt=1.0, description="an interval longer than this many median intervals is a gap")
     gap_rate_sigma_deg_s: float = Field(5.0, gt=0, description="unknown rate change assumed over a bridged gap")
     gap_accel_sigma_m_s2: float = Field(1.0, gt=0, description="unknown acceleration change over a bridged gap")
+    _angles = field_validator("mount_rpy_deg")(check_angles)
 
     @model_validator(mode="after")
     def _first_row_needs_increments(self):
@@ -427,6 +429,8 @@ class InitSection(_Strict):
                                      "(with filter.lever_arm)")
     sigma_time_offset_s: float = Field(0.05, gt=0, description="initial sigma of the estimated IMU-GNSS time "
                                        "offset (with filter.time_offset)")
+    _angles = field_validator("rpy_deg", "yaw_deg")(check_angles)
+    _longitude = field_validator("lon_deg")(check_longitude)
 
     @model_validator(mode="after")
     def _given_complete(self):

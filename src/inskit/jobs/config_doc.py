@@ -123,7 +123,8 @@ SECTION_RULES = {
     "VibrationSpec": "Rules: a sinusoidal vibration takes frequency_hz, a random one frequency_hz or band_hz "
                      "(0 < low < high), not both. Its highest frequency (a random one's top of the band) must be "
                      "below the IMU's Nyquist frequency, imu.rate_hz / 2 (with imu.quadrature_nodes 1 or 2 lower "
-                     "still: where their increments stay within 0.1 %).",
+                     "still: where their increments stay within 0.1 %). The amplitude of an attitude (roll, "
+                     "pitch, yaw) is within +-360 deg.",
     "SegmentSpec": "Rules: each type takes exactly its keys, listed under type (a key its type would ignore is an "
                    "error): turns take rate_deg_s or radius_m, not both; accelerate must speed up and decelerate "
                    "slow down; climb and descend take |angle_deg| < 90; a coning frequency must be below the IMU's "
@@ -241,8 +242,9 @@ def default_of(field) -> str:
     return f"`{_toml(v)}`"
 
 
-def allowed_of(field) -> str:
-    """Literal values and numeric bounds, e.g. ``"loose", "tight"`` or ``> 0, <= 1000``."""
+def allowed_of(field, model=None, name=None) -> str:
+    """Literal values and numeric bounds, e.g. ``"loose", "tight"`` or ``> 0, <= 1000``; with ``model`` and
+    ``name`` also the range of an angle or longitude checked by its validator (:func:`validator_bounds`)."""
     tp, _ = _strip_optional(field.annotation)
     if typing.get_origin(tp) is list:
         tp = typing.get_args(tp)[0]
@@ -254,7 +256,26 @@ def allowed_of(field) -> str:
         for cls, (sym, attr) in ops.items():
             if isinstance(m, cls):
                 parts.append(f"{sym} {_toml(getattr(m, attr))}")
+    if model is not None:
+        parts += validator_bounds(model, name)
     return ", ".join(parts) if parts else ""
+
+
+def validator_bounds(model, name) -> list[str]:
+    """The bounds a field validator of ``model`` puts on field ``name``
+    (:func:`inskit.config_files.check_angles`: each within +-360;
+    :func:`~inskit.config_files.check_longitude`: the longitude range)."""
+    from ..config_files import ANGLE_LIMIT_DEG, LONGITUDE_RANGE_DEG, check_angles, check_longitude
+
+    out = []
+    for dec in model.__pydantic_decorators__.field_validators.values():
+        if name not in dec.info.fields:
+            continue
+        if dec.func is check_angles:
+            out += [f">= {_toml(-ANGLE_LIMIT_DEG)}", f"<= {_toml(ANGLE_LIMIT_DEG)}"]
+        elif dec.func is check_longitude:
+            out += [f">= {_toml(LONGITUDE_RANGE_DEG[0])}", f"<= {_toml(LONGITUDE_RANGE_DEG[1])}"]
+    return out
 
 
 def meaning_of(model, name, field) -> str:
@@ -273,7 +294,7 @@ def rows(model) -> list[dict]:
         unit = UNIT_NOTES.get(f"{model.__name__}.{name}") or unit_of(name, desc)
         out.append({"key": name, "type": ("array of tables" if is_array else "table") if sub else
                     type_name(field.annotation, optional=default_of(field) == "unset"),
-                    "unit": "-" if sub else unit, "default": default_of(field), "allowed": allowed_of(field),
+                    "unit": "-" if sub else unit, "default": default_of(field), "allowed": allowed_of(field, model, name),
                     "meaning": desc, "section": sub, "array": is_array})
     return out
 

@@ -22,7 +22,8 @@ from typing import Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 
-from ..config_files import check_magnitude, check_scalar_type, read_toml, validation_message
+from ..config_files import (ANGLE_LIMIT_DEG, check_angles, check_longitude, check_magnitude, check_scalar_type,
+                            read_toml, validation_message)
 from ..errors import ConfigError
 from ..types import GnssData, ImuData, NavSolution
 from ..units import DEG, MAX_RATE_HZ, MAX_SAMPLES
@@ -45,6 +46,8 @@ class StartSpec(_S):
     yaw_deg: float = 0.0
     speed_m_s: float = Field(0.0, ge=0)
     transition_s: float = Field(2.0, gt=0)
+    _angles = field_validator("yaw_deg")(check_angles)
+    _longitude = field_validator("lon_deg")(check_longitude)
 
 
 class ImuSpec(_S):
@@ -59,12 +62,7 @@ class ImuSpec(_S):
         (0.0, 0.0, 0.0), description="mounting of the IMU in the vehicle, in the convention of navigate's "
         "[imu] mount_rpy_deg (the same numbers there rotate the readings back into vehicle axes); the truth file "
         "keeps the vehicle's attitude")
-
-    @model_validator(mode="after")
-    def _mount(self):
-        if not all(abs(a) <= 360.0 for a in self.mount_rpy_deg):
-            raise ValueError(f"mount_rpy_deg must be angles within +-360 deg, got {list(self.mount_rpy_deg)}")
-        return self
+    _angles = field_validator("mount_rpy_deg")(check_angles)
 
 
 class GnssSpec(_S):
@@ -118,6 +116,7 @@ class SegmentSpec(_S):
     amplitude_deg: float | None = None
     frequency_hz: float | None = Field(None, gt=0)
     repeat: int = Field(1, ge=1)
+    _angles = field_validator("amplitude_deg")(check_angles)  # angle_deg of a turn may be more than a turn
 
 
 @dataclass(frozen=True)
@@ -356,6 +355,9 @@ def check_vibration(v: VibrationSpec, i: int, imu: ImuSpec, where: str = "") -> 
     vibration given ``band_hz``), a band that is no band, or a frequency the
     IMU cannot sample (:func:`check_frequency`)."""
     name = f"{where}vibration {i} ({v.target}, {v.kind})"
+    if v.target != "down" and not abs(v.amplitude) <= ANGLE_LIMIT_DEG:
+        raise ConfigError(f"{name}: amplitude {v.amplitude:g} is outside [-{ANGLE_LIMIT_DEG:g}, {ANGLE_LIMIT_DEG:g}] "
+                          f"degrees: no angle needs more than a full turn either way (a typo, or another unit?)")
     if v.kind == "sinusoidal":
         if v.band_hz is not None:
             raise ConfigError(f"{name}: band_hz is for kind = \"random\" (a sinusoidal vibration would ignore it); "
