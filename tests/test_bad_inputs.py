@@ -554,6 +554,17 @@ def test_garbage_rinex(capsys, tmp_path, content):
     assert empty_or_absent(tmp_path / "o")
 
 
+def test_an_elevation_mask_below_the_horizon_is_refused_as_the_config_refuses_it(capsys, sim, tmp_path):
+    """spp --mask -5 was taken, [gnss] mask_deg = -5 refused in other words: one range [0, 90), one message."""
+    said = "-5 is outside [0, 90) degrees: an elevation mask is an elevation from the horizon"
+    refused(run(capsys, "spp", OBS, NAV, "--mask", "-5", "--out", tmp_path / "o"), f"--mask: {said}")
+    assert empty_or_absent(tmp_path / "o")
+    cfg = config(tmp_path, sim, "")
+    cfg.write_text(cfg.read_text().replace(f'[gnss]\nfile = "{sim / "gnss.csv"}"',
+                                           f'[gnss]\ncoupling = "tight"\nobs = "{OBS}"\nnav = "{NAV}"\nmask_deg = -5'))
+    refused(run(capsys, "navigate", cfg), str(cfg), f"field 'gnss.mask_deg': {said}")
+
+
 def test_click_usage_errors_are_exit_2_too(capsys, sim):
     """Not an inskit message but click's (usage + error), still exit 2 and no traceback."""
     from inskit.cli import main

@@ -102,6 +102,36 @@ def test_job_refuses_a_reference_off_the_earth_and_bad_models():
         run_spp(OBS, NAV, iono="nequick")
 
 
+@pytest.mark.parametrize("mask", ["-5", "-0.5", "90", "120"])
+def test_the_mask_takes_the_range_and_the_message_of_the_config(tmp_path, mask):
+    """spp --mask took [-5, 90), the navigate config's [gnss] mask_deg (and the scenario's [raw_gnss]
+    mask_deg, which took -5 too) [0, 90), each with its own words: now one range, one message."""
+    from inskit.errors import ConfigError
+    from inskit.jobs.config import config_from_dict
+    from inskit.simulation.scenario import load_scenario
+
+    r = inskit(OBS, NAV, "--mask", mask, "--json")
+    assert r.returncode == 2 and r.stdout == "" and r.stderr.count("\n") == 1, r.stderr
+    said = r.stderr.strip().removeprefix("inskit: error: --mask: ")
+    assert said.startswith(f"{float(mask):g} is outside [0, 90) degrees: an elevation mask is"), r.stderr
+    with pytest.raises(ConfigError) as e:
+        config_from_dict({"imu": {"file": "i.csv"}, "gnss": {"coupling": "tight", "obs": "o", "nav": "n",
+                                                            "mask_deg": float(mask)}}, source="c.toml")
+    assert str(e.value) == f"c.toml: field 'gnss.mask_deg': {said}"
+    sc = tmp_path / "s.toml"
+    sc.write_text(f'name = "s"\n[start]\nlat_deg = 1\nlon_deg = 2\n[raw_gnss]\nmask_deg = {mask}\n'
+                  '[[segment]]\ntype = "static"\nduration_s = 1\n')
+    with pytest.raises(ConfigError) as e:
+        load_scenario(sc)
+    assert str(e.value) == f"{sc}: field 'raw_gnss.mask_deg': {said}"
+
+
+def test_the_mask_from_the_horizon_up_is_taken():
+    r = invoke(OBS, NAV, "--mask", "0", "--json")
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.stdout)["epochs_solved"] == 240
+
+
 def test_throughput_figure():
     """A benchmark figure, not a timing test: the dict is well formed."""
     b = spp_throughput(OBS, NAV, repeats=2)

@@ -70,6 +70,37 @@ ANGLE_LIMIT_DEG = 360.0
 #: western half counted eastward)
 LONGITUDE_RANGE_DEG = (-180.0, 360.0)
 
+#: the elevation masks a user sets [deg] (``inskit spp --mask``, ``[gnss] mask_deg``, ``[raw_gnss] mask_deg``):
+#: from the horizon to below the zenith, [0, 90).  Below the horizon the Saastamoinen delay is undefined
+#: (:func:`inskit.gnss.atmosphere.saastamoinen_delay` gives NaN), a signal would cross the Earth, and the code
+#: weight 1 / sin^2(el) has no bound at 0.
+MASK_RANGE_DEG = (0, 90)
+
+
+def mask_problem(mask_deg) -> str | None:
+    """What is wrong with an elevation mask a user set [deg], in words
+    (None: nothing): the one check and message of ``inskit spp --mask``, the
+    navigate config's ``[gnss] mask_deg`` and the scenario's ``[raw_gnss]
+    mask_deg`` (:data:`MASK_RANGE_DEG`).  Not a number: None (the caller's
+    type check says so)."""
+    lo, hi = MASK_RANGE_DEG
+    if isinstance(mask_deg, bool) or not isinstance(mask_deg, (int, float)):
+        return None
+    if math.isfinite(mask_deg) and lo <= mask_deg < hi:
+        return None
+    return (f"{mask_deg:g} is outside [{lo:g}, {hi:g}) degrees: an elevation mask is an elevation from the horizon "
+            f"({lo:g}: every satellite above it) up to below the zenith (below the horizon no troposphere model "
+            "holds and a signal would cross the Earth)")
+
+
+def check_mask(v):
+    """A pydantic before-validator of an elevation-mask field: :func:`mask_problem`'s message (the field's
+    ``ge``/``lt`` bounds, the same range, then never speak; they document it)."""
+    problem = mask_problem(v)
+    if problem:
+        raise ValueError(problem)
+    return v
+
 
 def _angle_names(v):
     """The components of an angle setting for a message: roll, pitch, yaw of a triple; none of a scalar."""

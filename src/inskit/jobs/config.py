@@ -24,8 +24,8 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 from pydantic_core import PydanticCustomError
 
-from ..config_files import (check_angles, check_longitude, check_magnitude, check_scalar_type, read_toml,
-                            validation_message)
+from ..config_files import (MASK_RANGE_DEG, check_angles, check_longitude, check_magnitude, check_mask,
+                            check_scalar_type, read_toml, validation_message)
 from ..errors import ConfigError, InputError
 from ..units import MAX_RATE_HZ
 
@@ -178,7 +178,8 @@ class GnssSection(_Strict):
     nav: Path | None = Field(None, description="RINEX 2/3 navigation file with the broadcast ephemerides")
     systems: list[Literal["G", "E"]] = Field(["G", "E"], min_length=1, description="satellite systems used "
                                              "(GPS, Galileo), each once")
-    mask_deg: float = Field(10.0, ge=0, lt=90, description="elevation mask")
+    mask_deg: float = Field(10.0, ge=MASK_RANGE_DEG[0], lt=MASK_RANGE_DEG[1], description="elevation mask")
+    _mask = field_validator("mask_deg", mode="before")(check_mask)
     iono: Literal["klobuchar", "iono-free", "none"] = Field(
         "klobuchar", description="ionospheric correction: the broadcast Klobuchar model, the dual-frequency "
         "ionosphere-free code combination, or none")

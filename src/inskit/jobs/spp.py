@@ -80,8 +80,11 @@ def _check_options(mask_deg, iono, tropo):
         raise ConfigError(f"--iono must be one of {', '.join(IONO)}, got {iono!r}")
     if tropo not in TROPO:
         raise ConfigError(f"--tropo must be one of {', '.join(TROPO)}, got {tropo!r}")
-    if not (np.isfinite(mask_deg) and -5.0 <= mask_deg < 90.0):
-        raise ConfigError(f"--mask must be an elevation in [-5, 90) deg, got {mask_deg}")
+    from ..config_files import mask_problem
+
+    problem = mask_problem(mask_deg)
+    if problem:
+        raise ConfigError(f"--mask: {problem}")
 
 
 def _refuse(out, overwrite, inputs=()):

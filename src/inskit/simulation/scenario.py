@@ -22,8 +22,8 @@ from typing import Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 
-from ..config_files import (ANGLE_LIMIT_DEG, check_angles, check_longitude, check_magnitude, check_scalar_type,
-                            read_toml, validation_message)
+from ..config_files import (ANGLE_LIMIT_DEG, MASK_RANGE_DEG, check_angles, check_longitude, check_magnitude,
+                            check_mask, check_scalar_type, read_toml, validation_message)
 from ..errors import ConfigError
 from ..types import GnssData, ImuData, NavSolution
 from ..units import DEG, MAX_RATE_HZ, MAX_SAMPLES
@@ -205,7 +205,7 @@ class RawGnssSection(_S):
     rate_hz: float = Field(1.0, gt=0, le=100, description="observation rate [Hz]")
     constellation: str = Field("walker-gps", description="'walker-gps', 'walker-galileo', 'walker-gps+galileo' "
                                "or 'nav:PATH' (a RINEX navigation file, relative to the scenario file)")
-    mask_deg: float = Field(10.0, ge=-5, lt=90, description="elevation mask [deg]")
+    mask_deg: float = Field(10.0, ge=MASK_RANGE_DEG[0], lt=MASK_RANGE_DEG[1], description="elevation mask [deg]")
     code_sigma_m: float = Field(0.5, ge=0, description="zenith white code noise [m] (/ sin el)")
     phase_sigma_m: float = Field(0.003, ge=0, description="zenith white phase noise [m] (/ sin el)")
     doppler_sigma_m_s: float = Field(0.05, ge=0, description="zenith white Doppler noise [m/s] (/ sin el)")
@@ -226,6 +226,7 @@ class RawGnssSection(_S):
     cn0_zenith_dbhz: float = Field(48.0, gt=0, description="C/N0 at zenith [dB-Hz]")
     cn0_horizon_dbhz: float = Field(34.0, gt=0, description="C/N0 at the horizon [dB-Hz]")
     blockage: list[BlockageSpec] = Field(default_factory=list, description="blockage windows")
+    _mask = field_validator("mask_deg", mode="before")(check_mask)
 
     @model_validator(mode="after")
     def _start(self):
