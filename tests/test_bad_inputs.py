@@ -680,6 +680,43 @@ def test_an_outage_window_with_no_fix_in_it_is_reported(capsys, sim, tmp_path):
                             "no fix") for w in s["health"]["warnings"]), s["health"]["warnings"]
 
 
+@pytest.mark.parametrize("kind", ["speed_course_too_slow", "height_around_the_imu", "speed_course_withheld"])
+def test_an_aiding_log_that_makes_no_update_is_warned_naming_the_file(capsys, sim, tmp_path, kind):
+    """A speed-and-course or height log that overlapped the IMU's span but made 0 updates (every reading
+    too slow for a course, on either side of the IMU log, withheld in an outage) left a run called healthy
+    without a word, as if the log had been used."""
+    import pandas as pd
+
+    from inskit import io
+
+    tr = io.read_solution(sim / "truth.csv")
+    t = np.arange(tr.time[0], tr.time[-1], 0.1)
+    v = tr.interpolate(t).v_n
+    sc = pd.DataFrame({"time_s": t, "speed_m_s": np.hypot(v[:, 0], v[:, 1]),
+                       "course_deg": np.degrees(np.arctan2(v[:, 1], v[:, 0])) % 360.0,
+                       "sigma_speed_m_s": 0.05, "sigma_course_deg": 1.0})
+    log = tmp_path / "aid.csv"
+    gnss = 'speed_course = "aid.csv"\n'
+    if kind == "speed_course_too_slow":
+        sc.to_csv(log, index=False)
+        gnss += "speed_course_min_speed_m_s = 20\n"
+        extra, why = "", "slower than 20 m/s, below which a course means nothing"
+    elif kind == "speed_course_withheld":
+        sc[(sc.time_s > 12) & (sc.time_s < 48)].to_csv(log, index=False)
+        extra, why = "[outages]\nprotocol = \"windows\"\nwindows_s = [[10, 50]]\n", "withheld inside the outage"
+    else:
+        pd.DataFrame({"time_s": [t[0] - 100.0, t[-1] + 100.0], "height_m": [300.0, 300.0]}).to_csv(log, index=False)
+        gnss, extra, why = "", "[height]\nfile = \"aid.csv\"\nsigma_m = 1\n", "2 outside the span the filter runs over"
+    cfg = config(tmp_path, sim, extra)
+    cfg.write_text(cfg.read_text().replace("[output]", gnss + "[output]", 1))
+    code, out, err = run(capsys, "navigate", cfg, "--json")
+    assert code == 0, err
+    what = "speed and course" if kind.startswith("speed_course") else "height"
+    said = [w for w in json.loads(out)["health"]["warnings"] if w.startswith(f"{log}: the {what} log made no update")]
+    assert len(said) == 1 and why in said[0] and said[0].endswith("the run is as if it had none"), said
+    assert f"warning: {said[0]}" in err
+
+
 def test_an_outage_protocol_that_scores_nothing_is_unhealthy(capsys, sim, tmp_path):
     """Every window past the fixes: no outage figure at all, so the verdict is
     unhealthy (and --strict exits 3), not a healthy run with null figures."""

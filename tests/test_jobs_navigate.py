@@ -618,3 +618,37 @@ def test_a_run_without_outages_prints_no_outage_table_header(drive_inputs, outag
     assert lines[0] == first
     assert not [ln for ln in lines if "window [s after first fix]" in ln or "--- against the withheld" in ln], lines
     assert lines[1].startswith("fit to the used fixes") and lines[-1].startswith("updates: gnss_pos")
+
+
+def test_aiding_warnings_name_the_log_and_why_it_made_no_update():
+    """An aiding log that overlapped the IMU's span but made 0 updates was not in the health verdict: each
+    cause is counted (withheld, outside the filtered span, too slow for a course, in an IMU gap, rejected)."""
+    from inskit.integration import GnssSpeedCourse, Height, Odometer
+    from inskit.jobs.navigate import aiding_warnings
+
+    ti = np.arange(0.0, 100.0, 0.01)  # the filter runs over 0.01..99.99 s (from the second sample)
+    t = np.arange(-5.0, 105.0, 1.0)   # 110 readings: 6 before 0.01 s, 5 after 99.99 s, 99 inside
+    odo = Odometer(t, np.full(len(t), 3.0), 0.1)
+    # speed and course: 11 withheld (20..30 s); 38 slower than 0.5 m/s (1..19, 31..49 s); 50 rejected (50..99 s)
+    sc = GnssSpeedCourse(t, np.where(t < 50, 0.2, 3.0), np.zeros(len(t)), 0.05, 0.01, use=(t < 20) | (t > 30))
+    hgt = Height(t, np.zeros(len(t)), 1.0)
+    logs = [("odometer", Path("/d/odo.csv"), odo), ("speed and course", Path("/d/sc.csv"), sc),
+            ("height", Path("/d/baro.csv"), hgt)]
+    counts = {"odometer": {"used": 0, "rejected": 96, "skipped": 14},  # 11 outside, 3 in an IMU gap
+              "gnss_speed_course": {"used": 0, "rejected": 50, "skipped": 11 + 38},
+              "height": {"used": 7, "rejected": 0, "skipped": 11}}
+    w = aiding_warnings(logs, counts, ti, "ekf")
+    assert len(w) == 2, w  # the height log made 7 updates: no warning
+    assert w[0] == ("/d/odo.csv: the odometer log made no update (of its 110 readings: 11 outside the span the "
+                    "filter runs over, 0.010..99.990 s; 3 in gaps of the IMU log; 96 rejected by the innovation "
+                    "gate (the filter found them inconsistent with the other measurements)): the run is as if it "
+                    "had none")
+    assert w[1] == ("/d/sc.csv: the speed and course log made no update (of its 110 readings: 11 withheld inside "
+                    "the outage windows, like the fixes; 11 outside the span the filter runs over, 0.010..99.990 s; "
+                    "38 slower than 0.5 m/s, below which a course means nothing "
+                    "(gnss.speed_course_min_speed_m_s); 50 rejected by the innovation gate (the filter found them "
+                    "inconsistent with the other measurements)): the run is as if it had none")
+    # a scheme without a filter fuses no aiding at all
+    w = aiding_warnings(logs[:1], {"gnss_pos": {"used": 9, "rejected": 0, "skipped": 0}}, ti, "uncoupled")
+    assert w == ["/d/odo.csv: the odometer log made no update (of its 110 readings: the uncoupled scheme runs no "
+                 "filter, so it fuses nothing but the fixes): the run is as if it had none"]

@@ -50,6 +50,7 @@ class NavigateResult:
     pending: object = None  #: the writer still finishing them (:func:`finish_streams`)
     truth_parts: dict = None  #: a streamed run's truth errors, segment by segment (``analysis.ErrorSummary``)
     imu_notes: dict = None  #: what the IMU reader found (repeated rows), when navigate read the files
+    aiding: list = None  #: the aiding logs fused: ``(what, file, measurement)`` (:func:`aiding_warnings`)
 
 
 def finish_streams(res: NavigateResult) -> None:
@@ -747,9 +748,10 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         initial = NavState.from_euler(imu.time[0], [i.lat_deg * DEG, i.lon_deg * DEG, i.height_m], i.v_ned_m_s,
                                       np.radians(i.rpy_deg))
     clock_start = None
-    extra_blocks, odo = [], None
+    extra_blocks, odo, aiding = [], None, []
     if cfg.odometer is not None:
         odo = odometer_measurement(cfg, imu, gnss_used)
+        aiding.append(("odometer", cfg.resolve(cfg.odometer.file), odo))
         if cfg.odometer.estimate_scale:
             from ..integration import OdometerScale
 
@@ -769,6 +771,8 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
 
         height, height_blocks = height_aiding(cfg, imu)
         extra_blocks += height_blocks
+        if cfg.height.file is not None:  # a constant height_m has no log to speak of
+            aiding.append(("height", cfg.resolve(cfg.height.file), height))
     if tight:
         meas_gnss, use_rows = tight_measurements(cfg, raw, windows, lever)
         clk_blocks, clock_start = clock_blocks(cfg, raw, initial, lever, use_rows)
@@ -800,6 +804,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
             meas.append(odo)
         if cfg.gnss.speed_course is not None:
             meas.append(speed_course_measurement(cfg, windows, lever, imu))
+            aiding.append(("speed and course", cfg.resolve(cfg.gnss.speed_course), meas[-1]))
         if height is not None:
             meas.append(height)
         extra = {g.row: gap_process_noise(settings.layout, g.length_s, np.radians(cfg.imu.gap_rate_sigma_deg_s),
@@ -828,7 +833,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     score_s = score_outages(sm.solution, gnss, windows, lever, truth=truth, fused=fused) if sm is not None else None
     return NavigateResult(cfg, imu, gnss, windows, used, startup, settings, out, sm, score_f, score_s,
                           time.perf_counter() - t_start, measured, gaps, raw, clock_start, rate_changes, truth,
-                          streams, pending, truth_parts, imu_notes)
+                          streams, pending, truth_parts, imu_notes, aiding)
 
 
 def _check_vehicle_axes(cfg: NavigateConfig, imu: ImuData, gnss: GnssData, startup: Startup, start, log):
@@ -1150,6 +1155,66 @@ def gnss_coverage_warnings(fix_time, imu_time) -> list[str]:
     return out
 
 
+def aiding_warnings(logs, counts, imu_time, scheme="") -> list[str]:
+    """A warning for each aiding log that made no update, naming the file
+    and why: its readings withheld in the outage windows, outside the IMU's
+    span (the filter's, from its second sample on), too slow for a course
+    (speed and course), in a gap of the IMU log, or rejected by the
+    innovation gate; or a scheme that fuses no aiding at all.  The log
+    overlapped the IMU's span (:func:`refuse_no_overlap`), yet the run is as
+    if it had none: without a word it would pass for one with it.
+
+    Parameters
+    ----------
+    logs : sequence of (str, Path, measurement)
+        What the log is ("odometer", "speed and course", "height"), its
+        file and the measurement made of it (its ``name``, ``time`` and
+        ``rows()``: the readings not withheld).
+    counts : dict
+        The filter's counts per measurement name (``used``, ``rejected``,
+        ``skipped``).
+    imu_time : (n,) array
+        The IMU's times [s].
+    scheme : str
+        The filter scheme, for the message when it fused no aiding.
+    """
+    out = []
+    t0, t1 = float(imu_time[1] if len(imu_time) > 1 else imu_time[0]), float(imu_time[-1])
+    for what, path, m in logs or ():
+        c = counts.get(m.name)
+        if c is not None and c["used"] > 0:
+            continue
+        t = np.asarray(m.time, float)
+        rows = np.asarray(m.rows(), int)
+        if c is None:
+            why = [f"the {scheme} scheme runs no filter, so it fuses nothing but the fixes"]
+        else:
+            why = []
+            withheld = len(t) - len(rows)
+            if withheld:
+                why.append(f"{withheld} withheld inside the outage windows, like the fixes")
+            tr = t[rows]
+            inside = (tr >= t0) & (tr <= t1)
+            if (~inside).any():
+                why.append(f"{int((~inside).sum())} outside the span the filter runs over, {t0:.3f}..{t1:.3f} s")
+            slow = 0
+            min_speed = getattr(m, "min_speed", None)
+            if min_speed is not None:  # speed and course: no course below walking pace
+                slow = int((inside & (m.speed[rows] < min_speed[rows])).sum())
+                if slow:
+                    why.append(f"{slow} slower than {float(np.max(min_speed[rows])):g} m/s, below which a course "
+                               "means nothing (gnss.speed_course_min_speed_m_s)")
+            in_gaps = c["skipped"] - int((~inside).sum()) - slow
+            if in_gaps > 0:
+                why.append(f"{in_gaps} in gaps of the IMU log")
+            if c["rejected"]:
+                why.append(f"{c['rejected']} rejected by the innovation gate (the filter found them inconsistent "
+                           "with the other measurements)")
+        out.append(f"{path}: the {what} log made no update (of its {len(t)} readings: {'; '.join(why)}): the run "
+                   "is as if it had none")
+    return out
+
+
 def truth_errors(res: NavigateResult, truth: NavSolution) -> dict:
     """Errors of the forward (and smoothed) solution against a truth file,
     summarised (:func:`inskit.analysis.summarize`) over every row (a
@@ -1234,6 +1299,7 @@ def summary(res: NavigateResult) -> dict:
         out["truth_errors"] = truth_errors(res, res.truth)
     out["health"] = health(fw, res.gaps or (), res.rate_changes or ())
     out["health"]["warnings"] += gnss_coverage_warnings(res.gnss.time, res.imu.time)
+    out["health"]["warnings"] += aiding_warnings(res.aiding, fw.counts, res.imu.time, res.settings.scheme)
     if res.truth is not None:  # what the truth could not score, said (not silently left out)
         from .. import analysis
         from .evaluate import coverage_warnings
@@ -1320,7 +1386,8 @@ def health(out, gaps=(), rate_changes=()) -> dict:
     and a mean NIS below a third of the degrees of freedom (conservative
     noise, common for constraint pseudo-measurements).  :func:`summary` adds
     the warning of a mounting the constraints do not model
-    (:func:`inskit.integration.mounting.mounting_check`).
+    (:func:`inskit.integration.mounting.mounting_check`) and that of an
+    aiding log that made no update (:func:`aiding_warnings`).
     """
     reasons, warnings, per = [], [], {}
     if not any(len(v.get("nis", [])) for v in out.innovations.values()):
