@@ -652,3 +652,28 @@ def test_aiding_warnings_name_the_log_and_why_it_made_no_update():
     w = aiding_warnings(logs[:1], {"gnss_pos": {"used": 9, "rejected": 0, "skipped": 0}}, ti, "uncoupled")
     assert w == ["/d/odo.csv: the odometer log made no update (of its 110 readings: the uncoupled scheme runs no "
                  "filter, so it fuses nothing but the fixes): the run is as if it had none"]
+
+
+def test_the_uncoupled_scheme_writes_its_solution_without_sigmas(drive_inputs, tmp_path):
+    """[filter] scheme = "uncoupled" has no covariance: its sigma columns were NaN and the Parquet writer refused
+    the whole solution ('refusing to write nan (column 'sigma_n_m', row 0)') after the run.  Now the solution
+    files hold no sigma column, and every column they hold is finite."""
+    import pyarrow.parquet as pq
+
+    from inskit.jobs.navigate import write_outputs
+
+    _, imu, gnss, _ = drive_inputs
+    cfg = load_config(EXAMPLE, {"output": {"plots": True}, "filter": {"scheme": "uncoupled"},
+                                "constraints": {"mounting": False, "nhc": False, "zupt": False}})
+    res = navigate(cfg, inputs=(imu, gnss))
+    s = summary(res)
+    files = write_outputs(res, tmp_path, s)
+    t = pq.read_table(tmp_path / "solution_forward.parquet")
+    assert not [c for c in t.column_names if c.startswith("sigma_")], t.column_names
+    assert {"lat_deg", "lon_deg", "height_m", "roll_deg"} <= set(t.column_names)
+    assert all(np.isfinite(t.column(c).to_numpy()).all() for c in t.column_names)
+    assert t.num_rows == len(res.forward.nav.time) and (tmp_path / "summary.json") in files
+    head = (tmp_path / "solution_forward.csv").read_text().splitlines()[0]
+    assert "sigma_" not in head and "nan" not in (tmp_path / "solution_forward.csv").read_text()[:20000]
+    for name in ("track.png", "errors.png", "innovations.png", "biases.png"):  # the plots drew it too (they
+        assert (tmp_path / name) in files and (tmp_path / name).stat().st_size > 5_000  # failed on the sigmas)

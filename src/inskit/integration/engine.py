@@ -236,6 +236,10 @@ class Track:
         """The solution with named columns (navigation sigmas and every
         estimate) in ``extra``, for files, plots and tables."""
         extra = self.layout.columns(self.aux, self.sigma, sigma_blocks=NAV_SIGMA_BLOCKS)
+        # a sigma no filter gave (the uncoupled scheme has no covariance) is not a column: NaN throughout,
+        # it made the writers refuse the whole solution
+        extra = {k: v for k, v in extra.items()
+                 if not (k.startswith("sigma_") and len(v) and np.isnan(v[0]) and np.isnan(v).all())}
         return NavSolution._trusted(self.nav.time, self.nav.lla, self.nav.v_n, self.nav.q_nb, extra)
 
 

@@ -97,9 +97,10 @@ def _errors(c, path, plt):
             ax.plot(*line_breaks(tg - t0, d[:, j]), lw=0.7, color=color, label=f"{label} - GNSS")
             if len(d):
                 worst[j] = max(worst[j], float(np.nanmax(np.abs(d[:, j]))))
-            sig = si.extra[("sigma_n_m", "sigma_e_m", "sigma_d_m")[j]]
-            ax.plot(*line_breaks(tg - t0, 3 * sig), lw=0.5, ls="--", color=color)
-            ax.plot(*line_breaks(tg - t0, -3 * sig), lw=0.5, ls="--", color=color)
+            sig = si.extra.get(("sigma_n_m", "sigma_e_m", "sigma_d_m")[j])
+            if sig is not None:  # the uncoupled scheme has no covariance: no envelope
+                ax.plot(*line_breaks(tg - t0, 3 * sig), lw=0.5, ls="--", color=color)
+                ax.plot(*line_breaks(tg - t0, -3 * sig), lw=0.5, ls="--", color=color)
             ax.set_ylabel(f"{name} [m]")
     for j, ax in enumerate(axes):
         _shade(ax, res.windows, t0)
@@ -107,7 +108,9 @@ def _errors(c, path, plt):
         lim = max(6.0, 1.08 * worst[j])  # the worst error whole; the sigma envelope may leave the axis
         ax.set_ylim(-lim, lim)
     axes[0].legend(fontsize=8, loc="upper left")
-    axes[0].set_title("antenna position minus GNSS fix (grey: outages; dashed: +-3 sigma, may leave the axis)")
+    envelope = "sigma_n_m" in fwd.extra
+    axes[0].set_title("antenna position minus GNSS fix (grey: outages; " + (
+        "dashed: +-3 sigma, may leave the axis)" if envelope else "no sigma: no filter in this run)"))
     axes[-1].set_xlabel("time after first GNSS fix [s]")
     fig.tight_layout()
     return save_figure(fig, path)
@@ -118,6 +121,12 @@ def _innovations(c, path, plt):
     # innovations
     inn = res.forward.innovations
     names = [k for k, v in inn.items() if len(v["t"])]
+    if not names:  # the uncoupled scheme: the fixes reset the solution, no filter weighs them
+        fig, ax = plt.subplots(figsize=(10, 2.6))
+        ax.text(0.5, 0.5, "no filter innovations: no measurement was fused by a filter in this run "
+                f"({res.settings.scheme} scheme)", ha="center", va="center", transform=ax.transAxes)
+        ax.set_axis_off()
+        return save_figure(fig, path)
     fig, axes = plt.subplots(len(names), 1, figsize=(10, 2.6 * len(names)), sharex=True, squeeze=False)
     for ax, k in zip(axes[:, 0], names):
         v = inn[k]
