@@ -357,6 +357,19 @@ def test_impossible_navigate_configuration(capsys, sim, tmp_path, text, needles)
     assert not (tmp_path / "nav").exists()
 
 
+@pytest.mark.parametrize("argv, needles", [
+    (["align", "{imu}", "--lat", "45", "--mount-rpy", "0,370,0"],
+     ["--mount-rpy: pitch 370 is outside [-360, 360] degrees", "a typo"]),
+    (["mechanize", "{imu}", "--init", "45,7,300,0,0,0,0,0,400", "--out", "{out}"],
+     ["--init: yaw 400 is outside [-360, 360] degrees"]),
+])
+def test_an_angle_beyond_a_full_turn_on_the_command_line(capsys, sim, tmp_path, argv, needles):
+    """The command-line angles are held to the config keys' range: a typo (370 for 37.0) was taken modulo 360."""
+    out = tmp_path / "sol.csv"
+    refused(run(capsys, *[a.format(imu=sim / "imu.csv", out=out) for a in argv]), *needles)
+    assert not out.exists()
+
+
 @pytest.mark.parametrize("old, new, needles", [
     ("lat_deg = 45", "lat_deg = 95", ["field 'start.lat_deg'", "less than or equal to 90"]),
     ("white_h_m = 0.5", "white_h_m = -0.5", ["field 'gnss.white_h_m'", "greater than or equal to 0"]),

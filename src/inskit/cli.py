@@ -70,8 +70,24 @@ def _numbers(option, text, n, meaning):
     return x
 
 
+def _angles(option, rpy):
+    """``rpy`` [deg] (roll, pitch, yaw) of ``option``, each within a full
+    turn either way as the config's angle keys are
+    (:func:`inskit.config_files.check_angles`), else an InputError naming
+    the option."""
+    from .config_files import check_angles
+
+    try:
+        check_angles(tuple(float(v) for v in rpy))
+    except ValueError as exc:
+        raise InputError(f"{option}: {exc}") from None
+    return rpy
+
+
 def _parse_init(text):
-    return _numbers("--init", text, 9, "lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg")
+    x = _numbers("--init", text, 9, "lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg")
+    _angles("--init", x[6:9])
+    return x
 
 
 def _height_ref(text, imu):
@@ -591,7 +607,7 @@ def align(imu_file, lat_deg, method, m_gain, t_start, t_end, imu_format, mount_r
         raise InputError(f"--lat must be within [-90, 90] deg, got {lat_deg}")
     mount = (0.0, 0.0, 0.0)
     if mount_rpy:
-        mount = tuple(_numbers("--mount-rpy", mount_rpy, 3, "roll,pitch,yaw [deg]"))
+        mount = tuple(_angles("--mount-rpy", _numbers("--mount-rpy", mount_rpy, 3, "roll,pitch,yaw [deg]")))
     if m_gain is not None and not 0.0 <= m_gain <= 1.0:
         raise InputError(f"--m must be within [0, 1], got {m_gain}")
     from .units import DEG_PER_HOUR, MICRO_G
