@@ -94,6 +94,15 @@ def test_walkthrough_navigates_as_the_doc_says(walkthrough):
     assert run.solution is run.forward and run.smoothed is None
 
 
+def test_walkthrough_names_the_missing_time_offset(walkthrough):
+    """The prose: without its -0.26 s the drive is unhealthy and the first reason names the offset."""
+    ns, _ = walkthrough
+    late = ns["late"]
+    assert late.health["verdict"] == "unhealthy"
+    assert late.health["reasons"][0].startswith("gnss_pos: the fixes fit an IMU time offset of -0.26")
+    assert abs(late.summary["time_offset_check"]["best_s"] + 0.26) < 0.01
+
+
 def test_walkthrough_dataframe_and_plot(walkthrough):
     ns, work = walkthrough
     df, run = ns["df"], ns["run"]
