@@ -451,6 +451,21 @@ def test_force_never_turns_an_input_into_an_output(capsys, sim, tmp_path):
     assert (g / "rates.csv").read_bytes() == before
 
 
+def test_report_never_writes_over_the_fix_file_it_reads(capsys, sim, tmp_path):
+    """`report RUN --out GNSS.csv --force`, GNSS.csv the fix file the run's
+    configuration names (the report reads it for the track), replaced the
+    user's fixes by the HTML page: only the run folder's own files counted
+    as inputs."""
+    gnss = tmp_path / "gnss.csv"
+    shutil.copy(sim / "gnss.csv", gnss)
+    before = gnss.read_bytes()
+    assert navigate(capsys, sim, tmp_path, None, gnss)[0] == 0
+    refused(run(capsys, "report", tmp_path / "nav", "--out", gnss, "--force"), str(gnss),
+            "is an input of this command")
+    assert gnss.read_bytes() == before
+    assert not (tmp_path / "nav" / "report.html").exists()
+
+
 def test_an_output_folder_with_results_needs_force(capsys, sim, tmp_path):
     code, _, err = navigate(capsys, sim, tmp_path)
     assert code == 0, err

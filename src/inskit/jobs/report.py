@@ -284,9 +284,12 @@ class _Run:
         self.config = _read_json(d / "config_used.json", "configuration (config_used.json)") \
             if (d / "config_used.json").exists() else None
         self.fixes, self.fix_file = None, None
+        #: the files the report reads: never its output, --force or not (the fix file lies outside the folder)
+        self.inputs = [p for p in d.iterdir() if p.is_file() and p.suffix.lower() != ".html"]
         if self.config:
             p = _find_fix_file(d, self.config, self.summary.get("config_dir"))
             if p is not None:
+                self.inputs.append(p)
                 self.fixes = _read_fixes(p, self.config)
                 self.fix_file = p if self.fixes is not None else None
         if self.summary.get("first_fix_time_s") is not None:  # recorded by navigate
@@ -704,8 +707,9 @@ def build_report(run_dir, out=None, overwrite=False):
         ``solution_forward.csv``).
     out : path, optional
         The HTML file (default ``run_dir/report.html``), written atomically.
-        Never one of the run's own files (``summary.json``, the solutions
-        ...); an existing file only with ``overwrite``.
+        Never a file the report reads (the run's own: ``summary.json``, the
+        solutions ...; the GNSS fix file its configuration names); an
+        existing file only with ``overwrite``.
     overwrite : bool
         Replace an existing ``out`` (``--force``).
 
@@ -728,7 +732,7 @@ def build_report(run_dir, out=None, overwrite=False):
 
     run = _Run(run_dir)
     out = Path(out) if out is not None else run.dir / "report.html"
-    check_outputs([out], [p for p in run.dir.iterdir() if p.is_file() and p.suffix.lower() != ".html"], overwrite)
+    check_outputs([out], run.inputs, overwrite)
     figs = [("track", "Track", *_fig_track(run, go), False),
             ("sigmas", "Position, velocity and attitude sigmas", *_fig_sigmas(run, go, make_subplots), True),
             ("innovations", "Innovations", *_fig_innovations(run, go, make_subplots), True),
