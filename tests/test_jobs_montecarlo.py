@@ -151,6 +151,17 @@ def test_an_early_outage_still_has_gnss_on_figures_or_says_there_are_none():
     assert np.isfinite(rows[0]["outage_end_horizontal_m"])
 
 
+def test_schemes_on_an_ideal_imu_run():
+    """static.toml with `grade = "ideal"` (the scenario's default grade): `inskit schemes` printed 'initial
+    uncertainty gyro_bias must be > 0, got 0.0' (the matched filter's initial bias sigma is the sensor's,
+    zero for an ideal IMU); it is floored as the filter's noise is, and every scheme runs."""
+    sc = load_scenario(EXAMPLES / "static.toml")
+    sc = sc.model_copy(update={"imu": sc.imu.model_copy(update={"grade": "ideal"})})
+    rows = compare_schemes(sc, (20.0, 30.0), seed=1)
+    assert [r["scheme"] for r in rows] == ["uncoupled", "open", "closed"]
+    assert all(np.isfinite(r["outage_end_horizontal_m"]) for r in rows)
+
+
 def test_the_gnss_on_figure_leaves_out_the_scenarios_own_outages_too():
     """tc_blockage has 120 s blockages of its own: they were counted as GNSS on (closed loop 49.6 m,
     uncoupled 766 m)."""

@@ -28,7 +28,7 @@ from ..simulation.imu import ideal_imu, truth_solution
 from ..simulation.sensors import ImuErrors, TriadErrors, apply_imu_errors
 from ..errors import InputError
 from ..types import NavState
-from ..units import MAX_SAMPLES
+from ..units import DEG_PER_HOUR, MAX_SAMPLES, MICRO_G
 
 #: initial uncertainty used by the consistency runs, per IMU grade (tilt, yaw) [deg]
 GRADE_INITIAL_ATTITUDE_DEG = {"navigation": (0.2, 1.0), "tactical": (0.2, 1.0), "industrial-mems": (1.0, 3.0),
@@ -64,6 +64,12 @@ def consistency_errors(errors: ImuErrors) -> ImuErrors:
     return ImuErrors(keep(errors.gyro), keep(errors.accel), errors.source)
 
 
+#: the least initial bias sigma :func:`matched_settings` gives the filter: 0.001 deg/h, 0.1 ug (an ideal sensor's
+#: bias is zero, and a zero sigma no covariance)
+MIN_GYRO_BIAS_SIGMA = 1e-3 * DEG_PER_HOUR
+MIN_ACCEL_BIAS_SIGMA = 0.1 * MICRO_G
+
+
 def matched_settings(errors: ImuErrors, initial: InitialUncertainty, **kw) -> FilterSettings:
     """Filter settings that match a sensor model (15 states).
 
@@ -79,8 +85,10 @@ def matched_settings(errors: ImuErrors, initial: InitialUncertainty, **kw) -> Fi
     noise = SensorNoise(max(g.white_noise, 1e-12), max(a.white_noise, 1e-12),
                         max(g.gm_sigma * np.sqrt(2.0 / g.bias_instability_tau_s), 1e-15),
                         max(a.gm_sigma * np.sqrt(2.0 / a.bias_instability_tau_s), 1e-15), np.inf)
-    init = replace(initial, gyro_bias=float(np.hypot(g.turn_on_bias_sigma, g.gm_sigma)),
-                   accel_bias=float(np.hypot(a.turn_on_bias_sigma, a.gm_sigma)))
+    # an ideal sensor has no bias at all: the filter's initial sigma is floored as its noise is (a zero sigma is
+    # no covariance; the 'ideal' grade, the scenario's default, was refused by InitialUncertainty)
+    init = replace(initial, gyro_bias=max(float(np.hypot(g.turn_on_bias_sigma, g.gm_sigma)), MIN_GYRO_BIAS_SIGMA),
+                   accel_bias=max(float(np.hypot(a.turn_on_bias_sigma, a.gm_sigma)), MIN_ACCEL_BIAS_SIGMA))
     extra = {k: kw.pop(k) for k in ("lever_arm_b", "lever_arm", "time_offset", "scale_factors", "time_offset0",
                                     "extra_blocks") if k in kw}
     return FilterSettings.standard(noise, init, **extra, **kw)
