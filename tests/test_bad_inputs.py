@@ -534,6 +534,24 @@ def test_output_folder_under_a_file(capsys, sim, tmp_path):
     assert f.read_text() == "mine\n"
 
 
+def test_an_output_file_under_a_file_is_refused_before_the_work(capsys, sim, tmp_path):
+    """An output file (not folder) under a regular file: evaluate --plot said '[Errno 20] Not a directory:
+    .../.part-123-x.png' after the work, its --per-epoch file already written; --per-epoch '[Errno 17] File
+    exists'; allan --plot and report --out the same.  Now refused first, naming the file in the way."""
+    f = tmp_path / "afile"
+    f.write_text("mine\n")
+    truth = sim / "truth.csv"
+    pe = tmp_path / "err.csv"
+    for argv, name in ((["evaluate", truth, truth, "--per-epoch", pe, "--plot", f / "x.png"], "x.png"),
+                       (["evaluate", truth, truth, "--per-epoch", f / "x.csv"], "x.csv"),
+                       (["allan", sim / "imu.csv", "--plot", f / "x.png"], "x.png")):
+        refused(run(capsys, *argv), f"{f}: is a file; expected an output folder (so {f / name} cannot be written)")
+    assert not pe.exists() and f.read_text() == "mine\n"
+    assert navigate(capsys, sim, tmp_path)[0] == 0
+    refused(run(capsys, "report", tmp_path / "nav", "--out", f / "r.html"),
+            f"{f}: is a file; expected an output folder (so {f / 'r.html'} cannot be written)")
+
+
 def test_unsupported_plot_extension_is_a_user_error(capsys, sim, tmp_path):
     plot = tmp_path / "err.xyz"
     refused(run(capsys, "evaluate", sim / "truth.csv", sim / "truth.csv", "--plot", plot), str(plot),

@@ -125,12 +125,7 @@ def check_folder_writable(folder):
     (before any long computation, not after it).  The folders it makes are
     remembered for :func:`remove_made_folders`."""
     folder = Path(folder)
-    for p in (folder, *folder.parents):  # the nearest existing one must be a folder ('File exists' misled)
-        if p.exists():
-            if not p.is_dir():
-                where = "" if p == folder else f" (so {folder} cannot be made)"
-                raise InputError(f"{p}: is a file; expected an output folder{where}")
-            break
+    _nearest_folder(folder, folder, "made")  # the nearest existing one must be a folder ('File exists' misled)
     full = folder.resolve()  # 'x/../E/new' with no x: E exists, and must not be taken for a folder made here
     missing = [p for p in (full, *full.parents) if not p.exists()]  # the deepest first
     try:
@@ -142,6 +137,30 @@ def check_folder_writable(folder):
     except OSError as exc:
         raise InputError(f"{folder}: the output folder is not writable ({exc.strerror or exc})") from None
     return folder
+
+
+def _nearest_folder(folder, target, verb):
+    """The nearest existing one of ``folder`` and its parents; an InputError
+    when it is a file (``target`` cannot be ``verb`` under it: 'File exists'
+    or 'Not a directory' from the write misled)."""
+    for p in (folder, *folder.parents):
+        if p.exists():
+            if not p.is_dir():
+                where = "" if p == target else f" (so {target} cannot be {verb})"
+                raise InputError(f"{p}: is a file; expected an output folder{where}")
+            return p
+    return Path(".")
+
+
+def check_output_place(path):
+    """Refuse, before any work, an output file whose folder cannot hold it:
+    one under a file, or in a folder that is not writable (the write, after
+    the work, said '[Errno 20] Not a directory: .../.part-...').  Makes
+    nothing."""
+    path = Path(path)
+    near = _nearest_folder(path.parent, path, "written")
+    if not os.access(near, os.W_OK | os.X_OK):
+        raise InputError(f"{path}: cannot be written ({near} is not a writable folder)")
 
 
 def require_file(path) -> Path:
@@ -160,7 +179,8 @@ def check_outputs(outputs, inputs=(), overwrite=False, option="--force"):
     an output that is one of the command's ``inputs`` (never, whatever
     ``overwrite`` says: the run would replace what it reads), or one that
     exists when ``overwrite`` is false (the user's file: ``option`` lifts
-    that).  ``None`` entries of either list are skipped.  Every command that
+    that), or one whose folder cannot hold it (:func:`check_output_place`).
+    ``None`` entries of either list are skipped.  Every command that
     writes files calls this on the whole list of what it will write."""
     ins = [Path(i) for i in inputs if i is not None]
     for out in outputs:
@@ -172,6 +192,7 @@ def check_outputs(outputs, inputs=(), overwrite=False, option="--force"):
                                  "output)")
         if Path(out).exists() and not overwrite:
             raise InputError(f"{out}: already exists; refusing to overwrite it (use {option})")
+        check_output_place(out)
 
 
 def same_file(a, b) -> bool:

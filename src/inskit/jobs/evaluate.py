@@ -13,7 +13,7 @@ from pathlib import Path
 
 from .. import analysis, io
 from ..errors import InputError
-from ..files import same_file
+from ..files import check_output_place, same_file
 
 #: file names the per-epoch table may have (the format follows the name)
 PER_EPOCH_SUFFIXES = (".csv", ".csv.gz", ".parquet")
@@ -57,7 +57,8 @@ def per_epoch_format(path) -> str:
 
 def check_per_epoch_file(path, force, inputs=()):
     """Refuse, before the work, a per-epoch path of unknown format, one that
-    exists (without ``force``) or one that names an input."""
+    exists (without ``force``), one that names an input or one whose folder
+    cannot hold it."""
     if path is None:
         return
     per_epoch_format(path)
@@ -66,6 +67,7 @@ def check_per_epoch_file(path, force, inputs=()):
             raise InputError(f"{path}: is an input of this run; choose another --per-epoch file")
     if Path(path).exists() and not force:
         raise InputError(f"{path}: already exists; refusing to overwrite it (use --force)")
+    check_output_place(path)
 
 
 def write_per_epoch(path, err: analysis.NavError, metadata=None) -> Path:
