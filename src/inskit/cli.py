@@ -497,10 +497,9 @@ def allan(imu_file, plot_file, toml_file, force, no_unit_check, first_row, as_js
     in the JSON), a note names it, and the [noise] section comes from the
     other axes of its sensor; three constant gyro (or accelerometer) axes
     are refused."""
-    from . import io
     from .analysis.allan import plot_allan
     from .files import check_folder_writable, check_outputs, same_file, write_text
-    from .jobs.allan import allan_report
+    from .jobs.allan import allan_report, read_static_log
 
     _check_plot_file(plot_file, force, [imu_file])
     if toml_file:
@@ -508,7 +507,7 @@ def allan(imu_file, plot_file, toml_file, force, no_unit_check, first_row, as_js
             raise InputError(f"{toml_file}: given as both --plot and --toml; choose two files")
         check_outputs([toml_file], [imu_file], force)
         check_folder_writable(Path(toml_file).resolve().parent)
-    imu = io.read_imu(imu_file, check_units=not no_unit_check, first_row=first_row)
+    imu = read_static_log(imu_file, check_units=not no_unit_check, first_row=first_row)
     try:
         r, rep = allan_report(imu)
     except InputError as exc:  # what the log is not (regular, long, static): said of the file

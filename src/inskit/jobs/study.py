@@ -304,13 +304,13 @@ FROM_FIT = ("gyro_arw_deg_sqrt_h", "gyro_bias_instability_deg_h", "gyro_bias_tau
 
 
 def _read_log(g: AllanGrade):
-    from .. import io
     from ..io.rtklib import read_rtklibexplorer_imu
+    from .allan import read_static_log
 
     path = g._log if g._log is not None else Path(g.allan)
     if not path.is_file():
         raise ConfigError(f"{g._key}: no such file {path}")
-    imu = io.read_imu(path) if g.format == "inskit" else read_rtklibexplorer_imu(path)[0]
+    imu = read_static_log(path, format="inskit") if g.format == "inskit" else read_rtklibexplorer_imu(path)[0]
     if g.window_s is not None:
         t = imu.time - imu.time[0]
         a, b = g.window_s
