@@ -611,6 +611,21 @@ def test_an_elevation_mask_below_the_horizon_is_refused_as_the_config_refuses_it
     refused(run(capsys, "navigate", cfg), str(cfg), f"field 'gnss.mask_deg': {said}")
 
 
+@pytest.mark.parametrize("address, said", [
+    ("foo", "missing port number"), ("tcp://host:99999", "port 99999 is outside 1..65535"),
+    ("tcp://:8786", "no host"), ("tcp://host:abc", "its port is not a number")])
+def test_a_scheduler_address_that_names_no_scheduler_is_refused_before_anything_is_written(
+        capsys, tmp_path, address, said):
+    """`study SPEC --out D --scheduler foo` was 'internal error: ValueError: missing port number in address
+    'foo'' (exit 3), after D/study.json was written; port 99999 waited 20 s to say it could not connect."""
+    spec = tmp_path / "study.toml"
+    spec.write_text(f'scenario = "{Path(__file__).resolve().parents[1] / "examples" / "car.toml"}"\n'
+                    'kind = "monte-carlo"\nruns = 2\nduration_s = 100.0\n')
+    refused(run(capsys, "study", spec, "--out", tmp_path / "out", "--scheduler", address),
+            f"--scheduler {address}: not a scheduler address ({said}", "tcp://host:8786")
+    assert empty_or_absent(tmp_path / "out")
+
+
 def test_click_usage_errors_are_exit_2_too(capsys, sim):
     """Not an inskit message but click's (usage + error), still exit 2 and no traceback."""
     from inskit.cli import main

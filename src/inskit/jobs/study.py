@@ -610,6 +610,28 @@ def _write_parquet(df, path):
     return Path(path)
 
 
+def check_cluster_options(scheduler, workers):
+    """Refuse, before anything is written, a ``--scheduler`` address that
+    names no scheduler (no port, a port outside 1..65535) and ``--workers``
+    beside it (an existing cluster has its own)."""
+    if scheduler is None:
+        return
+    if workers is not None:
+        raise ConfigError("--workers applies to the local cluster; an existing one (--scheduler) has its own")
+    from distributed.comm.addressing import parse_address, parse_host_port
+
+    expected = "expected an address such as tcp://host:8786"
+    try:
+        scheme, loc = parse_address(str(scheduler))
+        host, port = parse_host_port(loc) if scheme in ("tcp", "tls") else (None, None)
+    except ValueError as exc:
+        why = "its port is not a number" if "invalid literal" in str(exc) else str(exc)
+        raise InputError(f"--scheduler {scheduler}: not a scheduler address ({why}); {expected}") from None
+    if scheme in ("tcp", "tls") and not (host and 1 <= int(port) <= 65535):
+        raise InputError(f"--scheduler {scheduler}: not a scheduler address (" + (
+            "no host" if not host else f"port {port} is outside 1..65535") + f"); {expected}")
+
+
 def _open_client(scheduler, workers):
     """A distributed client and the cluster it started (or None)."""
     import logging
@@ -617,11 +639,10 @@ def _open_client(scheduler, workers):
     from distributed import Client, LocalCluster
 
     if scheduler is not None:
-        if workers is not None:
-            raise ConfigError("--workers applies to the local cluster; an existing one (--scheduler) has its own")
+        check_cluster_options(scheduler, workers)
         try:
             return Client(scheduler, timeout="20s"), None
-        except (OSError, TimeoutError) as exc:
+        except (OSError, TimeoutError, ValueError) as exc:
             raise InputError(f"--scheduler {scheduler}: could not connect ({exc})") from None
     n = (os.cpu_count() or 1) if workers is None else int(workers)
     if n < 1:
@@ -746,6 +767,7 @@ def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None
     log = log or (lambda s: None)
     t_start = time.perf_counter()
     spec, scenario_path = load_spec(spec_path)
+    check_cluster_options(scheduler, workers)
     out = check_folder_writable(out_dir)
     fp = fingerprint(spec, scenario_path)
     cases = build_cases(spec, scenario_path, fp, source=spec_path)  # every config error before anything is written
