@@ -234,3 +234,55 @@ def test_reproduce_gyrofree_returns_plain_json_values(tmp_path, monkeypatch):
                                    "rate_error_max_rad_s": None, "force_error_max_m_s2": None}}
     assert [type(v) for v in got["closed_form"].values()][:3] == [float, int, bool] and type(got["rate_hz"]) is float
     json.dumps(got, allow_nan=False)  # strict JSON (it raised on the NaN)
+
+
+def test_init_from_takes_the_truth_at_the_array_files_first_time(tmp_path):
+    """`gyrofree navigate` of an array file starting at 0.5 s with --init-from
+    the whole truth (from 0 s) started the source frame from the truth's first
+    row, in silence: 23.4 m off at 2 s against the truth.  The state is now
+    the truth's at the array's first time; a truth that does not reach that
+    time is refused naming --init-from and both files (the Earth frames said
+    'requested times 0.000..0.000 s fall outside the solution span', naming
+    neither)."""
+    r = invoke(gyrofree, "simulate", "source003", "--out", tmp_path / "gf", "--rate", 200, "--duration", 2)
+    assert r.exit_code == 0, r.output
+    for name in ("array", "truth"):
+        lines = (tmp_path / "gf" / f"{name}.csv").read_text().splitlines()
+        (tmp_path / f"{name}_late.csv").write_text("\n".join(lines[:1] + lines[101:]) + "\n")  # from 0.5 s
+    r = invoke(gyrofree, "navigate", tmp_path / "array_late.csv", "--out", tmp_path / "n", "--init-from",
+               tmp_path / "gf" / "truth.csv", "--truth", tmp_path / "truth_late.csv", "--json")
+    assert r.exit_code == 0, r.output
+    e = json.loads(r.stdout)["truth_errors"]
+    assert e["position_max_m"] < 1e-6 and e["rate_sign_errors"] == 0
+    r = invoke(gyrofree, "navigate", tmp_path / "gf" / "array.csv", "--out", tmp_path / "n2", "--init-from",
+               tmp_path / "truth_late.csv")
+    assert isinstance(r.exception, InputError)
+    assert str(r.exception) == (f"--init-from {tmp_path / 'truth_late.csv'}: spans 0.500..2.000 s, but "
+                                f"{tmp_path / 'gf' / 'array.csv'} starts at 0.000 s: mismatched time bases?")
+    r = invoke(gyrofree, "simulate", EXAMPLES / "car.toml", "--out", tmp_path / "car", "--rate", 100,
+               "--duration", 2)
+    assert r.exit_code == 0, r.output
+    lines = (tmp_path / "car" / "truth.csv").read_text().splitlines()
+    (tmp_path / "car_late.csv").write_text("\n".join(lines[:1] + lines[101:]) + "\n")  # from 1 s
+    r = invoke(gyrofree, "navigate", tmp_path / "car" / "array.csv", "--frame", "ned", "--out", tmp_path / "n3",
+               "--init-from", tmp_path / "car_late.csv")
+    assert isinstance(r.exception, InputError)
+    assert str(r.exception).startswith(f"--init-from {tmp_path / 'car_late.csv'}: spans 1.000..2.000 s, but ")
+
+
+def test_inertial_truth_between_its_rows():
+    """The source frame's initial state between two truth rows: linear in
+    position and velocity, the attitude between the two rows'."""
+    import numpy as np
+
+    from inskit.gyrofree.motion import ConstantRateMotion
+    from inskit.jobs.gyrofree import _inertial_at
+
+    m = ConstantRateMotion()
+    tr = m.truth(np.array([0.0, 0.01, 0.02]))
+    at = _inertial_at(tr, 0.01)
+    assert np.array_equal(at.r_i[0], tr.r_i[1]) and np.array_equal(at.q_ib[0], tr.q_ib[1])
+    mid = _inertial_at(tr, 0.015)
+    exact = m.truth(np.array([0.015]))
+    assert np.allclose(mid.r_i[0], exact.r_i[0], atol=1e-3) and np.allclose(mid.q_ib[0], exact.q_ib[0], atol=1e-3)
+    assert abs(np.linalg.norm(mid.q_ib[0]) - 1) < 1e-12

@@ -227,10 +227,42 @@ def _parse_vector(text, n, what):
     return np.array(x)
 
 
-def _truth_rate(extra, k=0):
+def _truth_rate(extra, time, t):
+    """The truth's body rate ``w{x,y,z}_rad_s`` at time ``t`` (linear between
+    its rows), or None when it has none."""
     if all(f"w{a}_rad_s" in extra for a in "xyz"):
-        return np.array([extra[f"w{a}_rad_s"][k] for a in "xyz"])
+        return np.array([np.interp(t, time, extra[f"w{a}_rad_s"]) for a in "xyz"])
     return None
+
+
+def _check_init_span(init_from, time, array_file, t_start):
+    """Refuse an ``--init-from`` file whose times do not reach the array
+    file's first time, naming the option and both files (as ``inskit
+    mechanize --init-from`` does)."""
+    if not time[0] <= t_start <= time[-1]:
+        raise InputError(f"--init-from {init_from}: spans {float(time[0]):.3f}..{float(time[-1]):.3f} s, but "
+                         f"{array_file} starts at {t_start:.3f} s: mismatched time bases?")
+
+
+def _inertial_at(tr, t):
+    """An inertial truth's state at time ``t`` inside its span, as a one-row
+    :class:`~inskit.gyrofree.motion.InertialSolution`: its row at ``t`` when
+    it has one, else linear in position and velocity and a normalised blend of
+    the quaternions of the rows either side (as ``NavSolution.sample``)."""
+    from ..gyrofree.motion import InertialSolution
+
+    j = int(np.searchsorted(tr.time, t))
+    if j < len(tr.time) and abs(tr.time[j] - t) <= 1e-9 * max(1.0, abs(t)):
+        i, k, w = j, j, 0.0
+    else:
+        i, k = j - 1, j
+        w = (t - tr.time[i]) / (tr.time[k] - tr.time[i])
+    q0, q1 = tr.q_ib[i], tr.q_ib[k]
+    if np.dot(q0, q1) < 0:
+        q1 = -q1
+    q = q0 * (1 - w) + q1 * w
+    return InertialSolution(np.array([t]), (tr.r_i[i] * (1 - w) + tr.r_i[k] * w)[None],
+                            (tr.v_i[i] * (1 - w) + tr.v_i[k] * w)[None], (q / np.linalg.norm(q))[None])
 
 
 def navigate_job(array_file, layout_spec, out_dir, *, d=0.1, solver="auto", frame="source", init=None, init_from=None,
@@ -299,16 +331,19 @@ def navigate_job(array_file, layout_spec, out_dir, *, d=0.1, solver="auto", fram
     initial = None
     ref_inertial = None
     if init_from:
+        t_start = float(data.time[0])
         if frame == "source":
-            ref_inertial, extra = read_inertial(init_from)
-            k = 0
+            tr, extra = read_inertial(init_from)
+            _check_init_span(init_from, tr.time, array_file, t_start)
+            ref_inertial = _inertial_at(tr, t_start)
         else:
             ref = io.read_solution(init_from)
+            _check_init_span(init_from, ref.time, array_file, t_start)
             initial = ref.interpolate(data.time[:1]).state(0)
             extra = ref.extra
-            k = int(np.argmin(np.abs(ref.time - data.time[0])))
+            tr = ref
         if w0 is None:
-            w0 = _truth_rate(extra, k)
+            w0 = _truth_rate(extra, tr.time, t_start)
     elif init:
         if frame == "source":
             raise InputError("--init is for the Earth frames; the source frame starts at C = I, r = v = 0 "
