@@ -273,3 +273,19 @@ def test_consistency_says_which_grades_the_filter_is_consistent_with():
     assert bad["verdict"] == "inconsistent"
     assert bad["anees"]["att"]["mean"] > 10 * bad["anees"]["att"]["band_95"][1]
     assert any(r.startswith("att:") and "optimistic" in r for r in bad["reasons"])
+
+
+@pytest.mark.parametrize("outage", [(0.0, 10.0), (0.5, 10.0), (1.0, 10.0)])
+def test_an_outage_before_any_fix_reaches_the_filters_is_refused(outage):
+    """`inskit schemes car.toml --outage 0,1842` (and 0,60) printed the three schemes' outage-end errors,
+    identical to the last digit (714635.54 m each), and exit 0: no fix had reached any filter (the one at
+    the first epoch is the initial state's), so each coasted from the same start and nothing was compared."""
+    from inskit.errors import InputError
+
+    sc = load_scenario(EXAMPLES / "static.toml")
+    with pytest.raises(InputError, match=rf"^--outage {outage[0]:g},10: no GNSS fix of the scenario 'static' "
+                                         r"reaches the filters before it \(the first after the start is at 1 s; "
+                                         r"fixes at 1 Hz.*comparing nothing; start the outage after a fix$"):
+        compare_schemes(sc, outage)
+    rows = {r["scheme"]: r for r in compare_schemes(sc, (1.5, 10.0), seed=1, schemes=("uncoupled", "closed"))}
+    assert rows["uncoupled"]["outage_end_horizontal_m"] != rows["closed"]["outage_end_horizontal_m"]

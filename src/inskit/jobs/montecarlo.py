@@ -270,10 +270,22 @@ def compare_schemes(scenario, outage, seed=0, schemes=("uncoupled", "open", "clo
     from .outages import gnss_data_gaps, withheld_mask
 
     g_err = gnss_errors(scenario)
-    if not withheld_mask(fix_times(t[0], t[-1], g_err), [outage]).any():  # before the simulation
+    fixes = fix_times(t[0], t[-1], g_err)
+    withheld = withheld_mask(fixes, [outage])
+    if not withheld.any():  # before the simulation
         raise InputError(f"--outage {outage[0]:g},{outage[1]:g}: holds no GNSS fix of the scenario "
                          f"{scenario.name!r} (fixes at {g_err.rate_hz:g} Hz, outside its [gnss] outages_s): it "
                          "withholds nothing; give a longer outage")
+    # the schemes differ only in what they did with the fixes they used: one after the start (a fix at the first
+    # epoch, the initial state's, is no update) and before the outage
+    used = fixes[(fixes > t[0] + 1e-6) & (fixes < outage[0]) & ~withheld]
+    if not len(used):
+        after = fixes[fixes > t[0] + 1e-6]
+        first = f"the first after the start is at {after[0]:g} s" if len(after) else "none after the start"
+        raise InputError(f"--outage {outage[0]:g},{outage[1]:g}: no GNSS fix of the scenario {scenario.name!r} "
+                         f"reaches the filters before it ({first}; fixes at {g_err.rate_hz:g} Hz, outside its [gnss] "
+                         "outages_s): the three schemes would all coast alike from the initial state, comparing "
+                         "nothing; start the outage after a fix")
     gravity = scenario.earth.gravity  # the simulation's and the filters' model
     ideal = ideal_imu(tr, t, nodes=scenario.imu.quadrature_nodes, gravity=gravity)
     errs = imu_errors(scenario)
