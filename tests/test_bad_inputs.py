@@ -348,6 +348,10 @@ def test_bad_toml(capsys, sim, tmp_path, text, needles):
      ["field 'init.rpy_deg'", "yaw -400 is outside [-360, 360] degrees"]),
     ('[init]\nmode = "given"\nlat_deg = 45\nlon_deg = 700\nheight_m = 300\nrpy_deg = [0, 0, 0]\n',
      ["field 'init.lon_deg'", "700 is outside [-180, 360] degrees"]),
+    # a height beyond 100 km, as the height log's readings: a pressure in Pa, millimetres, past the Earth's centre
+    ('[init]\nmode = "given"\nlat_deg = 45\nlon_deg = 7\nheight_m = 300000\nrpy_deg = [0, 0, 0]\n',
+     ["field 'init.height_m'", "300000 m is beyond +-100 km of the ellipsoid", "expected a height in metres"]),
+    ("[height]\nheight_m = 101325\n", ["field 'height.height_m'", "101325 m is beyond +-100 km"]),
 ])
 def test_impossible_navigate_configuration(capsys, sim, tmp_path, text, needles):
     cfg = config(tmp_path, sim, text)
@@ -367,6 +371,23 @@ def test_an_angle_beyond_a_full_turn_on_the_command_line(capsys, sim, tmp_path, 
     """The command-line angles are held to the config keys' range: a typo (370 for 37.0) was taken modulo 360."""
     out = tmp_path / "sol.csv"
     refused(run(capsys, *[a.format(imu=sim / "imu.csv", out=out) for a in argv]), *needles)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("argv, needles", [
+    (["mechanize", "{imu}", "--init", "45,7,1e9,0,0,0,0,0,0", "--out", "{out}"],
+     ["--init: height_m 1e+09 m is beyond +-100 km of the ellipsoid", "expected a height in metres"]),
+    (["mechanize", "{imu}", "--init", "45,7,-1e7,0,0,0,0,0,0", "--out", "{out}"],
+     ["--init: height_m -1e+07 m is beyond +-100 km"]),
+    (["mechanize", "{imu}", "--init-from", "{truth}", "--height", "hold", "--height-ref", "101325", "--out", "{out}"],
+     ["--height-ref: 101325 m is beyond +-100 km of the ellipsoid: a pressure or another unit?"]),
+])
+def test_a_height_beyond_100_km_on_the_command_line(capsys, sim, tmp_path, argv, needles):
+    """`mechanize --height hold --height-ref 101325` (a pressure in Pa) held the height at 101 km and exit 0,
+    `--init 45,7,-1e7,...` started 3600 km past the Earth's centre: the constant height was taken unchecked
+    where a height log holding the same number is refused."""
+    out = tmp_path / "sol.csv"
+    refused(run(capsys, *[a.format(imu=sim / "imu.csv", truth=sim / "truth.csv", out=out) for a in argv]), *needles)
     assert not out.exists()
 
 
@@ -395,6 +416,7 @@ def test_an_angle_beyond_a_full_turn_on_the_command_line(capsys, sim, tmp_path, 
      ["field 'imu.mount_rpy_deg'", "roll 370 is outside [-360, 360] degrees"]),
     ("height_m = 300", "height_m = 300\nyaw_deg = 450", ["field 'start.yaw_deg'", "450 is outside [-360, 360]"]),
     ("lon_deg = 7", "lon_deg = -190", ["field 'start.lon_deg'", "-190 is outside [-180, 360]"]),
+    ("height_m = 300", "height_m = 300000", ["field 'start.height_m'", "300000 m is beyond +-100 km"]),
     ('type = "cruise"\nduration_s = 20', 'type = "roll"\namplitude_deg = 3600\nduration_s = 20',
      ["field 'segment.3.amplitude_deg'", "3600 is outside [-360, 360]"]),
     ('[[segment]]\ntype = "static"', ('[[vibration]]\ntarget = "yaw"\namplitude = 500\nfrequency_hz = 1\n'

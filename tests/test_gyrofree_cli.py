@@ -286,3 +286,19 @@ def test_inertial_truth_between_its_rows():
     exact = m.truth(np.array([0.015]))
     assert np.allclose(mid.r_i[0], exact.r_i[0], atol=1e-3) and np.allclose(mid.q_ib[0], exact.q_ib[0], atol=1e-3)
     assert abs(np.linalg.norm(mid.q_ib[0]) - 1) < 1e-12
+
+
+@pytest.mark.parametrize("init, message", [
+    ("40,-105,1600e3,0,0,0,0,0,0", "--init: height_m 1.6e+06 m is beyond +-100 km of the ellipsoid: a pressure or "
+                                   "another unit? expected a height in metres"),
+    ("40,-105,1600,0,0,0,0,0,400", "--init: yaw 400 is outside [-360, 360] degrees: no angle needs more than a full "
+                                   "turn either way (a typo, or another unit?)"),
+])
+def test_init_is_checked_as_mechanize_checks_it(tmp_path, init, message):
+    """`gyrofree navigate --frame ned --init 40,-105,1600e3,...` (km typed as m) navigated from 1600 km up, and a
+    yaw of 400 deg was taken modulo 360: refused in the words of `inskit mechanize --init`."""
+    r = invoke(gyrofree, "simulate", "source003", "--out", tmp_path / "gf", "--rate", 100, "--duration", 1)
+    assert r.exit_code == 0, r.output
+    r = invoke(gyrofree, "navigate", tmp_path / "gf" / "array.csv", "--frame", "ned", "--init", init, "--omega0",
+               "1,2,3", "--out", tmp_path / "n")
+    assert isinstance(r.exception, InputError) and str(r.exception) == message

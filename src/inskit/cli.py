@@ -84,10 +84,26 @@ def _angles(option, rpy):
     return rpy
 
 
-def _parse_init(text):
-    x = _numbers("--init", text, 9, "lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg")
-    _angles("--init", x[6:9])
+def _parse_init(text, option="--init"):
+    """``--init lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg``:
+    nine finite numbers, the angles within a full turn and the height within
+    the heights of :func:`_height` (a wrong unit refused naming the option)."""
+    x = _numbers(option, text, 9, "lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg")
+    _height(option, x[2], "height_m ")
+    _angles(option, x[6:9])
     return x
+
+
+def _height(option, h, what=""):
+    """A height [m] given with ``option``, within the heights a height log
+    may hold (:func:`inskit.config_files.height_problem`), else an InputError
+    naming the option."""
+    from .config_files import height_problem
+
+    problem = height_problem(float(h))
+    if problem:
+        raise InputError(f"{option}: {what}{problem}")
+    return h
 
 
 def _height_ref(text, imu):
@@ -99,7 +115,7 @@ def _height_ref(text, imu):
     if x is not None:
         if not np.isfinite(x):
             raise InputError(f"--height-ref: {text!r} is not a finite height in metres")
-        return x
+        return _height("--height-ref", x)
     from .jobs.height import height_profile_at
 
     if not Path(text).is_file():

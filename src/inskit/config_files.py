@@ -63,6 +63,28 @@ def check_magnitude(v):
                              "an exponent slipped?)")
     return v
 
+def height_problem(v) -> str | None:
+    """What is wrong with a height a user gave [m], in words (None:
+    nothing): beyond +-:data:`inskit.units.MAX_HEIGHT_M` of the ellipsoid,
+    the limit of the height log's readings too.  Not a finite number: None
+    (the caller's own checks say so)."""
+    from .units import MAX_HEIGHT_M
+
+    if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v) or abs(v) <= MAX_HEIGHT_M:
+        return None
+    return (f"{v:g} m is beyond +-{MAX_HEIGHT_M / 1000:g} km of the ellipsoid: a pressure or another unit? "
+            "expected a height in metres")
+
+
+def check_height(v):
+    """A pydantic after-validator of a height field [m] (None passes):
+    :func:`height_problem`'s message."""
+    problem = height_problem(v)
+    if problem:
+        raise ValueError(problem)
+    return v
+
+
 #: an angle setting [deg] beyond a full turn either way is refused: no orientation needs more, and 370 for 37.0
 #: (or a value in another unit) would be taken without a word, the angle modulo 360
 ANGLE_LIMIT_DEG = 360.0

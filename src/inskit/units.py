@@ -32,3 +32,8 @@ MAX_RATE_HZ = 10_000  # an int: 10000, not 10000.0, in the messages and docs/con
 #: 1000 s at :data:`MAX_RATE_HZ`, 27.8 h at 100 Hz; about 10 GB of arrays in the simulations.  Beyond it a
 #: rate times a duration is refused before any array is made.
 MAX_SAMPLES = 10_000_000
+#: The heights [m] a user gives (an initial state's, a held or aiding height, a height log's readings, a
+#: scenario's start) lie within this many metres of the ellipsoid: the deepest trench and the highest aircraft
+#: with room to spare.  Beyond it the number is a wrong unit or column (101325, a pressure in Pa; millimetres),
+#: or, below -6.4e6 m, a point past the Earth's centre; taken in silence it sent a run off the Earth.
+MAX_HEIGHT_M = 100_000.0

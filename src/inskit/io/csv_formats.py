@@ -21,7 +21,7 @@ from .. import rotations as rot
 from ..errors import InputError
 from ..files import require_file, write_csv
 from ..types import GnssData, ImuData, NavSolution
-from ..units import DEG, DEG_PER_HOUR, G0
+from ..units import DEG, DEG_PER_HOUR, G0, MAX_HEIGHT_M
 from ..types import plain_number
 
 AXES = ("x", "y", "z")
@@ -1186,7 +1186,7 @@ def read_speed_course(path):
 
 
 #: heights beyond this many metres from the ellipsoid are taken as a wrong unit or column [m]
-HEIGHT_LIMIT_M = 100_000.0
+HEIGHT_LIMIT_M = MAX_HEIGHT_M
 
 
 def read_height(path):

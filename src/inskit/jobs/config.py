@@ -24,7 +24,7 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 from pydantic_core import PydanticCustomError
 
-from ..config_files import (MASK_RANGE_DEG, check_angles, check_longitude, check_magnitude, check_mask,
+from ..config_files import (MASK_RANGE_DEG, check_angles, check_height, check_longitude, check_magnitude, check_mask,
                             check_scalar_type, read_toml, validation_message)
 from ..errors import ConfigError, InputError
 from ..units import MAX_RATE_HZ
@@ -432,6 +432,7 @@ class InitSection(_Strict):
                                        "offset (with filter.time_offset)")
     _angles = field_validator("rpy_deg", "yaw_deg")(check_angles)
     _longitude = field_validator("lon_deg")(check_longitude)
+    _height = field_validator("height_m")(check_height)
 
     @model_validator(mode="after")
     def _given_complete(self):
@@ -704,6 +705,7 @@ class HeightSection(_Strict):
     bias_rw_m_sqrt_h: float = Field(2.0, gt=0, description="random-walk: the offset's drift in 1 h, 1 sigma (a "
                                     "barometer: 2 m is 0.25 hPa of weather per sqrt(h))")
     bias_tau_s: float | None = Field(None, gt=0, description="gauss-markov: correlation time of the offset")
+    _height = field_validator("height_m")(check_height)
 
     @model_validator(mode="after")
     def _consistent(self):

@@ -264,8 +264,10 @@ def allowed_of(field, model=None, name=None) -> str:
 def validator_bounds(model, name) -> list[str]:
     """The bounds a field validator of ``model`` puts on field ``name``
     (:func:`inskit.config_files.check_angles`: each within +-360;
-    :func:`~inskit.config_files.check_longitude`: the longitude range)."""
-    from ..config_files import ANGLE_LIMIT_DEG, LONGITUDE_RANGE_DEG, check_angles, check_longitude
+    :func:`~inskit.config_files.check_longitude`: the longitude range;
+    :func:`~inskit.config_files.check_height`: +-MAX_HEIGHT_M)."""
+    from ..config_files import ANGLE_LIMIT_DEG, LONGITUDE_RANGE_DEG, check_angles, check_height, check_longitude
+    from ..units import MAX_HEIGHT_M
 
     out = []
     for dec in model.__pydantic_decorators__.field_validators.values():
@@ -275,6 +277,8 @@ def validator_bounds(model, name) -> list[str]:
             out += [f">= {_toml(-ANGLE_LIMIT_DEG)}", f"<= {_toml(ANGLE_LIMIT_DEG)}"]
         elif dec.func is check_longitude:
             out += [f">= {_toml(LONGITUDE_RANGE_DEG[0])}", f"<= {_toml(LONGITUDE_RANGE_DEG[1])}"]
+        elif dec.func is check_height:
+            out += [f">= {_toml(-MAX_HEIGHT_M)}", f"<= {_toml(MAX_HEIGHT_M)}"]
     return out
 
 

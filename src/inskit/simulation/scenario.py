@@ -22,7 +22,7 @@ from typing import Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field, PrivateAttr, ValidationError, field_validator, model_validator
 
-from ..config_files import (ANGLE_LIMIT_DEG, MASK_RANGE_DEG, check_angles, check_longitude, check_magnitude,
+from ..config_files import (ANGLE_LIMIT_DEG, MASK_RANGE_DEG, check_angles, check_height, check_longitude, check_magnitude,
                             check_mask, check_scalar_type, read_toml, validation_message)
 from ..errors import ConfigError
 from ..types import GnssData, ImuData, NavSolution
@@ -48,6 +48,7 @@ class StartSpec(_S):
     transition_s: float = Field(2.0, gt=0)
     _angles = field_validator("yaw_deg")(check_angles)
     _longitude = field_validator("lon_deg")(check_longitude)
+    _height = field_validator("height_m")(check_height)
 
 
 class ImuSpec(_S):
