@@ -445,6 +445,15 @@ def test_impossible_command_line_values(capsys, sim, tmp_path):
     assert empty_or_absent(tmp_path / "nav") and not out.exists()
 
 
+@pytest.mark.parametrize("method", ["accel", "gyro", "fine"])
+def test_an_option_the_method_would_ignore_is_refused(capsys, sim, method):
+    """`align IMU --lat 45 --method fine --m 0.5` ran the fine alignment and said nothing of the blending gain
+    it had been given (--m is read by --method blend only), as mechanize refuses --height-ref with --height free."""
+    refused(run(capsys, "align", sim / "imu.csv", "--lat", "45", "--method", method, "--m", "0.5"),
+            f"--m 0.5 would be ignored: it is the blending gain of --method blend, and --method {method} blends "
+            "nothing; drop --m, or give --method blend")
+
+
 # --- 11. results already there, --out equal to an input, unwritable output --------------------------------
 def test_force_never_turns_an_input_into_an_output(capsys, sim, tmp_path):
     """`spp OBS NAV --out D --force` with OBS = D/spp.pos replaced the

@@ -302,3 +302,36 @@ def test_init_is_checked_as_mechanize_checks_it(tmp_path, init, message):
     r = invoke(gyrofree, "navigate", tmp_path / "gf" / "array.csv", "--frame", "ned", "--init", init, "--omega0",
                "1,2,3", "--out", tmp_path / "n")
     assert isinstance(r.exception, InputError) and str(r.exception) == message
+
+
+def test_options_another_solver_or_layout_would_ignore_are_refused(tmp_path):
+    """`gyrofree navigate --filter-noise 0.01 --noise 0.01`, `--solver least-squares --sign-rule source` and
+    `--layout FILE --d 0.2` ran and said nothing of the option they had dropped (--noise and --sign-rule are
+    read by the closed form only, --d by the built-in layouts only); the defaults still run."""
+    r = invoke(gyrofree, "simulate", "source003", "--out", tmp_path / "gf", "--rate", 100, "--duration", 1)
+    assert r.exit_code == 0, r.output
+    a, lay = tmp_path / "gf" / "array.csv", tmp_path / "gf" / "layout.csv"
+    for args, message in (
+            (["--noise", "0.01", "--filter-noise", "0.01"],
+             "--noise 0.01 would be ignored: it is an option of the closed-form solver and --filter-noise selects "
+             "the least-squares solver; drop it, or give --solver closed-form (the ten layout)"),
+            (["--solver", "least-squares", "--sign-rule", "source", "--noise", "0.1"],
+             "--sign-rule source and --noise 0.1 would be ignored: they are options of the closed-form solver and "
+             "--solver least-squares is given; drop them, or give --solver closed-form (the ten layout)"),
+            (["--layout", lay, "--d", "0.2"],
+             f"--d 0.2 would be ignored: it is the lever arm of the built-in layouts ten and six, and --layout {lay} "
+             "gives every accelerometer's position itself; drop --d")):
+        r = invoke(gyrofree, "navigate", a, "--omega0", "1,2,3", "--out", tmp_path / "n", *args)
+        assert isinstance(r.exception, InputError) and str(r.exception) == message
+    r = invoke(gyrofree, "simulate", "source003", "--out", tmp_path / "s", "--layout", lay, "--d", "0.3")
+    assert isinstance(r.exception, InputError) and str(r.exception).startswith("--d 0.3 would be ignored")
+    r = invoke(gyrofree, "simulate", "source003", "--layout", "six", "--out", tmp_path / "six", "--rate", 100,
+               "--duration", 1)
+    assert r.exit_code == 0, r.output
+    r = invoke(gyrofree, "navigate", tmp_path / "six" / "array.csv", "--layout", "six", "--omega0", "1,2,3",
+               "--noise", "0.1", "--out", tmp_path / "n")
+    assert isinstance(r.exception, InputError) and "--solver auto takes least squares for layout 'six'" in str(
+        r.exception)
+    for args in (["--layout", lay, "--noise", "0.01"], ["--solver", "least-squares"], ["--d", "0.1"]):
+        r = invoke(gyrofree, "navigate", a, "--omega0", "1,2,3", "--out", tmp_path / "ok", "--force", *args)
+        assert r.exit_code == 0, r.output

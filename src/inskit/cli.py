@@ -625,6 +625,9 @@ def align(imu_file, lat_deg, method, m_gain, t_start, t_end, imu_format, mount_r
         mount = tuple(_angles("--mount-rpy", _numbers("--mount-rpy", mount_rpy, 3, "roll,pitch,yaw [deg]")))
     if m_gain is not None and not 0.0 <= m_gain <= 1.0:
         raise InputError(f"--m must be within [0, 1], got {m_gain}")
+    if m_gain is not None and method != "blend":
+        raise InputError(f"--m {m_gain:g} would be ignored: it is the blending gain of --method blend, and --method "
+                         f"{method} blends nothing; drop --m, or give --method blend")
     from .units import DEG_PER_HOUR, MICRO_G
 
     for name, v in (("--accel-bias-ug", accel_bias_ug), ("--gyro-bias-deg-h", gyro_bias_deg_h)):

@@ -49,7 +49,7 @@ def gyrofree():
 @gyrofree.command("simulate")
 @click.argument("scenario")
 @click.option("--layout", "layout_spec", default="ten", show_default=True, help=_LAYOUT_HELP)
-@click.option("--d", "d", type=FINITE, default=0.1, show_default=True, help="Lever arm of ten/six [m].")
+@click.option("--d", "d", type=FINITE, help="Lever arm of ten/six [m]  [default: 0.1]")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Output folder.")
 @click.option("--rate", "rate_hz", type=RATE_HZ, metavar="HZ", help="Sampling rate [Hz] (default 1000 for "
               f"source003, else the scenario's IMU rate; at most {MAX_RATE_HZ:g} Hz).")
@@ -90,7 +90,7 @@ def simulate(scenario, layout_spec, d, out_dir, rate_hz, duration, bias_ug, bias
 @gyrofree.command("navigate")
 @click.argument("array_file", type=click.Path(dir_okay=False))
 @click.option("--layout", "layout_spec", default="ten", show_default=True, help=_LAYOUT_HELP)
-@click.option("--d", "d", type=FINITE, default=0.1, show_default=True, help="Lever arm of ten/six [m].")
+@click.option("--d", "d", type=FINITE, help="Lever arm of ten/six [m]  [default: 0.1]")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Output folder.")
 @click.option("--solver", type=click.Choice(["auto", "closed-form", "least-squares"]), default="auto",
               show_default=True, help="auto: the closed form for the ten layout, least squares otherwise.")

@@ -22,16 +22,25 @@ SOURCE_SCENARIO = "source003"
 
 
 # --- helpers ---------------------------------------------------------------------------
-def layout_from_spec(spec, d=0.1):
-    """``"ten"``, ``"six"`` (with lever arm ``d`` [m]) or a layout file path."""
+#: the lever arm of the built-in layouts when none is given [m]
+DEFAULT_D_M = 0.1
+
+
+def layout_from_spec(spec, d=None):
+    """``"ten"``, ``"six"`` (with lever arm ``d`` [m], default
+    :data:`DEFAULT_D_M`) or a layout file path (whose positions are its own:
+    a ``d`` with it would be ignored and is refused, naming ``--d``)."""
     from ..gyrofree.files import read_layout
     from ..gyrofree.layout import builtin_layout
 
     if spec in ("ten", "six"):
-        return builtin_layout(spec, d)
+        return builtin_layout(spec, DEFAULT_D_M if d is None else d)
     p = Path(spec)
     if not p.exists():
         raise InputError(f"--layout: {spec!r} is neither 'ten', 'six' nor an existing layout file")
+    if d is not None:
+        raise InputError(f"--d {d:g} would be ignored: it is the lever arm of the built-in layouts ten and six, and "
+                         f"--layout {spec} gives every accelerometer's position itself; drop --d")
     return read_layout(p)
 
 
@@ -72,7 +81,7 @@ def array_errors_from_datasheet(layout, rng, rate_hz, *, bias_ug=0.0, bias_sigma
 
 
 # --- simulate ------------------------------------------------------------------------------
-def simulate_job(scenario, layout_spec, out_dir, *, d=0.1, rate_hz=None, duration=None, seed=0, overwrite=False,
+def simulate_job(scenario, layout_spec, out_dir, *, d=None, rate_hz=None, duration=None, seed=0, overwrite=False,
                  log=None, **errors):
     """Simulate an accelerometer array on a scenario and write its files.
 
@@ -88,8 +97,9 @@ def simulate_job(scenario, layout_spec, out_dir, *, d=0.1, rate_hz=None, duratio
         and ``truth.csv`` (inertial format for ``source003``, the NED solution
         format otherwise; both with the true rates ``wx_rad_s ..`` and specific
         force ``fx_m_s2 ..``).
-    d : float
-        Lever arm of the built-in layouts [m].
+    d : float, optional
+        Lever arm of the built-in layouts [m] (default :data:`DEFAULT_D_M`;
+        refused with a layout file).
     rate_hz, duration : float, optional
         Sampling rate [Hz] (default 1000 Hz for ``source003``, the scenario's
         IMU rate otherwise; at most :data:`inskit.units.MAX_RATE_HZ`) and
@@ -265,7 +275,7 @@ def _inertial_at(tr, t):
                             (tr.v_i[i] * (1 - w) + tr.v_i[k] * w)[None], (q / np.linalg.norm(q))[None])
 
 
-def navigate_job(array_file, layout_spec, out_dir, *, d=0.1, solver="auto", frame="source", init=None, init_from=None,
+def navigate_job(array_file, layout_spec, out_dir, *, d=None, solver="auto", frame="source", init=None, init_from=None,
                  omega0=None, rate_filter_noise=None, sign_rule="robust", noise_sigma=0.0, truth_file=None,
                  overwrite=False, log=None):
     """Solve an array file and navigate; write ``rates.csv`` and ``solution.csv``.
@@ -277,8 +287,9 @@ def navigate_job(array_file, layout_spec, out_dir, *, d=0.1, solver="auto", fram
     layout_spec : str
         ``"ten"``, ``"six"`` or a layout file.
     out_dir : path
-    d : float
-        Lever arm of the built-in layouts [m].
+    d : float, optional
+        Lever arm of the built-in layouts [m] (default :data:`DEFAULT_D_M`;
+        refused with a layout file).
     solver : {"auto", "closed-form", "least-squares"}
     frame : {"source", "ned", "wander", "ecef", "inertial"}
         ``"source"``: source 003's inertial navigation (eq. 43-44, no
@@ -375,6 +386,16 @@ def navigate_job(array_file, layout_spec, out_dir, *, d=0.1, solver="auto", fram
             raise InputError("--filter-noise uses the least-squares solver's rate filter; drop --solver closed-form")
         solver = "least-squares"
         opts["rate_filter"] = RateFilter(sensor_noise=rate_filter_noise)
+    if solver != "closed-form":  # options of the closed form only: not taken in silence by another solver
+        why = ("--filter-noise selects the least-squares solver" if rate_filter_noise is not None else
+               "--solver least-squares is given" if solver == "least-squares" else
+               f"--solver auto takes least squares for layout {layout.label!r} (not the ten layout)")
+        given = [o for o, on in (("--sign-rule source", sign_rule != "robust"),
+                                 (f"--noise {noise_sigma:g}", noise_sigma != 0.0)) if on]
+        if given:
+            them = ("they are options", "them") if len(given) > 1 else ("it is an option", "it")
+            raise InputError(f"{' and '.join(given)} would be ignored: {them[0]} of the closed-form solver and "
+                             f"{why}; drop {them[1]}, or give --solver closed-form (the ten layout)")
     sol = solve(data, layout, method="least-squares" if solver == "auto" else solver, **opts)
     write_rates(out / "rates.csv", sol, overwrite=True)
     summary = {"array_file": str(array_file), "layout": layout.label, "solver": sol.method, "frame": frame,
