@@ -443,3 +443,16 @@ def test_progress_off_a_terminal_is_a_plain_line_now_and_then():
     q.update(39)
     assert quiet.getvalue() == ""  # a short job prints no progress
     assert isinstance(progress(3, "x"), LineProgress)  # pytest's stderr is not a terminal
+
+
+def test_mechanize_summary_wraps_the_longitude_as_the_file_does(files, tmp_path):
+    """Across the antimeridian the JSON said lon_deg 180.099 where the written solution said -179.901."""
+    out = tmp_path / "sol.csv"
+    r = inskit("mechanize", files / "imu.csv", "--init", "45,179.995,50,0,100,0,0,0,90", "--height", "hold",
+               "--out", out, "--json")
+    assert r.returncode == 0, r.stderr
+    final = json.loads(r.stdout)["final"]
+    sol = io.read_solution(out)
+    lon_file = float(np.degrees(sol.lla[-1, 1]))
+    assert -180.0 < final["lon_deg"] <= 180.0 and final["lon_deg"] < 0  # it crossed: about 6 km east of 179.995
+    assert final["lon_deg"] == pytest.approx(lon_file, abs=1e-9)

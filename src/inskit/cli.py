@@ -201,6 +201,8 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
     if out_file:
         io.write_solution(out_file, sol, overwrite=force)
         _log(f"wrote {out_file}")
+    from .rotations import wrap_angle
+
     end = sol.state(len(sol) - 1)
     rpy = end.euler / DEG
     summary = {
@@ -210,7 +212,10 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
         "duration_s": float(sol.time[-1] - sol.time[0]),
         "elapsed_s": elapsed,
         "final": {
-            "time_s": end.time, "lat_deg": end.lla[0] / DEG, "lon_deg": end.lla[1] / DEG, "height_m": end.lla[2],
+            # the longitude wrapped into (-180, 180] as the solution file writes it (it said 180.099 where the
+            # file said -179.901 after crossing the antimeridian)
+            "time_s": end.time, "lat_deg": end.lla[0] / DEG, "lon_deg": float(wrap_angle(end.lla[1])) / DEG,
+            "height_m": end.lla[2],
             "vn_m_s": end.v_n[0], "ve_m_s": end.v_n[1], "vd_m_s": end.v_n[2],
             "roll_deg": rpy[0], "pitch_deg": rpy[1], "yaw_deg": rpy[2],
         },
