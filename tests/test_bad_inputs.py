@@ -817,3 +817,18 @@ def test_an_outage_protocol_that_scores_nothing_is_unhealthy(capsys, sim, tmp_pa
     s = json.loads(out)
     assert code == 3 and s["outages"] == 0 and s["health"]["verdict"] == "unhealthy"
     assert any("scored no outage" in r for r in s["health"]["reasons"]), s["health"]
+
+
+@pytest.mark.parametrize("argv, needle", [
+    (["study", "examples/car.toml", "--out", "{out}"], "this is a scenario file, which `inskit simulate` takes"),
+    (["simulate", "examples/drive_0708.toml", "--out", "{out}"],
+     "this is a navigate configuration, which `inskit navigate` takes"),
+    (["navigate", "examples/study_mc_mems.toml", "--out", "{out}"], "this is a study file, which `inskit study` takes"),
+])
+def test_another_commands_toml_file_is_named_as_such(capsys, tmp_path, argv, needle):
+    """`inskit study examples/car.toml` said "field 'scenario': Field required (and 9 more)"."""
+    root = Path(__file__).resolve().parents[1]
+    out = tmp_path / "out"
+    args = [str(root / a) if a.startswith("examples/") else a.format(out=out) for a in argv]
+    refused(run(capsys, *args), needle)
+    assert not out.exists()

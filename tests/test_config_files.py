@@ -130,3 +130,39 @@ def test_a_literal_of_the_wrong_kind_names_its_choices(tmp_path):
     with pytest.raises(ConfigError, match=r"field 'imu\.repeated_rows': true is a boolean; this setting takes one "
                                           r"of \"keep\", \"drop\""):
         load_config(p)
+
+
+EXAMPLES = __import__("pathlib").Path(__file__).resolve().parents[1] / "examples"
+
+
+@pytest.mark.parametrize("example, kind", [("car.toml", "scenario"), ("drive_0708.toml", "config"),
+                                           ("walk_0827_tight.toml", "config"), ("study_mc_mems.toml", "study"),
+                                           ("study_outage_grades.toml", "study"), ("static.toml", "scenario")])
+def test_each_example_is_recognised_as_its_kind(example, kind):
+    from inskit.config_files import toml_kind
+
+    assert toml_kind(read_toml(EXAMPLES / example, kind)) == kind
+
+
+@pytest.mark.parametrize("example, asked, said", [
+    ("car.toml", "study", "this is a scenario file, which `inskit simulate` takes, not a study file"),
+    ("drive_0708.toml", "scenario", "this is a navigate configuration, which `inskit navigate` takes, not a scenario"),
+    ("study_mc_mems.toml", "config", "this is a study file, which `inskit study` takes, not a navigate configuration"),
+])
+def test_another_commands_file_is_named_as_such(example, asked, said):
+    """`inskit study examples/car.toml` said "field 'scenario': Field required (and 9 more)"; every command that
+    reads a TOML file took another's for a broken one of its own."""
+    with pytest.raises(ConfigError) as e:
+        read_toml(EXAMPLES / example, asked)
+    assert str(e.value).startswith(f"{EXAMPLES / example}: {said}"), str(e.value)
+
+
+def test_a_file_of_no_known_kind_goes_to_the_model(tmp_path):
+    """Neither kind recognised (or two at once): read as asked, so the model's own message names the field."""
+    from inskit.config_files import toml_kind
+
+    p = tmp_path / "c.toml"
+    p.write_text('name = "x"\n')
+    assert read_toml(p, "study") == {"name": "x"} and toml_kind({"name": "x"}) is None
+    both = {"segment": [], "imu": {"file": "a.csv"}}
+    assert toml_kind(both) is None

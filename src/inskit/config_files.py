@@ -32,7 +32,37 @@ def read_toml(path, kind="config"):
     except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"{path}: not valid TOML ({exc})") from None
     _refuse_non_finite(data, path, "")
+    other = toml_kind(data)
+    if other is not None and kind in _KINDS and other != kind:  # another command's file: say so, not 'field required'
+        what, command = _KINDS[other]
+        raise ConfigError(f"{path}: this is {what}, which `{command}` takes, not {_KINDS[kind][0]} "
+                          "(docs/config.md describes each)")
     return data
+
+
+#: the TOML files inskit reads: what each is, and the command that takes it
+_KINDS = {"config": ("a navigate configuration", "inskit navigate"),
+          "scenario": ("a scenario file", "inskit simulate"),
+          "study": ("a study file", "inskit study")}
+
+
+def toml_kind(data) -> str | None:
+    """Which of inskit's TOML files ``data`` (parsed) is, by the keys only
+    that kind has: ``"study"`` (top-level ``scenario`` and ``kind`` or
+    ``runs``), ``"scenario"`` (``[[segment]]`` tables, or a ``[start]``
+    table), ``"config"`` (an ``[imu]`` table naming a ``file``, or a
+    ``[gnss]`` table naming ``file`` or ``obs``); None when it is none of
+    them or looks like more than one."""
+    if not isinstance(data, dict):
+        return None
+    imu, gnss = data.get("imu"), data.get("gnss")
+    found = {k for k, hit in (
+        ("study", isinstance(data.get("scenario"), str) and ("kind" in data or "runs" in data)),
+        ("scenario", isinstance(data.get("segment"), list) or isinstance(data.get("start"), dict)),
+        ("config", (isinstance(imu, dict) and "file" in imu)
+         or (isinstance(gnss, dict) and ("file" in gnss or "obs" in gnss))),
+    ) if hit}
+    return found.pop() if len(found) == 1 else None
 
 
 def _refuse_non_finite(node, path, where):
