@@ -11,6 +11,8 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
+
 from .. import analysis, io
 from ..errors import InputError
 from ..files import check_output_place, same_file
@@ -140,7 +142,7 @@ def evaluate(solution_file, truth_file, *, t_from=None, t_to=None, remove_offset
     s["window"] = {"from_s": t_from, "to_s": t_to}
     s["offset_removed"] = offset.summary() if offset is not None else None
     s["truth_coverage"] = cover
-    s["warnings"] = coverage_warnings(cover, truth.time)
+    s["warnings"] = coverage_warnings(cover, truth.time) + sampling_warnings(sol.time, truth.time, truth_file)
     if per_epoch_file is not None:
         meta = {"solution": str(solution_file), "truth": str(truth_file), "window": s["window"],
                 "offset_removed": s["offset_removed"]}
@@ -152,6 +154,30 @@ def evaluate(solution_file, truth_file, *, t_from=None, t_to=None, remove_offset
         analysis.plot_errors(err, plot_file, title=title)
         s["plot"] = str(plot_file)
     return s
+
+
+#: a truth sampled more coarsely than this [s] (median step), and than this many solution steps, is said
+TRUTH_STEP_WARN_S = 2.0
+TRUTH_STEP_WARN_RATIO = 50.0
+
+
+def sampling_warnings(t, truth_time, truth_file="truth") -> list[str]:
+    """A truth sampled far more coarsely than the solution (median step
+    above :data:`TRUTH_STEP_WARN_S` and :data:`TRUTH_STEP_WARN_RATIO` times
+    the solution's), in words: the errors between its samples are those of
+    a linear interpolation over that step, not the solution's; and a truth
+    whose time column is in milliseconds (a 100 Hz truth read as a sample
+    every 10 s) looks the same and is scored without another word."""
+    tt, ts = np.asarray(truth_time, float), np.asarray(t, float)
+    if len(tt) < 2 or len(ts) < 2:
+        return []
+    dt_truth, dt_sol = float(np.median(np.diff(tt))), float(np.median(np.diff(ts)))
+    if dt_truth > TRUTH_STEP_WARN_S and dt_truth > TRUTH_STEP_WARN_RATIO * dt_sol:
+        return [f"{truth_file}: the truth is sampled every {dt_truth:.4g} s (median) against the solution's "
+                f"{dt_sol:.4g} s: between its samples the errors are those of a linear interpolation over "
+                f"{dt_truth:.4g} s, not the solution's own (a time column in ms, 1000 times its seconds, looks "
+                "the same)"]
+    return []
 
 
 def coverage_warnings(cover: dict, truth_time) -> list[str]:
