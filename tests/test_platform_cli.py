@@ -76,6 +76,7 @@ def test_platform_integrate_json_and_files(scenario, tmp_path):
     for f in ("solution.csv", "ins.csv", "truth.csv", "estimates.csv", "errors.png"):
         assert (tmp_path / f).exists()
     assert s["errors"]["horizontal_m"]["rms"] < 50.0
+    assert s["settings"]["fix_interval_s"] == pytest.approx(s["settings"]["every"] * s["dt_s"])
     # refuses to overwrite, names the file
     with pytest.raises(InputError, match="already exists"):
         run(platform, ["integrate", scenario, "--out", tmp_path])

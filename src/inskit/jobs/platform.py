@@ -677,7 +677,7 @@ def integrate_job(scenario_file, out_dir, *, scheme="closed", estimator="kalman"
     ss = steady_state_errors(run, min(2 * HOUR, 0.25 * (truth.time[-1] - truth.time[0])))
     return {"scenario": sc.name, "scheme": scheme, "filter": estimator, "earth": earth_model, "dt_s": dt,
             "seed": seed, "epochs": len(truth.time), "fixes": int(sns.available.sum()), "elapsed_s": run.elapsed_s,
-            "settings": run.settings, "errors": s,
+            "settings": {**run.settings, "fix_interval_s": every * dt}, "errors": s,
             "steady_state": {k: {"max": v[0], "rms": v[1]} for k, v in ss.items()},
             "files": [str(f) for f in files]}
 
