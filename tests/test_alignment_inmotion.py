@@ -193,7 +193,8 @@ def test_auto_chooses_in_motion_without_rest_and_the_course_is_enough(car, from_
 
 def _bank_run(car, from_truth, offset_deg):
     d, sim = car
-    res = navigate(_cfg(d, yaw_deg=YAW0_DEG + offset_deg))
+    # the guess wrapped into [-180, 180): the config refuses an angle beyond a full turn (370 deg, a typo)
+    res = navigate(_cfg(d, yaw_deg=(YAW0_DEG + offset_deg + 180.0) % 360.0 - 180.0))
     s = res.startup
     assert s.mode == "in-motion" and s.bank is not None
     assert len(s.bank["scores"]) == 12 and s.bank["span_s"] == pytest.approx(40.0)
