@@ -335,3 +335,20 @@ def test_options_another_solver_or_layout_would_ignore_are_refused(tmp_path):
     for args in (["--layout", lay, "--noise", "0.01"], ["--solver", "least-squares"], ["--d", "0.1"]):
         r = invoke(gyrofree, "navigate", a, "--omega0", "1,2,3", "--out", tmp_path / "ok", "--force", *args)
         assert r.exit_code == 0, r.output
+
+
+def test_omega0_beside_init_from_is_said(tmp_path):
+    """--omega0 with --init-from replaced the truth file's initial rate without a word (the docs say the option
+    wins); now a note names both, and the summary says where the initial rate came from."""
+    r = invoke(gyrofree, "simulate", "source003", "--out", tmp_path / "gf", "--rate", 200)
+    assert r.exit_code == 0, r.output
+    args = ("gyrofree", "navigate", tmp_path / "gf" / "array.csv", "--layout", "ten", "--init-from",
+            tmp_path / "gf" / "truth.csv",
+            "--json", "--force")
+    r = inskit(*args, "--out", tmp_path / "a")
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout)["omega0_from"] == "--init-from" and "--omega0" not in r.stderr
+    r = inskit(*args, "--out", tmp_path / "b", "--omega0", "3,1,2")
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout)["omega0_from"] == "--omega0"
+    assert "note: --omega0 3, 1, 2 rad/s is used, not the initial rate of" in r.stderr

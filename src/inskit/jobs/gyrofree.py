@@ -353,8 +353,12 @@ def navigate_job(array_file, layout_spec, out_dir, *, d=None, solver="auto", fra
             initial = ref.interpolate(data.time[:1]).state(0)
             extra = ref.extra
             tr = ref
+        w_file = _truth_rate(extra, tr.time, t_start)
         if w0 is None:
-            w0 = _truth_rate(extra, tr.time, t_start)
+            w0 = w_file
+        elif w_file is not None:  # both: the option wins (docs/gyrofree.md), and says so
+            log(f"note: --omega0 {', '.join(f'{v:g}' for v in w0)} rad/s is used, not the initial rate of "
+                f"{init_from} ({', '.join(f'{v:.4g}' for v in w_file)} rad/s)")
     elif init:
         if frame == "source":
             raise InputError("--init is for the Earth frames; the source frame starts at C = I, r = v = 0 "
@@ -374,6 +378,7 @@ def navigate_job(array_file, layout_spec, out_dir, *, d=None, solver="auto", fra
         initial = NavState.from_euler(data.time[0], [x[0] * DEG, x[1] * DEG, x[2]], x[3:6], x[6:9] * DEG)
     elif frame != "source":
         raise InputError(f"--frame {frame} needs an initial state: --init ... or --init-from TRUTH.csv")
+    omega0_from = ("--omega0" if omega0 is not None else "--init-from" if w0 is not None else "rest")
     opts = {"omega0": w0}
     if solver in ("auto", "closed-form") and rate_filter_noise is None:
         from ..gyrofree.layout import source_index
@@ -400,7 +405,7 @@ def navigate_job(array_file, layout_spec, out_dir, *, d=None, solver="auto", fra
     write_rates(out / "rates.csv", sol, overwrite=True)
     summary = {"array_file": str(array_file), "layout": layout.label, "solver": sol.method, "frame": frame,
                "samples": len(sol), "duration_s": float(sol.time[-1] - sol.time[0]),
-               "omega0_rad_s": None if w0 is None else w0}
+               "omega0_rad_s": None if w0 is None else w0, "omega0_from": omega0_from}
     if frame == "source":
         kw = {}
         if ref_inertial is not None:
