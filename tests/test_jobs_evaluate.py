@@ -177,3 +177,19 @@ def test_a_truth_in_milliseconds_is_said(files, tmp_path):
                                                                truth.q_nb[keep], {}))
     assert not [x for x in evaluate(files / "sol.csv", tmp_path / "truth_1hz.csv")["warnings"]
                 if "sampled every" in x]
+
+
+def test_a_truth_elsewhere_from_the_start_is_said(files, tmp_path):
+    """A truth whose latitude and longitude hold radians under the _deg headers (0.698 for 40 deg) was scored
+    as an error of thousands of km without a word (a helper found it); a solution that starts 10 km or more
+    from its truth describes another place, and the warning says so.  The right truth says nothing."""
+    truth = io.read_solution(files / "truth.csv")
+    df = pd.read_csv(files / "truth.csv")
+    df["lat_deg"] = np.radians(df["lat_deg"])
+    df["lon_deg"] = np.radians(df["lon_deg"])
+    df.to_csv(tmp_path / "truth_rad.csv", index=False)
+    s = evaluate(files / "sol.csv", tmp_path / "truth_rad.csv")
+    w = [x for x in s["warnings"] if "km from the truth" in x]
+    assert len(w) == 1 and "radians under a _deg header" in w[0], s["warnings"]
+    assert not [x for x in evaluate(files / "sol.csv", files / "truth.csv")["warnings"] if "km from" in x]
+    assert len(truth.time) == len(df)

@@ -142,7 +142,8 @@ def evaluate(solution_file, truth_file, *, t_from=None, t_to=None, remove_offset
     s["window"] = {"from_s": t_from, "to_s": t_to}
     s["offset_removed"] = offset.summary() if offset is not None else None
     s["truth_coverage"] = cover
-    s["warnings"] = coverage_warnings(cover, truth.time) + sampling_warnings(sol.time, truth.time, truth_file)
+    s["warnings"] = (coverage_warnings(cover, truth.time) + sampling_warnings(sol.time, truth.time, truth_file)
+                     + start_warnings(full, truth_file))
     if per_epoch_file is not None:
         meta = {"solution": str(solution_file), "truth": str(truth_file), "window": s["window"],
                 "offset_removed": s["offset_removed"]}
@@ -177,6 +178,27 @@ def sampling_warnings(t, truth_time, truth_file="truth") -> list[str]:
                 f"{dt_sol:.4g} s: between its samples the errors are those of a linear interpolation over "
                 f"{dt_truth:.4g} s, not the solution's own (a time column in ms, 1000 times its seconds, looks "
                 "the same)"]
+    return []
+
+
+#: a solution further than this [m] from the truth at the first epoch they share is said
+START_APART_WARN_M = 10_000.0
+
+
+def start_warnings(err, truth_file="truth") -> list[str]:
+    """A solution that is already far from the truth at the first epoch they
+    share (above :data:`START_APART_WARN_M` horizontally), in words: a
+    solution starts from the truth or from the fixes, so two files kilometres
+    apart from the start describe different places (another datum, or
+    radians under a ``_deg`` header: a latitude of 0.7 for 40 deg) rather
+    than a navigation error, and their scores would read as one."""
+    if not len(err.time):
+        return []
+    h0 = float(np.hypot(err.pos_ned[0, 0], err.pos_ned[0, 1]))
+    if h0 > START_APART_WARN_M:
+        return [f"{truth_file}: at the first epoch they share ({float(err.time[0]):.3f} s) the solution is "
+                f"{h0 / 1000.0:.4g} km from the truth: the two files seem to describe different places (a datum, "
+                "or angles in radians under a _deg header?) rather than a navigation error"]
     return []
 
 
