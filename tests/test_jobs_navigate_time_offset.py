@@ -184,3 +184,14 @@ def test_the_bundled_drive_without_its_offset_is_told_it(tmp_path):
     rec = check_time_offset(cfg, s)
     assert rec["found"] and abs(rec["best_s"] - (-0.26)) < 0.01, rec
     assert s["health"]["reasons"][0].startswith("gnss_pos: the fixes fit an IMU time offset of -0.26")
+
+
+def test_an_imu_log_in_utc_beside_fixes_in_gps_time_is_told_the_leap_seconds(drive):
+    """An IMU log stamped in UTC beside fixes in GPS time is 18 s off, far beyond the +-0.5 s searched first;
+    the check then tries GPS - UTC either way and names it."""
+    cfg = config(drive, 18.0)  # the truth: 0
+    s = summary(navigate(cfg))
+    rec = check_time_offset(cfg, s)
+    assert rec["found"] and rec["gps_utc_shift_s"] == -18.0 and abs(rec["best_s"]) < 0.01, rec
+    first = s["health"]["reasons"][0]
+    assert "seem off by GPS time - UTC (18 s" in first and "set [imu] time_offset_s = " in first, first

@@ -1028,6 +1028,9 @@ TIME_OFFSET_CHECK_SPAN_S = 0.5
 TIME_OFFSET_CHECK_GRID_S = 0.1
 #: an offset is named when it moves this far [s] from the given one at least
 TIME_OFFSET_CHECK_MIN_S = 0.01
+#: GPS time minus UTC [s] since 2017-01-01 (IERS Bulletin C): an IMU log stamped in UTC beside fixes in GPS time
+#: is late or early by this much, which the check tries when nothing near the given offset fits
+GPS_UTC_S = 18.0
 #: the check runs the filter over this much of the log [s] at most (an hour's log: 17 runs of 10 minutes, not of
 #: the hour)
 TIME_OFFSET_CHECK_MAX_S = 600.0
@@ -1101,9 +1104,25 @@ def check_time_offset(cfg: NavigateConfig, s: dict, log=None) -> dict | None:
         return s["time_offset_check"]
     best_nis = min(v for _, v in evals)
     at_given = [v for o, v in evals if abs(o - given) < 1e-9]
+    leap = None
+    if not best_nis <= HEALTH_MAX_MEAN_NIS_PER_DOF:  # nothing near: one log in UTC, the other in GPS time?
+        for c in (given + GPS_UTC_S, given - GPS_UTC_S):
+            if log:
+                log(f"health: no offset near {given:+g} s fits; trying {c:+g} +- {TIME_OFFSET_CHECK_SPAN_S:g} s "
+                    f"(GPS time - UTC = {GPS_UTC_S:g} s)")
+            try:
+                b2, e2 = search_time_offset(cfg.model_copy(update={"imu": cfg.imu.model_copy(
+                    update={"time_offset_s": c})}), log=log)
+            except Exception:  # noqa: BLE001 (logs that no longer overlap at that shift: no leap-second offset)
+                continue
+            evals = evals + e2
+            n2 = min(v for _, v in e2)
+            if n2 <= HEALTH_MAX_MEAN_NIS_PER_DOF and n2 < best_nis:
+                best, best_nis, leap = b2, n2, c - given
+                break
     rec = {"measurement": key, "given_s": given, "best_s": round(best, 4), "mean_nis_per_dof_given":
            at_given[0] if at_given else now, "mean_nis_per_dof_best": best_nis,
-           "evaluations": [list(e) for e in evals]}
+           "evaluations": [list(e) for e in sorted(evals)], "gps_utc_shift_s": leap}
     better = abs(best - given) >= TIME_OFFSET_CHECK_MIN_S and best_nis < 0.5 * rec["mean_nis_per_dof_given"]
     fits = better and best_nis <= HEALTH_MAX_MEAN_NIS_PER_DOF
     rec["found"] = bool(fits)
@@ -1112,7 +1131,10 @@ def check_time_offset(cfg: NavigateConfig, s: dict, log=None) -> dict | None:
         h["reasons"].insert(0, (
             f"{key}: the fixes fit an IMU time offset of {best:+.3f} s (mean NIS {best_nis:.2f} per degree of "
             f"freedom against {rec['mean_nis_per_dof_given']:.2f} at the given {given:+g} s): the IMU's time tags "
-            f"seem off; set [imu] time_offset_s = {best:.3f} (or run with --calibrate-time-offset)"))
+            + (f"seem off by GPS time - UTC ({GPS_UTC_S:g} s: one log in UTC, the other in GPS time)"
+               if leap is not None else "seem off")
+            + f"; set [imu] time_offset_s = {best:.3f}" + ("" if leap is not None else
+                                                          " (or run with --calibrate-time-offset)")))
     elif better:  # one cause among others, perhaps: said, not claimed
         h["warnings"].append(
             f"{key}: an IMU time offset of {best:+.3f} s fits the fixes better (mean NIS {best_nis:.2f} per degree "
