@@ -1105,7 +1105,8 @@ def check_time_offset(cfg: NavigateConfig, s: dict, log=None) -> dict | None:
     best_nis = min(v for _, v in evals)
     at_given = [v for o, v in evals if abs(o - given) < 1e-9]
     leap = None
-    if not best_nis <= HEALTH_MAX_MEAN_NIS_PER_DOF:  # nothing near: one log in UTC, the other in GPS time?
+    leap_tried = not best_nis <= HEALTH_MAX_MEAN_NIS_PER_DOF
+    if leap_tried:  # nothing near: one log in UTC, the other in GPS time?
         for c in (given + GPS_UTC_S, given - GPS_UTC_S):
             if log:
                 log(f"health: no offset near {given:+g} s fits; trying {c:+g} +- {TIME_OFFSET_CHECK_SPAN_S:g} s "
@@ -1143,7 +1144,8 @@ def check_time_offset(cfg: NavigateConfig, s: dict, log=None) -> dict | None:
             "(the other reasons and warnings name what they can)")
     else:
         h["warnings"].append(
-            f"{key}: no IMU time offset within {given:+g} +- {TIME_OFFSET_CHECK_SPAN_S:g} s fits the fixes better "
+            f"{key}: no IMU time offset within {given:+g} +- {TIME_OFFSET_CHECK_SPAN_S:g} s"
+            + (f" (nor {GPS_UTC_S:g} s either way, GPS time - UTC)" if leap_tried else "") + " fits the fixes better "
             f"(best {best:+.3f} s, mean NIS {best_nis:.2f} per degree of freedom): a time offset does not "
             "explain them (look first at what the other reasons and warnings name)")
     s["time_offset_check"] = rec
