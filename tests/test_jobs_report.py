@@ -210,3 +210,20 @@ def test_an_innovations_file_cut_mid_row_is_refused(run_dir, tmp_path):
     (d / "innovations.csv").write_text("".join(lines[:10] + ["\n"] + lines[10:]))
     with pytest.raises(InputError, match=r"innovations\.csv: line 42: empty field\(s\) in nu$"):
         build_report(d, tmp_path / "cut.html")
+
+
+def test_an_unreadable_fix_file_is_said_so_not_missing(run_dir, tmp_path):
+    """The fix file the configuration names exists but cannot be read: the note said it 'was not found'; now it
+    gives the reader's own message."""
+    import json
+
+    d = tmp_path / "badfix"
+    shutil.copytree(run_dir, d)
+    bad = tmp_path / "fixes.pos"
+    bad.write_text("% not an RTKLIB solution\nthis is no fix\n")
+    cfg = json.loads((d / "config_used.json").read_text())
+    cfg["gnss"]["file"] = str(bad)
+    (d / "config_used.json").write_text(json.dumps(cfg))
+    text = Path(build_report(d, tmp_path / "r.html")["report"]).read_text()
+    assert "the fix file named in the configuration could not be read (" in text and str(bad) in text
+    assert "was not found from the run folder" not in text

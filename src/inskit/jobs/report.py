@@ -214,7 +214,8 @@ def _find_fix_file(run_dir, cfg, config_dir=None):
 
 
 def _read_fixes(path, cfg):
-    """Fix times and lla from the GNSS file (rtklib .pos or our CSV), or None."""
+    """``(fixes, error)``: fix times and lla from the GNSS file (rtklib .pos
+    or our CSV) and None, or None and the reader's message."""
     from .. import io
     from ..io.rtklib import read_pos
 
@@ -223,11 +224,11 @@ def _read_fixes(path, cfg):
         if g.get("format") == "rtklib-pos":
             gnss, _ = read_pos(path, quality=tuple(g.get("quality") or (1, 2)),
                                   time_offset_s=float(g.get("time_offset_s") or 0.0))
-            return gnss.time, gnss.lla
+            return (gnss.time, gnss.lla), None
         d = io.read_gnss(path)
-        return d.time + float(g.get("time_offset_s") or 0.0), d.lla
-    except InputError:
-        return None
+        return (d.time + float(g.get("time_offset_s") or 0.0), d.lla), None
+    except InputError as exc:
+        return None, str(exc)
 
 
 def _infer_t0(summary, innov, t_sol):
@@ -283,14 +284,14 @@ class _Run:
         self.innov = read_innovations(d / "innovations.csv")
         self.config = _read_json(d / "config_used.json", "configuration (config_used.json)") \
             if (d / "config_used.json").exists() else None
-        self.fixes, self.fix_file = None, None
+        self.fixes, self.fix_file, self.fix_error = None, None, None
         #: the files the report reads: never its output, --force or not (the fix file lies outside the folder)
         self.inputs = [p for p in d.iterdir() if p.is_file() and p.suffix.lower() != ".html"]
         if self.config:
             p = _find_fix_file(d, self.config, self.summary.get("config_dir"))
             if p is not None:
                 self.inputs.append(p)
-                self.fixes = _read_fixes(p, self.config)
+                self.fixes, self.fix_error = _read_fixes(p, self.config)
                 self.fix_file = p if self.fixes is not None else None
         if self.summary.get("first_fix_time_s") is not None:  # recorded by navigate
             self.t0, self.t0_how = float(self.summary["first_fix_time_s"]), "first GNSS fix (summary.json)"
@@ -756,9 +757,12 @@ def build_report(run_dir, out=None, overwrite=False):
                  "keeping each bin's minimum and maximum, so peaks and worst cases are shown"
                  + (" (decimation applied in this report)." if any_dec else " (none needed here)."))
     if run.fixes is None:
-        notes.append("GNSS fixes: the fix file named in the configuration was not found from the run folder; the "
-                     "track marks the solution at the GNSS update times from innovations.csv instead."
-                     if run.innov else "GNSS fixes: not available in this run folder.")
+        where = (f"the fix file named in the configuration could not be read ({run.fix_error})" if run.fix_error
+                 else "the fix file named in the configuration was not found from the run folder" if run.config
+                 else "no configuration (config_used.json) names a fix file")
+        notes.append(f"GNSS fixes: {where}; the track marks the solution at the GNSS update times from "
+                     "innovations.csv instead." if run.innov else
+                     f"GNSS fixes: not available in this run folder ({where}).")
     if run.innov is None:
         notes.append("innovations.csv is not in the run folder: no innovation plot.")
     page = [
