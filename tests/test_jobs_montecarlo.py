@@ -289,3 +289,14 @@ def test_an_outage_before_any_fix_reaches_the_filters_is_refused(outage):
         compare_schemes(sc, outage)
     rows = {r["scheme"]: r for r in compare_schemes(sc, (1.5, 10.0), seed=1, schemes=("uncoupled", "closed"))}
     assert rows["uncoupled"]["outage_end_horizontal_m"] != rows["closed"]["outage_end_horizontal_m"]
+
+
+@pytest.mark.parametrize("runs, match", [(1, r"^--runs must be at least 2, got 1$"),
+                                         (1_000_001, r"^--runs must be at most 1,000,000, got 1,000,001 ")])
+def test_consistency_runs_are_bounded_as_a_studys(runs, match):
+    """`inskit consistency --runs 100000000` started a run of years under a progress bar; the bound is a study's."""
+    from inskit.errors import InputError
+    from inskit.jobs.montecarlo import consistency_study
+
+    with pytest.raises(InputError, match=match):
+        consistency_study(load_scenario(EXAMPLES / "car.toml"), "tactical", runs, 2.0)

@@ -327,6 +327,10 @@ def compare_schemes(scenario, outage, seed=0, schemes=("uncoupled", "open", "clo
     return rows
 
 
+#: the most runs of ``inskit consistency``, as of a study (``runs`` of a study file)
+MAX_CONSISTENCY_RUNS = 1_000_000
+
+
 def consistency_study(scenario, grade, runs, duration=None, seed=0, progress=None, map=map):
     """The ``inskit consistency`` job: Monte Carlo NEES of the closed-loop
     filter on a scenario's trajectory with a preset IMU grade and 1 Hz GNSS
@@ -345,6 +349,9 @@ def consistency_study(scenario, grade, runs, duration=None, seed=0, progress=Non
 
     if runs < 2:
         raise InputError(f"--runs must be at least 2, got {runs}")
+    if runs > MAX_CONSISTENCY_RUNS:  # as a study's runs: 1e9 would run for years, with a progress bar
+        raise InputError(f"--runs must be at most {MAX_CONSISTENCY_RUNS:,}, got {runs:,} (a study file, "
+                         "`inskit study`, spreads many runs over workers and resumes)")
     tr = build_trajectory(scenario, np.random.default_rng(seed))
     g = CONSISTENCY_GNSS
     shortest = min_consistency_duration_s(g)
