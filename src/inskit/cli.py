@@ -70,40 +70,15 @@ def _numbers(option, text, n, meaning):
     return x
 
 
-def _angles(option, rpy):
-    """``rpy`` [deg] (roll, pitch, yaw) of ``option``, each within a full
-    turn either way as the config's angle keys are
-    (:func:`inskit.config_files.check_angles`), else an InputError naming
-    the option."""
-    from .config_files import check_angles
-
-    try:
-        check_angles(tuple(float(v) for v in rpy))
-    except ValueError as exc:
-        raise InputError(f"{option}: {exc}") from None
-    return rpy
-
-
 def _parse_init(text, option="--init"):
     """``--init lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg``:
-    nine finite numbers, the angles within a full turn and the height within
-    the heights of :func:`_height` (a wrong unit refused naming the option)."""
-    x = _numbers(option, text, 9, "lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg")
-    _height(option, x[2], "height_m ")
-    _angles(option, x[6:9])
-    return x
+    nine finite numbers, the height and angles within the config keys' ranges
+    (:func:`inskit.config_files.check_option_init`: a wrong unit refused
+    naming the option)."""
+    from .config_files import check_option_init
 
-
-def _height(option, h, what=""):
-    """A height [m] given with ``option``, within the heights a height log
-    may hold (:func:`inskit.config_files.height_problem`), else an InputError
-    naming the option."""
-    from .config_files import height_problem
-
-    problem = height_problem(float(h))
-    if problem:
-        raise InputError(f"{option}: {what}{problem}")
-    return h
+    return check_option_init(option, _numbers(option, text, 9,
+                                              "lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg"))
 
 
 def _height_ref(text, imu):
@@ -115,7 +90,9 @@ def _height_ref(text, imu):
     if x is not None:
         if not np.isfinite(x):
             raise InputError(f"--height-ref: {text!r} is not a finite height in metres")
-        return _height("--height-ref", x)
+        from .config_files import check_option_height
+
+        return check_option_height("--height-ref", x)
     from .jobs.height import height_profile_at
 
     if not Path(text).is_file():
@@ -627,7 +604,10 @@ def align(imu_file, lat_deg, method, m_gain, t_start, t_end, imu_format, mount_r
         raise InputError(f"--lat must be within [-90, 90] deg, got {lat_deg}")
     mount = (0.0, 0.0, 0.0)
     if mount_rpy:
-        mount = tuple(_angles("--mount-rpy", _numbers("--mount-rpy", mount_rpy, 3, "roll,pitch,yaw [deg]")))
+        from .config_files import check_option_angles
+
+        mount = tuple(check_option_angles("--mount-rpy", _numbers("--mount-rpy", mount_rpy, 3,
+                                                                  "roll,pitch,yaw [deg]")))
     if m_gain is not None and not 0.0 <= m_gain <= 1.0:
         raise InputError(f"--m must be within [0, 1], got {m_gain}")
     if m_gain is not None and method != "blend":

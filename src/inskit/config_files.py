@@ -12,7 +12,7 @@ from pathlib import Path
 
 from pydantic import ValidationError
 
-from .errors import ConfigError
+from .errors import ConfigError, InputError
 
 
 def read_toml(path, kind="config"):
@@ -173,6 +173,37 @@ def check_angles(v):
             raise ValueError(f"{name}{x:g} is outside [-{ANGLE_LIMIT_DEG:g}, {ANGLE_LIMIT_DEG:g}] degrees: no "
                              "angle needs more than a full turn either way (a typo, or another unit?)")
     return v
+
+
+def check_option_angles(option, rpy):
+    """Angles [deg] given with a command-line ``option`` (roll, pitch, yaw)
+    held to :func:`check_angles`' range, else an InputError naming the
+    option; returns ``rpy``."""
+    try:
+        check_angles(tuple(float(v) for v in rpy))
+    except ValueError as exc:
+        raise InputError(f"{option}: {exc}") from None
+    return rpy
+
+
+def check_option_height(option, h, what=""):
+    """A height [m] given with a command-line ``option`` held to
+    :func:`height_problem`'s range, else an InputError naming the option
+    (``what`` names the value inside it); returns ``h``."""
+    problem = height_problem(float(h))
+    if problem:
+        raise InputError(f"{option}: {what}{problem}")
+    return h
+
+
+def check_option_init(option, x):
+    """A ``lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg``
+    state given with ``option`` (``inskit mechanize --init``, ``inskit
+    gyrofree navigate --init``): its height and angles held to the config
+    keys' ranges, the option named; returns ``x``."""
+    check_option_height(option, x[2], "height_m ")
+    check_option_angles(option, x[6:9])
+    return x
 
 
 def check_longitude(v):

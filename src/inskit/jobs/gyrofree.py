@@ -365,16 +365,9 @@ def navigate_job(array_file, layout_spec, out_dir, *, d=None, solver="auto", fra
                              "(or use --init-from with an inertial truth file)")
         from ..types import NavState
 
-        from ..config_files import check_angles, height_problem
+        from ..config_files import check_option_init
 
-        x = _parse_vector(init, 9, "--init")
-        problem = height_problem(float(x[2]))  # the checks and words of inskit mechanize --init
-        if problem:
-            raise InputError(f"--init: height_m {problem}")
-        try:
-            check_angles(tuple(float(v) for v in x[6:9]))
-        except ValueError as exc:
-            raise InputError(f"--init: {exc}") from None
+        x = check_option_init("--init", _parse_vector(init, 9, "--init"))  # as inskit mechanize --init
         initial = NavState.from_euler(data.time[0], [x[0] * DEG, x[1] * DEG, x[2]], x[3:6], x[6:9] * DEG)
     elif frame != "source":
         raise InputError(f"--frame {frame} needs an initial state: --init ... or --init-from TRUTH.csv")
