@@ -97,3 +97,21 @@ def test_quaternion_euler_shortcuts_agree_with_the_dcm_path(rng):
     assert np.allclose(rot.dcm_from_euler(e), rot.dcm_from_quat(locked), atol=1e-7)
     assert np.array_equal(rot.euler_from_quat(q[7]), rot.euler_from_quat(q[7:8])[0])
     assert rot.quat_from_euler(rpy[7]).shape == (4,)
+
+
+def test_quat_blend_takes_the_short_way_and_stays_unit(rng):
+    """Halfway between q and -q' (the same rotation as q', signs flipped) is halfway between the rotations;
+    the ends are the samples; single and batched agree."""
+    from inskit.rotations import dcm_from_quat, quat_blend, quat_from_rotvec, rotvec_from_dcm
+
+    a, b = quat_from_rotvec(np.array([0.1, 0.0, 0.0])), quat_from_rotvec(np.array([0.3, 0.0, 0.0]))
+    mid = quat_blend(a, -b, 0.5)
+    assert np.linalg.norm(mid) == pytest.approx(1.0)
+    assert rotvec_from_dcm(dcm_from_quat(mid)) == pytest.approx([0.2, 0.0, 0.0], abs=1e-12)
+    assert quat_blend(a, -b, 0.0) == pytest.approx(a) and abs(quat_blend(a, b, 1.0) @ b) == pytest.approx(1.0)
+    q0, q1 = rng.normal(size=(5, 4)), rng.normal(size=(5, 4))
+    q0 /= np.linalg.norm(q0, axis=1, keepdims=True)
+    q1 /= np.linalg.norm(q1, axis=1, keepdims=True)
+    w = rng.uniform(size=5)
+    batch = quat_blend(q0, q1, w)
+    assert batch == pytest.approx(np.array([quat_blend(q0[k], q1[k], w[k]) for k in range(5)]))

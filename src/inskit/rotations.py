@@ -162,6 +162,18 @@ def quat_normalize(q):
     return np.where(q[..., :1] < 0.0, -q, q)
 
 
+def quat_blend(q0, q1, w):
+    """Normalised linear blend ``(1 - w) q0 + w q1`` of unit quaternions,
+    the shorter way round (``q1`` negated where ``q0 . q1 < 0``): the
+    interpolation of attitude between two samples (single ``(4,)`` or
+    batched ``(n, 4)`` with ``w`` scalar or ``(n,)``)."""
+    q0, q1 = np.asarray(q0, dtype=float), np.asarray(q1, dtype=float)
+    w = np.asarray(w, dtype=float)[..., None]
+    q1 = np.where((np.sum(q0 * q1, axis=-1) < 0)[..., None], -q1, q1)
+    q = q0 * (1 - w) + q1 * w
+    return q / np.linalg.norm(q, axis=-1, keepdims=True)
+
+
 def dcm_from_quat(q):
     """DCM ``C_ab`` from the unit quaternion ``q_ab``."""
     q = np.asarray(q, dtype=float)

@@ -369,11 +369,8 @@ class NavSolution:
                 f"{self.time[0]:.3f}..{self.time[-1]:.3f} s"
             )
         i, j, w = self._bracket(t)
+        q = rot.quat_blend(self.q_nb[i], self.q_nb[j], w)
         w = w[:, None]
-        q0, q1 = self.q_nb[i], self.q_nb[j]
-        q1 = np.where((np.sum(q0 * q1, axis=1) < 0)[:, None], -q1, q1)
-        q = q0 * (1 - w) + q1 * w
-        q /= np.linalg.norm(q, axis=1, keepdims=True)
         return self.lla[i] * (1 - w) + self.lla[j] * w, self.v_n[i] * (1 - w) + self.v_n[j] * w, q
 
     def _bracket(self, t):

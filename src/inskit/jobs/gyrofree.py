@@ -258,8 +258,10 @@ def _inertial_at(tr, t):
     """An inertial truth's state at time ``t`` inside its span, as a one-row
     :class:`~inskit.gyrofree.motion.InertialSolution`: its row at ``t`` when
     it has one, else linear in position and velocity and a normalised blend of
-    the quaternions of the rows either side (as ``NavSolution.sample``)."""
+    the quaternions of the rows either side (:func:`inskit.rotations.quat_blend`,
+    as ``NavSolution.sample``)."""
     from ..gyrofree.motion import InertialSolution
+    from ..rotations import quat_blend
 
     j = int(np.searchsorted(tr.time, t))
     if j < len(tr.time) and abs(tr.time[j] - t) <= 1e-9 * max(1.0, abs(t)):
@@ -267,12 +269,8 @@ def _inertial_at(tr, t):
     else:
         i, k = j - 1, j
         w = (t - tr.time[i]) / (tr.time[k] - tr.time[i])
-    q0, q1 = tr.q_ib[i], tr.q_ib[k]
-    if np.dot(q0, q1) < 0:
-        q1 = -q1
-    q = q0 * (1 - w) + q1 * w
     return InertialSolution(np.array([t]), (tr.r_i[i] * (1 - w) + tr.r_i[k] * w)[None],
-                            (tr.v_i[i] * (1 - w) + tr.v_i[k] * w)[None], (q / np.linalg.norm(q))[None])
+                            (tr.v_i[i] * (1 - w) + tr.v_i[k] * w)[None], quat_blend(tr.q_ib[i], tr.q_ib[k], w)[None])
 
 
 def navigate_job(array_file, layout_spec, out_dir, *, d=None, solver="auto", frame="source", init=None, init_from=None,
