@@ -677,3 +677,38 @@ def test_the_uncoupled_scheme_writes_its_solution_without_sigmas(drive_inputs, t
     assert "sigma_" not in head and "nan" not in (tmp_path / "solution_forward.csv").read_text()[:20000]
     for name in ("track.png", "errors.png", "innovations.png", "biases.png"):  # the plots drew it too (they
         assert (tmp_path / name) in files and (tmp_path / name).stat().st_size > 5_000  # failed on the sigmas)
+
+
+def test_a_run_whose_writing_fails_leaves_the_previous_run_as_it_was(drive_inputs, tmp_path, monkeypatch):
+    """A --force rerun whose plots fail (or whose disk fills) after its solution files were written used to
+    leave the new solution and innovations beside the old plots, under the old summary.json (which listed
+    files of the other run), the previous run's files already removed.  Now the run's files land as a set:
+    a failure leaves the folder byte for byte as the previous run left it; a run that completes replaces
+    the set, and the files of the earlier run it did not write (its smoothed solution) go."""
+    import json
+
+    import inskit.jobs.plots as P
+    from inskit.jobs.navigate import write_outputs
+
+    cfg, imu, gnss, clean = drive_inputs
+    out = tmp_path / "run"
+    smoothed = navigate(cfg, inputs=(imu, gnss), smooth=True)
+    write_outputs(smoothed, out, summary(smoothed))
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+    assert "solution_smoothed.parquet" in before and "summary.json" in before
+
+    def broken(res, out_dir, parallel=True):
+        (Path(out_dir) / "track.png").write_bytes(b"half a figure")
+        raise RuntimeError("matplotlib failed")
+
+    monkeypatch.setattr(P, "plot_all", broken)
+    cfg_plots = load_config(EXAMPLE, {"output": {"plots": True}})
+    res = navigate(cfg_plots, inputs=(imu, gnss))
+    with pytest.raises(RuntimeError, match="matplotlib failed"):
+        write_outputs(res, out, summary(res), replace_previous=True)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before  # nothing new, nothing lost, no staging
+
+    files = write_outputs(clean, out, summary(clean), replace_previous=True)  # plots off: completes
+    names = sorted(p.name for p in out.iterdir())
+    assert names == sorted(f.name for f in files) and "solution_smoothed.parquet" not in names
+    assert json.loads((out / "summary.json").read_text())["files"] == [str(f) for f in files]

@@ -166,9 +166,7 @@ def navigate(config, *, smooth=False, truth=None, out_dir=None, overwrite=False,
     N.check_time_offset(cfg, s, log=log)  # unhealthy GNSS updates: is it the IMU's time tags?
     files = []
     if target is not None:
-        if overwrite:
-            N.clear_previous_run(target)
-        files = N.write_outputs(res, target, s)
+        files = N.write_outputs(res, target, s, replace_previous=overwrite)
     forward = res.forward.solution
     smoothed = res.smoothed.solution if res.smoothed is not None else None
     return NavigationRun(smoothed if smoothed is not None else forward, forward, smoothed, s, list(files), res)

@@ -394,9 +394,7 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
         text_extra = N.truth_errors_text(s["truth_errors"]) if "truth_errors" in s else ""
         if not as_json:  # the result first: the files and plots (a second or two) follow
             _emit(s, False, N.outage_table_text(s) + text_extra)
-        if force:
-            N.clear_previous_run(target)
-        files = N.write_outputs(res, target, s)
+        files = N.write_outputs(res, target, s, replace_previous=force)
     except BaseException:  # the streamed solution files (temporary names) go with the run
         N.abort_streams(res)
         raise

@@ -71,6 +71,37 @@ def staged_files(folder):
     shutil.rmtree(tmp, ignore_errors=True)
 
 
+@contextmanager
+def staged_folder(folder, last=("summary.json",)):
+    """Write a set of files whole or not at all, as :func:`staged_files`,
+    for writers that take a folder (plots, a run's outputs): yield a hidden
+    staging folder inside ``folder``; when the block completes every file
+    the block left in it moves to ``folder`` (those named in ``last`` after
+    the others: a run's summary lands last, as the mark of a complete set);
+    on any error or interrupt the staging folder goes and ``folder`` is left
+    as it was.  The moves are undone when one of them fails
+    (:func:`_commit`)."""
+    import shutil
+    import tempfile
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=".staging-", dir=folder))
+    work = tmp / "files"
+    work.mkdir()
+    try:
+        yield work
+        parts = sorted((p for p in work.iterdir() if p.is_file()), key=lambda p: (p.name in last, p.name))
+        _commit({folder / p.name: p for p in parts}, tmp / "previous")
+    except OSError as exc:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise InputError(f"{folder}: the results could not be written ({exc.strerror or exc})") from None
+    except BaseException:
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    shutil.rmtree(tmp, ignore_errors=True)
+
+
 def _commit(staged, previous):
     """Move each staged file to its final name; should any move fail (or be
     interrupted), undo the ones made: the files they replaced come back from

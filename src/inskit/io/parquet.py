@@ -316,17 +316,21 @@ class SolutionStream:
             self._fh.close()
             self._fh = None
 
-    def commit(self) -> Path:
-        """Close and rename the file to its final name."""
+    def commit(self, folder=None) -> Path:
+        """Close and rename the file to its final name (with ``folder``: to
+        its name in that folder, e.g. a staging folder of
+        :func:`inskit.files.staged_folder` that moves a run's files into
+        place as a set); returns the path it now has."""
         self.close()
         if not self.tmp.exists():
             raise InputError(f"{self.path}: the streamed run wrote no rows")
+        dest = self.path if folder is None else Path(folder) / self.path.name
         try:
-            os.replace(self.tmp, self.path)
+            os.replace(self.tmp, dest)
         except OSError as exc:
             self.abort()
             raise InputError(f"{self.path}: could not be written ({exc.strerror or exc})") from None
-        return self.path
+        return dest
 
     def abort(self):
         """Close and remove the temporary file."""

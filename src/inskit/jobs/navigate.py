@@ -1559,22 +1559,36 @@ def outage_table_text(s: dict) -> str:
     return "\n".join(lines)
 
 
-def clear_previous_run(out_dir: Path) -> list:
-    """Remove the files an earlier run listed in its ``summary.json`` (only
-    those, and only inside ``out_dir``), so that a ``--force`` run leaves no
-    stale result beside its own.  Returns the files removed."""
+def previous_run_files(out_dir: Path) -> list:
+    """The files an earlier run in ``out_dir`` listed in its ``summary.json``
+    (only those inside ``out_dir``), with the summary and the report written
+    after it; ``[]`` when there is no readable summary."""
     summary_path = Path(out_dir) / "summary.json"
     if not summary_path.exists():
         return []
     try:
         listed = json.loads(summary_path.read_text()).get("files", [])
-    except (OSError, ValueError):
+    except (OSError, ValueError, AttributeError):
         listed = []
-    removed = []
     root = Path(out_dir).resolve()
-    for name in list(listed) + ["summary.json", "report.html"]:  # the report is written after the summary
-        f = (Path(out_dir) / Path(name).name)
-        if f.resolve().parent == root and f.exists():
+    out = []
+    for name in [str(x) for x in listed if isinstance(x, str)] + ["summary.json", "report.html"]:
+        f = Path(out_dir) / Path(name).name
+        if f.resolve().parent == root and f not in out:
+            out.append(f)
+    return out
+
+
+def clear_previous_run(out_dir: Path, previous=None, keep=()) -> list:
+    """Remove the files of an earlier run (``previous``, by default
+    :func:`previous_run_files`) except those named in ``keep`` (the new
+    run's own), so that a ``--force`` run leaves no stale result beside its
+    own.  Returns the files removed."""
+    previous = previous_run_files(out_dir) if previous is None else previous
+    keep = set(keep)
+    removed = []
+    for f in previous:
+        if f.name not in keep and f.exists():
             f.unlink()
             removed.append(f)
     return removed
@@ -1610,44 +1624,59 @@ def write_innovations(innovations: dict, path) -> Path:
     return write_csv(path, data, "%.10g")
 
 
-def write_outputs(res: NavigateResult, out_dir: Path, s: dict) -> list:
-    """Solution files and plots into ``out_dir``, each written whole or not at
-    all, then ``summary.json`` last (with the list of files), as the mark of a
-    complete run.
+def write_outputs(res: NavigateResult, out_dir: Path, s: dict, *, replace_previous=False) -> list:
+    """Solution files, innovations, the configuration used, plots and
+    ``summary.json`` (with the list of files) into ``out_dir``, as a set:
+    written into a staging folder and moved into place together, the
+    summary last, as the mark of a complete run
+    (:func:`inskit.files.staged_folder`).  A failure on the way (a plot, a
+    full disk, an interrupt) leaves ``out_dir`` as it was: no new file
+    beside the old ones, no result without its summary.
+
+    ``replace_previous`` (``--force``): once the new set is in place, the
+    files an earlier run listed in its summary that this one did not write
+    go (:func:`clear_previous_run`), so no stale result stays beside the new.
 
     ``[output] format``: ``solution_forward.parquet`` (and ``_smoothed``) at
     every IMU epoch, ``solution_forward.csv`` (and ``_smoothed``) at
     ``[output] rate_hz``, or both; ``[output] columns`` selects the columns of
     both (:func:`inskit.io.parquet.select_columns`).
     """
-    out_dir.mkdir(parents=True, exist_ok=True)
-    o = res.config.output
-    files = []
-    tracks = [("forward", res.forward)] + ([("smoothed", res.smoothed)] if res.smoothed is not None else [])
-    if res.streams:  # written while the filter ran: renamed into place now
-        finish_streams(res)
-        files += [w.commit() for w in res.streams]
-        tracks = []
-    for label, track in tracks:
-        sol = track.solution
-        if o.format in ("parquet", "both"):
-            files.append(io.write_solution(out_dir / f"solution_{label}.parquet", sol, overwrite=True,
-                                           columns=o.columns,
-                                           metadata={"config": res.config.name, "solution": label,
-                                                     "scheme": res.settings.scheme}))
-        if o.format in ("csv", "both"):
-            files.append(io.write_solution(out_dir / f"solution_{label}.csv", sol, overwrite=True,
-                                           rate_hz=o.rate_hz, columns=o.columns))
-    s["solution_files"] = {"format": o.format, "csv_rate_hz": o.rate_hz if o.format != "parquet" else None,
-                           "columns": list(o.columns)}
-    files.append(write_innovations(res.forward.innovations, out_dir / "innovations.csv"))
-    files.append(write_text(out_dir / "config_used.json",
-                            res.config.model_dump_json(indent=2, exclude={"base_dir"})))
-    if o.plots:
-        from .plots import plot_all
+    from ..files import staged_folder
 
-        files += plot_all(res, out_dir)
-    files.append(out_dir / "summary.json")
-    s["files"] = [str(f) for f in files]
-    write_json(out_dir / "summary.json", s, indent=2)  # strict JSON: a NaN figure is null, never NaN
+    out_dir = Path(out_dir)
+    o = res.config.output
+    previous = previous_run_files(out_dir) if replace_previous else []
+    tracks = [("forward", res.forward)] + ([("smoothed", res.smoothed)] if res.smoothed is not None else [])
+    with staged_folder(out_dir) as stage:
+        names = []
+        if res.streams:  # written while the filter ran: moved into the set now
+            finish_streams(res)
+            names += [w.commit(stage).name for w in res.streams]
+            tracks = []
+        for label, track in tracks:
+            sol = track.solution
+            if o.format in ("parquet", "both"):
+                names.append(io.write_solution(stage / f"solution_{label}.parquet", sol, overwrite=True,
+                                               columns=o.columns,
+                                               metadata={"config": res.config.name, "solution": label,
+                                                         "scheme": res.settings.scheme}).name)
+            if o.format in ("csv", "both"):
+                names.append(io.write_solution(stage / f"solution_{label}.csv", sol, overwrite=True,
+                                               rate_hz=o.rate_hz, columns=o.columns).name)
+        s["solution_files"] = {"format": o.format, "csv_rate_hz": o.rate_hz if o.format != "parquet" else None,
+                               "columns": list(o.columns)}
+        names.append(write_innovations(res.forward.innovations, stage / "innovations.csv").name)
+        names.append(write_text(stage / "config_used.json",
+                                res.config.model_dump_json(indent=2, exclude={"base_dir"})).name)
+        if o.plots:
+            from .plots import plot_all
+
+            names += [p.name for p in plot_all(res, stage)]
+        names.append("summary.json")
+        files = [out_dir / n for n in names]
+        s["files"] = [str(f) for f in files]
+        write_json(stage / "summary.json", s, indent=2)  # strict JSON: a NaN figure is null, never NaN
+    if replace_previous:
+        clear_previous_run(out_dir, previous, keep=names)
     return files
