@@ -17,10 +17,9 @@ $(STAMP): pyproject.toml | $(BIN)/python
 	touch $(STAMP)
 
 $(WARM): $(STAMP) $(NUMBA_SRC)
-	@echo "building the compile cache and matplotlib's font cache (one run of the main job, output discarded)"
-	$(BIN)/inskit navigate examples/drive_0708.toml --out $(VENV)/warm-up --force > /dev/null 2>&1 || \
-	  $(BIN)/inskit navigate examples/drive_0708.toml --out $(VENV)/warm-up --force
-	rm -rf $(VENV)/warm-up
+	@echo "building the compile cache of every command and matplotlib's font cache (each command once on small inputs, outputs discarded)"
+	$(BIN)/python -m inskit.jobs.compile_cache || \
+	  echo "warning: a warm-up command failed (above); the commands it stands for compile at their first run"
 	touch $(WARM)
 
 install: $(WARM)
