@@ -102,3 +102,53 @@ def test_a_rate_file_drops_repeated_rows_and_says_how_many(tmp_path):
     imu = read_imu(p, repeated="drop", info=info)
     assert info["repeated_rows"] == 1 and len(imu) == 4
     assert list(np.round(imu.time, 3)) == [0.0, 0.01, 0.03, 0.04]
+
+
+def _pos_rows(n=40):
+    """The header and first ``n`` rows of the drive's .pos (GPST), split into fields."""
+    lines = [ln for ln in gzip.decompress(DRIVE_POS.read_bytes()).decode().splitlines() if ln.strip()]
+    return lines[0], [ln.split() for ln in lines[1:n + 1]]
+
+
+def _shifted(rows, seconds):
+    """The rows with their calendar stamps moved by ``seconds``."""
+    out = []
+    for f in rows:
+        t = np.datetime64(f"{f[0].replace('/', '-')}T{f[1]}", "ms") + np.timedelta64(int(seconds * 1000), "ms")
+        d, c = str(t).split("T")
+        out.append([d.replace("-", "/"), c] + f[2:])
+    return out
+
+
+def _write_pos(path, header, rows):
+    path.write_text(header + "\n" + "\n".join(" ".join(f) for f in rows) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("tsys, shift_s", [("UTC", -18.0), ("JST", 9 * 3600.0 - 18.0)])
+def test_utc_and_jst_stamps_are_made_gps_time(tmp_path, tsys, shift_s):
+    """RTKLIB writes UTC or JST stamps when out-timesys says so, and names it in the column header; they
+    were read as GPS time, 18 s (JST: 9 h) off, and navigate blamed the IMU's time tags."""
+    header, rows = _pos_rows()
+    ref, week = read_pos(_write_pos(tmp_path / "gpst.pos", header, rows))
+    p = _write_pos(tmp_path / f"{tsys}.pos", header.replace("GPST", tsys.ljust(4)), _shifted(rows, shift_s))
+    g, w = read_pos(p)
+    assert w == week
+    np.testing.assert_allclose(g.time, ref.time, rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(g.lla, ref.lla)
+
+
+def test_utc_stamps_take_the_leap_seconds_of_their_date(tmp_path):
+    """GPS - UTC was 17 s before 2017-01-01, 18 s from then on: a UTC file across that midnight."""
+    header, rows = _pos_rows(2)
+    rows[0][:2], rows[1][:2] = ["2016/12/31", "23:59:58.000"], ["2017/01/01", "00:00:01.000"]
+    g, _ = read_pos(_write_pos(tmp_path / "utc.pos", header.replace("GPST", "UTC "), rows))
+    assert g.time[1] - g.time[0] == pytest.approx(3.0 + 1.0, abs=1e-9)  # 3 s of the clock and the leap second
+
+
+def test_an_unknown_time_system_is_refused_naming_the_header_line(tmp_path):
+    header, rows = _pos_rows(3)
+    p = _write_pos(tmp_path / "tai.pos", header.replace("GPST", "TAI "), rows)
+    with pytest.raises(InputError, match=r"tai\.pos: line 1: the header names the time system 'TAI'; expected one "
+                                         r"of GPST, UTC, JST"):
+        read_pos(p)

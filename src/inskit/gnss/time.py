@@ -105,3 +105,30 @@ def to_datetime64(t_gps_s):
     """GPS-scale ``datetime64[ns]`` of seconds since the GPS epoch (for display)."""
     t = np.asarray(t_gps_s, dtype=float)
     return GPS_EPOCH_NP + np.round(t * 1e9).astype("timedelta64[ns]")
+
+
+#: The UTC dates (00:00:00) from which GPS time - UTC grew by one second, 1 s on 1981-07-01 to 18 s on
+#: 2017-01-01 (IERS Bulletin C; none announced since: Bulletin C 70, July 2025).  RTKLIB's ``leaps`` table.
+LEAP_SECOND_DATES = ("1981-07-01", "1982-07-01", "1983-07-01", "1985-07-01", "1988-01-01", "1990-01-01",
+                     "1991-01-01", "1992-07-01", "1993-07-01", "1994-07-01", "1996-01-01", "1997-07-01",
+                     "1999-01-01", "2006-01-01", "2009-01-01", "2012-07-01", "2015-07-01", "2017-01-01")
+_LEAP_NS = ((np.array(LEAP_SECOND_DATES, dtype="datetime64[ns]") - GPS_EPOCH_NP).astype(np.int64))
+
+
+def gps_minus_utc_s(utc_ns):
+    """GPS time - UTC [whole s] at UTC instants (:data:`LEAP_SECOND_DATES`).
+
+    Parameters
+    ----------
+    utc_ns : int or (n,) array_like of int
+        UTC date and time as integer nanoseconds since 1980-01-06 00:00:00,
+        counted as a calendar counts them (no leap seconds), as a UTC time
+        stamp parsed with ``datetime64`` is.
+
+    Returns
+    -------
+    int or (n,) int ndarray
+        Seconds to add to get GPS time: 0 before 1981-07-01, 18 since
+        2017-01-01.
+    """
+    return np.searchsorted(_LEAP_NS, np.asarray(utc_ns, dtype=np.int64), side="right")

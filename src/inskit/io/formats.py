@@ -17,7 +17,7 @@ GNSS formats
 ``"inskit"``
     Our CSV of fixes; :func:`inskit.io.csv_formats.read_gnss`.
 ``"rtklib-pos"``
-    An RTKLIB ``.pos`` solution (lat/lon/height, GPST); :func:`inskit.io.rtklib.read_pos`.
+    An RTKLIB ``.pos`` solution (lat/lon/height; GPST, UTC or JST); :func:`inskit.io.rtklib.read_pos`.
 
 The names are those of the navigate config's ``[imu] format`` and
 ``[gnss] format``.  Only the first line of a file (the first lines of a
@@ -43,7 +43,7 @@ IMU_FORMATS = {
 #: GNSS format -> one line of description
 GNSS_FORMATS = {
     "inskit": "inskit CSV of fixes: time_s, lat_deg, lon_deg, height_m, sigma_{n,e,d}_m (docs/formats.md)",
-    "rtklib-pos": "RTKLIB .pos solution: '%' header lines, then GPST date and time, latitude(deg), ...",
+    "rtklib-pos": "RTKLIB .pos solution: '%' header lines, then date and time (GPST, UTC or JST), latitude(deg), ...",
 }
 
 #: lines of a file read to recognise it

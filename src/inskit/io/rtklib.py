@@ -24,34 +24,88 @@ GPS_EPOCH = datetime(1980, 1, 6, tzinfo=timezone.utc)
 WEEK_S = 604800.0
 
 
-def gps_week_seconds(stamps):
-    """``(week, seconds of week)`` of ``YYYY/MM/DD HH:MM:SS.sss`` GPST strings
-    (parsed by NumPy's ISO 8601 reader in C, counted in integer nanoseconds
-    from the GPS epoch, so the seconds are exact to the nanosecond)."""
-    stamps = [str(x) for x in stamps]
-    text = np.asarray(stamps, dtype=str)
+class _BadStamp(ValueError):
+    """Row ``index`` of a column of time stamps is not one."""
+
+    def __init__(self, index):
+        super().__init__(index)
+        self.index = index
+
+
+def _calendar_ns(stamps):
+    """Integer nanoseconds since 1980-01-06 00:00:00 of ``YYYY/MM/DD
+    HH:MM:SS.sss`` strings, counted as a calendar counts them (parsed by
+    NumPy's ISO 8601 reader in C); :class:`_BadStamp` names the first that
+    is no such time."""
+    text = np.asarray([str(x) for x in stamps], dtype=str)
     iso = np.char.replace(np.char.replace(text, "/", "-"), " ", "T")
     shaped = (np.char.count(text, "/") == 2) & (np.char.count(iso, "T") == 1)
     try:
         if not shaped.all():
             raise ValueError
-        ns = (iso.astype("datetime64[ns]") - np.datetime64("1980-01-06T00:00:00", "ns")).astype(np.int64)
+        return (iso.astype("datetime64[ns]") - np.datetime64("1980-01-06T00:00:00", "ns")).astype(np.int64)
     except ValueError:
-        for i, stamp in enumerate(stamps):
+        for i in range(len(text)):
             try:
                 if not shaped[i]:
                     raise ValueError
                 np.datetime64(str(iso[i]), "ns")
             except ValueError:
-                raise InputError(f"line with time {stamp!r}: expected YYYY/MM/DD HH:MM:SS.sss") from None
-        raise InputError("the GPST time stamps could not be read as YYYY/MM/DD HH:MM:SS.sss") from None
+                raise _BadStamp(i) from None
+        raise _BadStamp(0) from None
+
+
+def gps_week_seconds(stamps):
+    """``(week, seconds of week)`` of ``YYYY/MM/DD HH:MM:SS.sss`` GPST strings
+    (parsed by NumPy's ISO 8601 reader in C, counted in integer nanoseconds
+    from the GPS epoch, so the seconds are exact to the nanosecond)."""
+    stamps = [str(x) for x in stamps]
+    try:
+        ns = _calendar_ns(stamps)
+    except _BadStamp as exc:
+        raise InputError(f"line with time {stamps[exc.index]!r}: expected YYYY/MM/DD HH:MM:SS.sss") from None
+    return _week_sow(ns)
+
+
+def _week_sow(ns):
     week_ns = int(WEEK_S) * 1_000_000_000
     week = ns // week_ns
     return week.astype(int), (ns - week * week_ns) / 1e9
 
 
+#: the time systems of an RTKLIB .pos file, as its column header names them (``%  GPST  latitude(deg) ...``,
+#: RTKLIB's out-timesys): hours ahead of UTC, or None for GPS time
+POS_TIME_SYSTEMS = {"GPST": None, "UTC": 0, "JST": 9}
+
+
+def _pos_times_ns(path, tsys, d0, d1, linenos):
+    """GPS time of each row of a .pos file as integer nanoseconds since the
+    GPS epoch: the row's stamp (``YYYY/MM/DD HH:MM:SS.sss``) read on the
+    header's time system ``tsys`` (:data:`POS_TIME_SYSTEMS`): UTC and JST
+    stamps are made GPS time with the leap seconds of their date
+    (:func:`inskit.gnss.time.gps_minus_utc_s`)."""
+    from ..gnss.time import gps_minus_utc_s
+
+    try:
+        ns = _calendar_ns(np.char.add(np.char.add(d0, " "), d1))
+    except _BadStamp as exc:
+        i = exc.index
+        raise InputError(f"{path}: line {linenos[i]}: time {d0[i] + ' ' + d1[i]!r}: expected YYYY/MM/DD "
+                         "HH:MM:SS.sss") from None
+    hours = POS_TIME_SYSTEMS[tsys]
+    if hours is not None:  # a UTC (JST: UTC + 9 h) stamp: GPS time is UTC plus the leap seconds of the date
+        ns = ns - hours * 3_600_000_000_000
+        ns = ns + gps_minus_utc_s(ns) * 1_000_000_000
+    return ns
+
+
 def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
-    """Read an RTKLIB ``.pos`` solution (lat/lon/height format, GPST).
+    """Read an RTKLIB ``.pos`` solution (lat/lon/height format).
+
+    The time stamps are in the time system the column header names
+    (``%  GPST  latitude(deg) ...``, RTKLIB's out-timesys): GPST as they
+    are, UTC and JST (UTC + 9 h) made GPS time with the leap seconds of
+    their date.
 
     Parameters
     ----------
@@ -67,8 +121,9 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
     Returns
     -------
     gnss : GnssData
-        With velocity when the file has ``vn ve vu`` columns (converted to
-        NED: ``vd = -vu``) and their sigmas.
+        Times in GPS seconds of week ``week0``; with velocity when the file
+        has ``vn ve vu`` columns (converted to NED: ``vd = -vu``) and their
+        sigmas.
     week0 : int
     """
     path = require_file(path)
@@ -79,7 +134,7 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
             for lineno, line in enumerate(fh, start=1):
                 if line.startswith("%"):
                     if "latitude" in line:
-                        header = line[1:].split()
+                        header = (lineno, line[1:].split())
                     continue
                 if line.strip():
                     rows.append((lineno, line.split()))
@@ -88,9 +143,14 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
                          "damaged?") from None
     if header is None:
         raise InputError(f"{path}: no '%  GPST latitude(deg) ...' header line: not an RTKLIB lat/lon .pos file")
+    hline, header = header
+    tsys = header[0]
+    if tsys not in POS_TIME_SYSTEMS:
+        raise InputError(f"{path}: line {hline}: the header names the time system {tsys!r}; expected one of "
+                         f"{', '.join(POS_TIME_SYSTEMS)} (RTKLIB's out-timesys)")
     if not rows:
         raise InputError(f"{path}: no solution rows")
-    # the header names 'GPST' once for the two date and time fields
+    # the header names the time system once for the two date and time fields
     names = ["date", "time"] + header[1:]
     need = ["latitude(deg)", "longitude(deg)", "height(m)", "Q", "sdn(m)", "sde(m)", "sdu(m)"]
     missing = [c for c in need if c not in names]
@@ -103,10 +163,7 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
     # a few thousand lines of fields split above: columns by NumPy (no pandas, half a second to import)
     table = np.array([f[:width] for _, f in rows], dtype=str)
     linenos = np.array([ln for ln, _ in rows])
-    try:
-        week, sow = gps_week_seconds(np.char.add(np.char.add(table[:, 0], " "), table[:, 1]))
-    except InputError as exc:
-        raise InputError(f"{path}: {exc}") from None
+    week, sow = _week_sow(_pos_times_ns(path, tsys, table[:, 0], table[:, 1], linenos))
     if week0 is None:
         week0 = int(week[0])
     t = (week - week0) * WEEK_S + sow + time_offset_s
