@@ -152,3 +152,40 @@ def test_an_unknown_time_system_is_refused_naming_the_header_line(tmp_path):
     with pytest.raises(InputError, match=r"tai\.pos: line 1: the header names the time system 'TAI'; expected one "
                                          r"of GPST, UTC, JST"):
         read_pos(p)
+
+
+def _week_tow(rows):
+    """The rows with their calendar stamps written as GPS week and seconds of week (out-timeform tow)."""
+    out = []
+    for f in rows:
+        ms = int((np.datetime64(f"{f[0].replace('/', '-')}T{f[1]}", "ms")
+                  - np.datetime64("1980-01-06T00:00:00", "ms")).astype(np.int64))
+        week, sow_ms = divmod(ms, 604800 * 1000)
+        out.append([f"{week:4d}", f"{sow_ms / 1000:.3f}"] + f[2:])
+    return out
+
+
+@pytest.mark.parametrize("tsys, shift_s", [("GPST", 0.0), ("UTC", -18.0)])
+def test_week_and_seconds_of_week_stamps_are_read(tmp_path, tsys, shift_s):
+    """RTKLIB's out-timeform = tow writes '2374   243258.499' for the date and time; such a file was refused
+    ('line with time '2374 243258.499': expected YYYY/MM/DD HH:MM:SS.sss')."""
+    header, rows = _pos_rows()
+    ref, week = read_pos(_write_pos(tmp_path / "calendar.pos", header, rows))
+    p = _write_pos(tmp_path / "tow.pos", header.replace("GPST", tsys.ljust(4)), _week_tow(_shifted(rows, shift_s)))
+    g, w = read_pos(p)
+    assert w == week
+    np.testing.assert_allclose(g.time, ref.time, rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(g.lla, ref.lla)
+
+
+def test_a_stamp_of_the_other_form_is_refused_naming_its_line(tmp_path):
+    header, rows = _pos_rows(5)
+    tow = _week_tow(rows)
+    tow[3] = rows[3]  # a calendar stamp among weeks and seconds
+    with pytest.raises(InputError, match=r"line 5: time '2025/07/08 19:34:19.249': expected a GPS week and seconds "
+                                         r"of week \(as on the first row"):
+        read_pos(_write_pos(tmp_path / "mixed.pos", header, tow))
+    tow = _week_tow(rows)
+    tow[2][1] = "604800.000"
+    with pytest.raises(InputError, match=r"line 4: .* seconds in \[0, 604800\)"):
+        read_pos(_write_pos(tmp_path / "sow.pos", header, tow))

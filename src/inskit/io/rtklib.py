@@ -80,18 +80,32 @@ POS_TIME_SYSTEMS = {"GPST": None, "UTC": 0, "JST": 9}
 
 def _pos_times_ns(path, tsys, d0, d1, linenos):
     """GPS time of each row of a .pos file as integer nanoseconds since the
-    GPS epoch: the row's stamp (``YYYY/MM/DD HH:MM:SS.sss``) read on the
-    header's time system ``tsys`` (:data:`POS_TIME_SYSTEMS`): UTC and JST
-    stamps are made GPS time with the leap seconds of their date
+    GPS epoch: the row's stamp, a calendar date and time (``YYYY/MM/DD
+    HH:MM:SS.sss``) or a week and seconds of week (``2374 243258.499``,
+    RTKLIB's out-timeform tow), both as its first row writes it, read on
+    the header's time system ``tsys`` (:data:`POS_TIME_SYSTEMS`): UTC and
+    JST stamps are made GPS time with the leap seconds of their date
     (:func:`inskit.gnss.time.gps_minus_utc_s`)."""
     from ..gnss.time import gps_minus_utc_s
 
-    try:
-        ns = _calendar_ns(np.char.add(np.char.add(d0, " "), d1))
-    except _BadStamp as exc:
-        i = exc.index
-        raise InputError(f"{path}: line {linenos[i]}: time {d0[i] + ' ' + d1[i]!r}: expected YYYY/MM/DD "
-                         "HH:MM:SS.sss") from None
+    expected = ("a GPS week and seconds of week (as on the first row, e.g. '2374 243258.499')"
+                if "/" not in d0[0] and d0[0].isdigit() else "YYYY/MM/DD HH:MM:SS.sss (as on the first row)")
+    if expected.startswith("YYYY"):
+        try:
+            ns = _calendar_ns(np.char.add(np.char.add(d0, " "), d1))
+        except _BadStamp as exc:
+            i = exc.index
+            raise InputError(f"{path}: line {linenos[i]}: time {d0[i] + ' ' + d1[i]!r}: expected {expected}") from None
+    else:
+        sow = _floats(d1)
+        bad = ~np.char.isdigit(d0) | ~((sow >= 0) & (sow < WEEK_S))
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise InputError(f"{path}: line {linenos[i]}: time {d0[i] + ' ' + d1[i]!r}: expected {expected}, "
+                             "seconds in [0, 604800)")
+        whole = np.floor(sow)
+        ns = (d0.astype(np.int64) * int(WEEK_S) + whole.astype(np.int64)) * 1_000_000_000 \
+            + np.round((sow - whole) * 1e9).astype(np.int64)
     hours = POS_TIME_SYSTEMS[tsys]
     if hours is not None:  # a UTC (JST: UTC + 9 h) stamp: GPS time is UTC plus the leap seconds of the date
         ns = ns - hours * 3_600_000_000_000
@@ -102,10 +116,11 @@ def _pos_times_ns(path, tsys, d0, d1, linenos):
 def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
     """Read an RTKLIB ``.pos`` solution (lat/lon/height format).
 
-    The time stamps are in the time system the column header names
-    (``%  GPST  latitude(deg) ...``, RTKLIB's out-timesys): GPST as they
-    are, UTC and JST (UTC + 9 h) made GPS time with the leap seconds of
-    their date.
+    The time stamps are calendar dates and times or GPS weeks and seconds
+    of week (RTKLIB's out-timeform), in the time system the column header
+    names (``%  GPST  latitude(deg) ...``, RTKLIB's out-timesys): GPST as
+    they are, UTC and JST (UTC + 9 h) made GPS time with the leap seconds
+    of their date.
 
     Parameters
     ----------
