@@ -189,3 +189,82 @@ def test_a_stamp_of_the_other_form_is_refused_naming_its_line(tmp_path):
     tow[2][1] = "604800.000"
     with pytest.raises(InputError, match=r"line 4: .* seconds in \[0, 604800\)"):
         read_pos(_write_pos(tmp_path / "sow.pos", header, tow))
+
+
+def _dms(x):
+    sign, x = ("-" if x < 0 else ""), abs(x)
+    d = int(x)
+    m = int((x - d) * 60)
+    return [f"{sign}{d}", f"{m:02d}", f"{(x - d - m / 60) * 3600:08.5f}"]
+
+
+def test_latitude_and_longitude_in_degrees_minutes_seconds_are_read(tmp_path):
+    """RTKLIB's out-degform = dms writes 'latitude(d'")' over '40 05 47.85650' (three fields): such a file was
+    refused ('missing column(s) latitude(deg), longitude(deg) in the header')."""
+    header, rows = _pos_rows()
+    ref, _ = read_pos(_write_pos(tmp_path / "deg.pos", header, rows))
+    rows[0][3] = "-0.5000000"  # west of Greenwich by less than a degree: written '-0 30 00.00000'
+    dms = [f[:2] + _dms(float(f[2])) + _dms(float(f[3])) + f[4:] for f in rows]
+    assert dms[0][5] == "-0"
+    p = _write_pos(tmp_path / "dms.pos", header.replace("latitude(deg) longitude(deg)",
+                                                        "latitude(d'\") longitude(d'\")"), dms)
+    g, _ = read_pos(p)
+    np.testing.assert_allclose(np.degrees(g.lla[1:, :2]), np.degrees(ref.lla[1:, :2]), rtol=0, atol=1e-9)
+    assert np.degrees(g.lla[0, 1]) == pytest.approx(-0.5, abs=1e-12)
+    np.testing.assert_array_equal(g.sigma_ned, ref.sigma_ned)
+    dms[4][3] = "61"
+    with pytest.raises(InputError, match=r"line 6: column 'latitude\(d'\"\)' has '40 61 .*'; expected whole degrees, "
+                                         r"then minutes and seconds in \[0, 60\)"):
+        read_pos(_write_pos(tmp_path / "bad.pos", header.replace("latitude(deg) longitude(deg)",
+                                                                  "latitude(d'\") longitude(d'\")"), dms))
+    with pytest.raises(InputError, match=r"missing column\(s\) longitude\(d'\"\) in the header"):
+        read_pos(_write_pos(tmp_path / "half.pos", header.replace("latitude(deg) longitude(deg)",
+                                                                  "latitude(d'\") longitude(D'\")"), dms))
+
+
+def test_ecef_positions_and_velocities_are_read_into_lat_lon_height_and_ned(tmp_path):
+    """RTKLIB's out-solformat = xyz ('x-ecef(m) y-ecef(m) z-ecef(m) ... sdx(m) ... sdzx(m)', and demo5's 'vx(m/s)
+    ... sdvzx'): refused before ('no '%  GPST latitude(deg) ...' header line')."""
+    from inskit import earth
+
+    header, rows = _pos_rows()
+    ref, _ = read_pos(_write_pos(tmp_path / "llh.pos", header, rows))
+    rng = np.random.default_rng(1)
+    sig_n = np.abs(rng.normal(0.5, 0.2, (len(rows), 3))) + 0.01
+    r_e = earth.lla_to_ecef(ref.lla)
+    c = earth.dcm_en(ref.lla[:, 0], ref.lla[:, 1])
+    q_e = np.einsum("kij,kj,klj->kil", c, sig_n ** 2, c)
+    v_e = np.einsum("kij,kj->ki", c, ref.v_n)
+
+    def sq(x):
+        return np.sign(x) * np.sqrt(np.abs(x))
+
+    out = []
+    for k, f in enumerate(rows):
+        q = q_e[k]
+        cols = [*r_e[k], *np.sqrt(np.diag(q)), sq(q[0, 1]), sq(q[1, 2]), sq(q[2, 0])]
+        vel = [*v_e[k], *np.sqrt(np.diag(q)), sq(q[0, 1]), sq(q[1, 2]), sq(q[2, 0])]  # the same sigmas: a check
+        out.append(f[:2] + [f"{x:.4f}" for x in cols[:3]] + f[5:7] + [f"{x:.9f}" for x in cols[3:]]
+                   + ["0.0", "0.0"] + [f"{x:.9f}" for x in vel])
+    head = ("%  GPST  x-ecef(m) y-ecef(m) z-ecef(m) Q ns sdx(m) sdy(m) sdz(m) sdxy(m) sdyz(m) sdzx(m) age(s) ratio "
+            "vx(m/s) vy(m/s) vz(m/s) sdvx sdvy sdvz sdvxy sdvyz sdvzx")
+    g, _ = read_pos(_write_pos(tmp_path / "xyz.pos", head, out))
+    np.testing.assert_allclose(g.time, ref.time, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(np.degrees(g.lla[:, :2]), np.degrees(ref.lla[:, :2]), rtol=0, atol=1e-9)
+    np.testing.assert_allclose(g.lla[:, 2], ref.lla[:, 2], rtol=0, atol=1e-3)
+    np.testing.assert_allclose(g.sigma_ned, sig_n, rtol=1e-6)
+    np.testing.assert_allclose(g.v_n, ref.v_n, rtol=0, atol=1e-8)
+    np.testing.assert_allclose(g.sigma_v_ned, sig_n, rtol=1e-6)
+    out[2][2:5] = [f"{x / 1000:.4f}" for x in r_e[2]]  # kilometres
+    with pytest.raises(InputError, match=r"line 4: x-ecef\(m\), y-ecef\(m\), z-ecef\(m\) = .* km from the "
+                                         r"ellipsoid; expected an ECEF position in metres"):
+        read_pos(_write_pos(tmp_path / "km.pos", head, out))
+
+
+def test_an_enu_baseline_is_refused_saying_what_to_write(tmp_path):
+    header, rows = _pos_rows(3)
+    head = "%  GPST  e-baseline(m) n-baseline(m) u-baseline(m) Q ns sde(m) sdn(m) sdu(m) sden(m) sdnu(m) sdue(m)"
+    p = _write_pos(tmp_path / "enu.pos", head, [f[:2] + ["1.0", "2.0", "3.0"] + f[5:15] for f in rows])
+    with pytest.raises(InputError, match=r"enu\.pos: line 1: the positions are an east/north/up baseline .* write the "
+                                         r"solution as lat/lon/height \(llh\) or ECEF \(xyz\)"):
+        read_pos(p)

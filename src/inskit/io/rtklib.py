@@ -12,11 +12,12 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import earth
 from .. import rotations as rot
 from ..errors import InputError
 from ..files import require_file
 from ..types import GnssData, ImuData
-from ..units import DEG, G0
+from ..units import DEG, G0, MAX_HEIGHT_M
 from .csv_formats import (_header_names, at_row, check_imu_time, check_imu_units, check_time_column,
                           lean_columns, numeric_columns, open_text, read_table, repeated_rows, require_columns)
 
@@ -114,7 +115,9 @@ def _pos_times_ns(path, tsys, d0, d1, linenos):
 
 
 def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
-    """Read an RTKLIB ``.pos`` solution (lat/lon/height format).
+    """Read an RTKLIB ``.pos`` solution: latitude and longitude in degrees
+    or in degrees, minutes and seconds, or ECEF x, y, z (rotated into
+    latitude, longitude, height and NED sigmas and velocity).
 
     The time stamps are calendar dates and times or GPS weeks and seconds
     of week (RTKLIB's out-timeform), in the time system the column header
@@ -148,7 +151,7 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
         with open_text(path) as fh:
             for lineno, line in enumerate(fh, start=1):
                 if line.startswith("%"):
-                    if "latitude" in line:
+                    if any(c in line for c in _POS_HEADER_MARKS):
                         header = (lineno, line[1:].split())
                     continue
                 if line.strip():
@@ -157,7 +160,8 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
         raise InputError(f"{path}: not a readable .pos file ({str(exc).splitlines()[0]}): truncated or "
                          "damaged?") from None
     if header is None:
-        raise InputError(f"{path}: no '%  GPST latitude(deg) ...' header line: not an RTKLIB lat/lon .pos file")
+        raise InputError(f"{path}: no '%  GPST latitude(deg) ...' (or x-ecef(m)) column header line: not an RTKLIB "
+                         ".pos file")
     hline, header = header
     tsys = header[0]
     if tsys not in POS_TIME_SYSTEMS:
@@ -167,8 +171,19 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
         raise InputError(f"{path}: no solution rows")
     # the header names the time system once for the two date and time fields
     names = ["date", "time"] + header[1:]
-    need = ["latitude(deg)", "longitude(deg)", "height(m)", "Q", "sdn(m)", "sde(m)", "sdu(m)"]
-    missing = [c for c in need if c not in names]
+    if "e-baseline(m)" in names:
+        raise InputError(f"{path}: line {hline}: the positions are an east/north/up baseline from the base station "
+                         "(RTKLIB's out-solformat = enu), which needs the base's position; write the solution as "
+                         "lat/lon/height (llh) or ECEF (xyz)")
+    form = "xyz" if "x-ecef(m)" in names else "dms" if _DMS["latitude"] in names else "llh"
+    for c in ("latitude", "longitude"):  # dms: degrees, minutes and seconds are three fields under one name
+        if _DMS[c] in names:
+            j = names.index(_DMS[c])
+            names[j:j + 1] = [f"{c}(d)", f"{c}(m)", f"{c}(s)"]
+    need = _POS_NEED[form]
+    # a d m s field is missing as the header would name it
+    missing = list(dict.fromkeys(_DMS.get(c.split("(")[0], c) if c[-3:] in ("(d)", "(m)", "(s)") else c
+                                 for c in need if c not in names))
     if missing:
         raise InputError(f"{path}: missing column(s) {', '.join(missing)} in the header")
     width = len(names)
@@ -185,18 +200,24 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
     num = {}
     for j, c in enumerate(names[2:], start=2):
         col = _floats(table[:, j])
-        if (~np.isfinite(col)).any() and c in need + ["vn(m/s)", "ve(m/s)", "vu(m/s)", "sdvn", "sdve", "sdvu"]:
+        if (~np.isfinite(col)).any() and (c in need or c in _POS_VELOCITY["llh"] + _POS_VELOCITY["xyz"]):
             i = int(np.argmax(~np.isfinite(col)))
             raise InputError(f"{path}: line {linenos[i]}: column '{c}' has {str(table[i, j])!r}; expected a "
                              "finite number")
         num[c] = col
+    if form == "dms":
+        for c in ("latitude", "longitude"):
+            num[f"{c}(deg)"] = _dms_degrees(path, c, table, names, num, linenos)
+    if form == "xyz":
+        _pos_from_ecef(path, num, linenos)
     for c, limit in (("latitude(deg)", 90.0), ("longitude(deg)", 360.0)):
         bad = np.abs(num[c]) > limit
         if bad.any():
             i = int(np.argmax(bad))
-            raise InputError(f"{path}: line {linenos[i]}: column '{c}' has {str(table[i, names.index(c)])!r}; "
-                             "expected a value in "
-                             f"[-{limit:g}, {limit:g}] degrees")
+            shown = (str(table[i, names.index(c)]) if c in names
+                     else " ".join(table[i, names.index(f"{c[:-5]}({u})")] for u in "dms"))
+            raise InputError(f"{path}: line {linenos[i]}: column '{c if c in names else _DMS[c[:-5]]}' has "
+                             f"{shown!r}; expected a value in [-{limit:g}, {limit:g}] degrees")
     keep = np.isin(num["Q"].astype(int), list(quality))
     if not keep.any():
         raise InputError(f"{path}: no rows with quality Q in {list(quality)}")
@@ -211,12 +232,82 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
         i = int(np.argmax(bad))
         raise InputError(f"{path}: line {linenos[keep][i]}: a position sigma is {float(sig[i].min())!r}; sigmas must be > 0")
     v = sv = None
-    if all(c in num for c in ("vn(m/s)", "ve(m/s)", "vu(m/s)", "sdvn", "sdve", "sdvu")):
+    if all(c in num for c in _POS_VELOCITY["llh"]):  # an xyz file's made NED by _pos_from_ecef
         v = np.column_stack([num["vn(m/s)"], num["ve(m/s)"], -num["vu(m/s)"]])[keep]
         sv = np.column_stack([num["sdvn"], num["sdve"], num["sdvu"]])[keep]
         if (sv <= 0).any():
             v = sv = None  # velocity sigmas absent: treat the velocity as unusable
     return GnssData(t[keep], lla, sig, v, sv), week0
+
+
+#: a column header of a .pos file names one of these (RTKLIB's out-solformat llh, with degrees or d m s, or xyz)
+_POS_HEADER_MARKS = ("latitude", "x-ecef", "e-baseline")
+#: the header's name of a latitude or longitude written as degrees, minutes and seconds (RTKLIB's out-degform dms)
+_DMS = {"latitude": "latitude(d'\")", "longitude": "longitude(d'\")"}
+#: the columns each position form needs
+_POS_NEED = {
+    "llh": ["latitude(deg)", "longitude(deg)", "height(m)", "Q", "sdn(m)", "sde(m)", "sdu(m)"],
+    "dms": ["latitude(d)", "latitude(m)", "latitude(s)", "longitude(d)", "longitude(m)", "longitude(s)", "height(m)",
+            "Q", "sdn(m)", "sde(m)", "sdu(m)"],
+    "xyz": ["x-ecef(m)", "y-ecef(m)", "z-ecef(m)", "Q", "sdx(m)", "sdy(m)", "sdz(m)"],
+}
+#: the velocity columns of each form (an xyz file's are rotated into the llh ones: :func:`_pos_from_ecef`)
+_POS_VELOCITY = {"llh": ["vn(m/s)", "ve(m/s)", "vu(m/s)", "sdvn", "sdve", "sdvu"],
+                 "xyz": ["vx(m/s)", "vy(m/s)", "vz(m/s)", "sdvx", "sdvy", "sdvz"]}
+
+
+def _dms_degrees(path, c, table, names, num, linenos):
+    """Degrees of a latitude or longitude (``c``) written as degrees,
+    minutes and seconds (``-105 08 50.81388``); the sign is the degree
+    field's, written as ``-0`` too.  Minutes and seconds outside [0, 60)
+    are refused naming the line."""
+    d, m, sec = (num[f"{c}({u})"] for u in "dms")
+    bad = (m < 0) | (m >= 60) | (sec < 0) | (sec >= 60) | (d != np.round(d))
+    if bad.any():
+        i = int(np.argmax(bad))
+        shown = " ".join(table[i, names.index(f"{c}({u})")] for u in "dms")
+        raise InputError(f"{path}: line {linenos[i]}: column '{_DMS[c]}' has {shown!r}; expected whole degrees, then "
+                         "minutes and seconds in [0, 60)")
+    sign = np.where(np.char.startswith(table[:, names.index(f"{c}(d)")], "-"), -1.0, 1.0)
+    return sign * (np.abs(d) + m / 60.0 + sec / 3600.0)
+
+
+def _ecef_cov_to_ned(num, names, lat, lon):
+    """Standard deviations [m or m/s] north, east, down of ECEF ones: the
+    ``(x, y, z, xy, yz, zx)`` columns ``names`` of ``num`` (the cross terms,
+    RTKLIB's signed square roots of the covariances, zero when absent)
+    make each row's covariance, which is rotated into NED."""
+    sx, sy, sz = (num[n] for n in names[:3])
+    cxy, cyz, czx = (np.sign(num[n]) * num[n] ** 2 if n in num else np.zeros_like(sx) for n in names[3:])
+    q = np.stack([np.stack([sx ** 2, cxy, czx], -1), np.stack([cxy, sy ** 2, cyz], -1),
+                  np.stack([czx, cyz, sz ** 2], -1)], -2)
+    c = earth.dcm_en(lat, lon)
+    q_n = np.einsum("kji,kjl,klm->kim", c, q, c)
+    return np.sqrt(np.clip(np.einsum("kii->ki", q_n), 0.0, None))
+
+
+def _pos_from_ecef(path, num, linenos):
+    """The columns of an llh file from those of an xyz one (RTKLIB's
+    out-solformat xyz), in ``num``: latitude, longitude [deg] and height of
+    the ECEF position, its sigmas and the velocity rotated into NED (the
+    up sigma is the down one).  A position more than 100 km from the
+    ellipsoid is refused (not metres, or not ECEF)."""
+    r = np.column_stack([num["x-ecef(m)"], num["y-ecef(m)"], num["z-ecef(m)"]])
+    lla = earth.ecef_to_lla(r)
+    far = np.abs(lla[:, 2]) > MAX_HEIGHT_M
+    if far.any():
+        i = int(np.argmax(far))
+        raise InputError(f"{path}: line {linenos[i]}: x-ecef(m), y-ecef(m), z-ecef(m) = {r[i].tolist()} is "
+                         f"{lla[i, 2] / 1000:.0f} km from the ellipsoid; expected an ECEF position in metres")
+    num["latitude(deg)"], num["longitude(deg)"], num["height(m)"] = lla[:, 0] / DEG, lla[:, 1] / DEG, lla[:, 2]
+    sig = _ecef_cov_to_ned(num, ["sdx(m)", "sdy(m)", "sdz(m)", "sdxy(m)", "sdyz(m)", "sdzx(m)"], lla[:, 0], lla[:, 1])
+    num["sdn(m)"], num["sde(m)"], num["sdu(m)"] = sig.T
+    if all(c in num for c in _POS_VELOCITY["xyz"]):
+        c = earth.dcm_en(lla[:, 0], lla[:, 1])
+        v_n = np.einsum("kji,kj->ki", c, np.column_stack([num["vx(m/s)"], num["vy(m/s)"], num["vz(m/s)"]]))
+        num["vn(m/s)"], num["ve(m/s)"], num["vu(m/s)"] = v_n[:, 0], v_n[:, 1], -v_n[:, 2]
+        sv = _ecef_cov_to_ned(num, ["sdvx", "sdvy", "sdvz", "sdvxy", "sdvyz", "sdvzx"], lla[:, 0], lla[:, 1])
+        num["sdvn"], num["sdve"], num["sdvu"] = sv.T
 
 
 def _floats(text):
