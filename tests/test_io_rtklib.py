@@ -268,3 +268,19 @@ def test_an_enu_baseline_is_refused_saying_what_to_write(tmp_path):
     with pytest.raises(InputError, match=r"enu\.pos: line 1: the positions are an east/north/up baseline .* write the "
                                          r"solution as lat/lon/height \(llh\) or ECEF \(xyz\)"):
         read_pos(p)
+
+
+@pytest.mark.parametrize("sep", [",", ";", "\t"])
+def test_fields_separated_by_another_character_are_read(tmp_path, sep):
+    """RTKLIB's out-fieldsep puts a character between the fields (the date and time stay one field with a blank):
+    such a file was refused ('missing column(s) latitude(deg), ... in the header')."""
+    header, rows = _pos_rows()
+    ref, _ = read_pos(_write_pos(tmp_path / "blank.pos", header, rows))
+    head = "%  " + header[1:].split()[0] + "   " + sep + sep.join(header[1:].split()[1:])
+    p = tmp_path / "sep.pos"
+    lines = [f"{f[0]} {f[1]}" + sep + sep.join(f" {x}" for x in f[2:]) for f in rows]
+    p.write_text(head + "\n" + "\n".join(lines) + "\n")
+    g, _ = read_pos(p)
+    np.testing.assert_array_equal(g.time, ref.time)
+    np.testing.assert_array_equal(g.lla, ref.lla)
+    np.testing.assert_array_equal(g.sigma_ned, ref.sigma_ned)

@@ -145,17 +145,19 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
     week0 : int
     """
     path = require_file(path)
-    header = None
+    header = sep = None
     rows = []
     try:
         with open_text(path) as fh:
             for lineno, line in enumerate(fh, start=1):
                 if line.startswith("%"):
                     if any(c in line for c in _POS_HEADER_MARKS):
-                        header = (lineno, line[1:].split())
+                        # RTKLIB's out-fieldsep: a separator between the fields, spaces inside the time field
+                        sep = next((c for c in (",", ";", "\t") if c in line), None)
+                        header = (lineno, _pos_fields(line[1:], sep))
                     continue
                 if line.strip():
-                    rows.append((lineno, line.split()))
+                    rows.append((lineno, _pos_fields(line, sep)))
     except (EOFError, OSError) as exc:  # a truncated or damaged gzip file
         raise InputError(f"{path}: not a readable .pos file ({str(exc).splitlines()[0]}): truncated or "
                          "damaged?") from None
@@ -254,6 +256,16 @@ _POS_NEED = {
 #: the velocity columns of each form (an xyz file's are rotated into the llh ones: :func:`_pos_from_ecef`)
 _POS_VELOCITY = {"llh": ["vn(m/s)", "ve(m/s)", "vu(m/s)", "sdvn", "sdve", "sdvu"],
                  "xyz": ["vx(m/s)", "vy(m/s)", "vz(m/s)", "sdvx", "sdvy", "sdvz"]}
+
+
+def _pos_fields(line, sep):
+    """The fields of a .pos line: split at blanks, or at ``sep`` (RTKLIB's
+    out-fieldsep) with the first field (a date and time, or a week and
+    seconds) split at blanks."""
+    if sep is None:
+        return line.split()
+    first, *rest = line.split(sep)
+    return first.split() + [f.strip() for f in rest]
 
 
 def _dms_degrees(path, c, table, names, num, linenos):
