@@ -239,3 +239,28 @@ def test_write_json_is_strict_json_whole_or_nothing(tmp_path, monkeypatch):
     with pytest.raises(KeyboardInterrupt):
         write_json(tmp_path / "s.json", {"a": 1})
     assert sorted(x.name for x in tmp_path.iterdir()) == ["r.json"]
+
+
+def test_staged_folder_moves_what_the_block_wrote_and_names_final_paths(tmp_path, monkeypatch):
+    """files.staged_folder: the files a writer put into the staging folder land in the folder, summary.json
+    last; a failure leaves the folder as it was, and a writer's message names the file by its final path."""
+    from inskit.files import staged_folder
+
+    out = tmp_path / "run"
+    out.mkdir()
+    (out / "old.txt").write_text("old")
+    order = []
+    real = os.replace
+    monkeypatch.setattr(os, "replace", lambda a, b: (order.append(os.path.basename(b)), real(a, b))[1])
+    with staged_folder(out) as stage:
+        for name in ("summary.json", "b.csv", "a.png"):
+            (stage / name).write_text(name)
+    assert [n for n in order if n != "old.txt"][-1] == "summary.json"
+    assert sorted(p.name for p in out.iterdir()) == ["a.png", "b.csv", "old.txt", "summary.json"]
+    with pytest.raises(InputError) as e:
+        with staged_folder(out) as stage:
+            (stage / "b.csv").write_text("new")
+            raise InputError(f"{stage / 'c.csv'}: could not be written (No space left on device)")
+    assert str(e.value) == f"{out / 'c.csv'}: could not be written (No space left on device)"
+    assert (out / "b.csv").read_text() == "b.csv"
+    assert sorted(p.name for p in out.iterdir()) == ["a.png", "b.csv", "old.txt", "summary.json"]

@@ -95,10 +95,11 @@ def test_a_change_of_rate_is_reported_and_not_taken_for_gaps():
     assert abs(c.rate_before_hz - 200.0) < 1 and abs(c.rate_after_hz - 20.0) < 0.5 and 59.0 < c.t_s < 64.0
 
 
-def test_a_gap_of_minutes_is_refused_by_row(turn_with_gap, capsys, tmp_path):
+def test_a_gap_of_minutes_is_refused_by_its_times(turn_with_gap, capsys, tmp_path):
     """A GPS week rollover the time column missed (604800 s) was bridged
     (mechanize warned, then failed 'within 0.1 deg of a pole'): a gap beyond
-    MAX_GAP_S is refused, naming the row, by navigate and mechanize."""
+    MAX_GAP_S is refused, naming the file's times on either side of it (a row
+    number counted the rows the job kept, not the file's lines), by navigate and mechanize."""
     from inskit import io
     from inskit.cli import main
     from inskit.errors import InputError
@@ -110,10 +111,13 @@ def test_a_gap_of_minutes_is_refused_by_row(turn_with_gap, capsys, tmp_path):
     k = 5000
     late[k:] += 604800.0
     broken = ImuData(late, gappy.dtheta_b, gappy.dv_b)
-    with pytest.raises(InputError, match=f"a gap of 60480.*before row {k} .*at most {MAX_GAP_S:g} s"):
+    with pytest.raises(InputError, match=f"a gap of 60480.*from {late[k - 1]:.4f} s to {late[k]:.4f} s "
+                                         rf"\(the file's times\).*at most {MAX_GAP_S:g} s"):
         refuse_long_gaps(find_gaps(broken), "log.csv")
+    with pytest.raises(InputError, match=f"from {late[k - 1] - 0.25:.4f} s to"):  # the reader's offset taken off
+        refuse_long_gaps(find_gaps(broken), "log.csv", time_offset_s=0.25)
     io.write_imu(tmp_path / "imu.csv", broken)
     io.write_solution(tmp_path / "truth.csv", truth)
     with pytest.raises(SystemExit) as e:
         main(["mechanize", str(tmp_path / "imu.csv"), "--init-from", str(tmp_path / "truth.csv")])
-    assert e.value.code == 2 and f"before row {k}" in capsys.readouterr().err
+    assert e.value.code == 2 and f"from {late[k - 1]:.4f} s to {late[k]:.4f} s" in capsys.readouterr().err

@@ -93,6 +93,9 @@ def staged_folder(folder, last=("summary.json",)):
         yield work
         parts = sorted((p for p in work.iterdir() if p.is_file()), key=lambda p: (p.name in last, p.name))
         _commit({folder / p.name: p for p in parts}, tmp / "previous")
+    except InputError as exc:  # a writer's message names the file by its final name, not the staging one
+        shutil.rmtree(tmp, ignore_errors=True)
+        raise InputError(str(exc).replace(f"{work}{os.sep}", f"{folder}{os.sep}")) from None
     except OSError as exc:
         shutil.rmtree(tmp, ignore_errors=True)
         raise InputError(f"{folder}: the results could not be written ({exc.strerror or exc})") from None

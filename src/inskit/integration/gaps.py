@@ -93,18 +93,23 @@ def find_gaps(imu: ImuData, factor=5.0):
 MAX_GAP_S = 60.0
 
 
-def refuse_long_gaps(gaps, name="the IMU log", limit=MAX_GAP_S):
-    """Raise an InputError naming the row of the first gap longer than
-    ``limit`` [s]: coasting (or bridging) on one sample's rates over minutes
-    is no navigation, and a gap of a GPS week (a rollover the time column
-    missed) would be bridged by tens of millions of rows."""
+def refuse_long_gaps(gaps, name="the IMU log", limit=MAX_GAP_S, time_offset_s=0.0):
+    """Raise an InputError naming the first gap longer than ``limit`` [s] by
+    the times on either side of it as the file's time column holds them
+    (``time_offset_s``: what the reader added to them, taken off again): a
+    row number would count the rows as the job holds them (cut to the
+    fixes' span, repeated rows dropped), not the lines of the file.
+    Coasting (or bridging) on one sample's rates over minutes is no
+    navigation, and a gap of a GPS week (a rollover the time column missed)
+    would be bridged by tens of millions of rows."""
     from ..errors import InputError
 
     for g in gaps:
         if g.length_s > limit:
-            raise InputError(f"{name}: a gap of {g.length_s:.3f} s in the time column before row {g.row} "
-                             f"(t = {g.start_s:.3f} s); at most {limit:g} s is gone across: split the log there, "
-                             "or fix its time column (a GPS week rollover?)")
+            a = g.start_s - time_offset_s
+            raise InputError(f"{name}: a gap of {g.length_s:.3f} s in the time column, from {a:.4f} s to "
+                             f"{a + g.length_s:.4f} s (the file's times); at most {limit:g} s is gone across: "
+                             "split the log there, or fix its time column (a GPS week rollover?)")
 
 
 def bridge_gaps(imu: ImuData, gaps):

@@ -673,16 +673,18 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         raise InputError("gnss.use_velocity and gnss.sigma_floor_m describe fixes fused by loose coupling; with "
                          "tight coupling the fixes are only the reference (use use_doppler and the sigma scales)")
     gaps = find_gaps(imu, cfg.imu.gap_factor)
-    refuse_long_gaps(gaps, str(cfg.resolve(cfg.imu.file)) if cfg.imu.file else "the IMU log")
+    refuse_long_gaps(gaps, str(cfg.resolve(cfg.imu.file)) if cfg.imu.file else "the IMU log",
+                     time_offset_s=cfg.imu.time_offset_s)
     rate_changes = find_rate_changes(imu)
+    off = cfg.imu.time_offset_s  # the messages give the file's own times (the rows here are cut and thinned)
     for c in rate_changes:
         if log:
             log(f"warning: the IMU rate changes from {c.rate_before_hz:.4g} Hz to {c.rate_after_hz:.4g} Hz near "
-                f"t = {c.t_s:.3f} s (row {c.row}): gaps are judged against the local rate")
+                f"t = {c.t_s - off:.3f} s (the file's time): gaps are judged against the local rate")
     for g in gaps:
         if log:
-            log(f"warning: the IMU log has a gap of {g.length_s:.3f} s at t = {g.start_s:.3f} s (row {g.row}): "
-                "bridged on the last rates, covariance inflated")
+            log(f"warning: the IMU log has a gap of {g.length_s:.3f} s at t = {g.start_s - off:.3f} s (the file's "
+                "time): bridged on the last rates, covariance inflated")
     imu, gaps = bridge_gaps(imu, gaps)
     if truth is None and cfg.truth is not None:  # a truth given in Python takes the place of [truth] file
         truth = io.read_solution(cfg.resolve(cfg.truth.file))
