@@ -193,3 +193,66 @@ def test_a_truth_elsewhere_from_the_start_is_said(files, tmp_path):
     assert len(w) == 1 and "radians under a _deg header" in w[0], s["warnings"]
     assert not [x for x in evaluate(files / "sol.csv", files / "truth.csv")["warnings"] if "km from" in x]
     assert len(truth.time) == len(df)
+
+
+@pytest.fixture(scope="module")
+def turning(tmp_path_factory):
+    """A 300 s drive round a circle of 300 m at 10 m/s (it turns through 573 deg), pitch and roll swinging a
+    few degrees; the solution is the truth with 0.1 deg of attitude noise."""
+    d = tmp_path_factory.mktemp("turn")
+    t = np.arange(3000) / 10.0
+    n, w = len(t), 10.0 / 300.0
+    ned = np.column_stack([300.0 * np.sin(w * t), 300.0 * (1.0 - np.cos(w * t)), np.zeros(n)])
+    lla = earth.ned_to_lla(ned, np.array([np.radians(40), np.radians(-105), 1600.0]))
+    v = np.column_stack([10.0 * np.cos(w * t), 10.0 * np.sin(w * t), np.zeros(n)])
+    rpy = np.column_stack([np.radians(2.0) * np.cos(t / 15.0), np.radians(3.0) * np.sin(t / 20.0), w * t])
+    truth = NavSolution.from_euler(t, lla, v, rpy)
+    noise = np.random.default_rng(3).normal(0.0, np.radians(0.1), (n, 3))
+    io.write_solution(d / "truth.csv", truth)
+    io.write_solution(d / "sol.csv", NavSolution.from_euler(t, lla, v, rpy + noise))
+    return d
+
+
+def _in_radians(src, dst, columns):
+    df = pd.read_csv(src)
+    for c in columns:
+        df[c] = np.radians(df[c])
+    df.to_csv(dst, index=False)
+    return dst
+
+
+def _unit_warnings(s):
+    return [w for w in s["warnings"] if "seems to hold radians" in w]
+
+
+def test_attitude_in_radians_under_deg_headers_is_said(turning, tmp_path):
+    """Attitude written in radians under roll_deg/pitch_deg/yaw_deg was scored without a word (a yaw error of
+    107 deg RMS on a drive, a pitch that looked 57 times better than it was).  A yaw in radians follows the
+    direction of travel of a track that turns; a column in radians times 180/pi matches the other file's:
+    the warning names the file and the column, in either file; the right files say nothing."""
+    assert _unit_warnings(evaluate(turning / "sol.csv", turning / "truth.csv")) == []
+    sol_rad = _in_radians(turning / "sol.csv", tmp_path / "sol_rad.csv", ["yaw_deg"])
+    s = evaluate(sol_rad, turning / "truth.csv")
+    w = _unit_warnings(s)
+    assert len(w) == 1 and w[0].startswith(f"{sol_rad}: column 'yaw_deg'") and "direction of travel" in w[0], w
+    assert "warning: " + w[0] in summary_text(s)
+    truth_rad = _in_radians(turning / "truth.csv", tmp_path / "truth_rad.csv", ["pitch_deg", "roll_deg"])
+    w = _unit_warnings(evaluate(turning / "sol.csv", truth_rad))
+    assert len(w) == 2 and all(x.startswith(f"{truth_rad}: column '") for x in w), w
+    assert "'roll_deg'" in w[0] and "'pitch_deg'" in w[1] and "times 180/pi, they match" in w[0]
+    # both files in radians agree with each other: only the yaw against the track tells, in each file
+    both = _in_radians(turning / "truth.csv", tmp_path / "truth_rad_yaw.csv", ["yaw_deg"])
+    w = _unit_warnings(evaluate(sol_rad, both))
+    assert len(w) == 2 and "'yaw_deg'" in w[0] and "'yaw_deg'" in w[1], w
+
+
+def test_attitude_unit_check_keeps_quiet_where_it_cannot_tell(files, turning, tmp_path):
+    """A straight track (files: yaw 179 deg against a course of 0, the body turned from the track) cannot tell
+    a yaw's unit; a poor solution in degrees (10 deg attitude errors) is no radians either."""
+    assert _unit_warnings(evaluate(files / "sol.csv", files / "truth.csv")) == []
+    df = pd.read_csv(turning / "sol.csv")
+    rng = np.random.default_rng(5)
+    for c in ("roll_deg", "pitch_deg", "yaw_deg"):
+        df[c] = df[c] + rng.normal(0.0, 10.0, len(df))
+    df.to_csv(tmp_path / "poor.csv", index=False)
+    assert _unit_warnings(evaluate(tmp_path / "poor.csv", turning / "truth.csv")) == []

@@ -14,8 +14,10 @@ from pathlib import Path
 import numpy as np
 
 from .. import analysis, io
+from .. import rotations as rot
 from ..errors import InputError
 from ..files import check_output_place, same_file
+from ..units import DEG
 
 #: file names the per-epoch table may have (the format follows the name)
 PER_EPOCH_SUFFIXES = (".csv", ".csv.gz", ".parquet")
@@ -143,7 +145,8 @@ def evaluate(solution_file, truth_file, *, t_from=None, t_to=None, remove_offset
     s["offset_removed"] = offset.summary() if offset is not None else None
     s["truth_coverage"] = cover
     s["warnings"] = (coverage_warnings(cover, truth.time) + sampling_warnings(sol.time, truth.time, truth_file)
-                     + start_warnings(full, truth_file))
+                     + start_warnings(full, truth_file)
+                     + attitude_unit_warnings(sol, truth, solution_file, truth_file))
     if per_epoch_file is not None:
         meta = {"solution": str(solution_file), "truth": str(truth_file), "window": s["window"],
                 "offset_removed": s["offset_removed"]}
@@ -200,6 +203,123 @@ def start_warnings(err, truth_file="truth") -> list[str]:
                 f"{h0 / 1000.0:.4g} km from the truth: the two files seem to describe different places (a datum, "
                 "or angles in radians under a _deg header?) rather than a navigation error"]
     return []
+
+
+#: attitude columns of a solution file, in the order of :attr:`NavSolution.euler`
+ATTITUDE_COLUMNS = ("roll_deg", "pitch_deg", "yaw_deg")
+#: a horizontal speed [m/s] above which the direction of travel is taken as a heading reference
+COURSE_MIN_SPEED_M_S = 2.0
+#: fewest moving epochs (and fewest shared epochs) the attitude-unit checks need
+UNIT_CHECK_MIN_EPOCHS = 20
+#: the checks look at this many epochs at most (evenly spread): a verdict, not a score
+UNIT_CHECK_MAX_EPOCHS = 20_000
+#: a track whose courses have a mean resultant length above this does not turn enough to tell units apart
+COURSE_MAX_RESULTANT = 0.9
+#: yaw read as radians within this [deg] (median) of the course, and read as degrees beyond the next, is radians
+COURSE_FIT_DEG, COURSE_MISFIT_DEG = 20.0, 45.0
+#: a column whose values times 180/pi fit the other file this many times better (RMS) is radians, when as
+#: written they differ by more than the next [deg] (RMS): a column in degrees times 57.3 fits far worse
+SCALED_FIT_RATIO, SCALED_MIN_MISFIT_DEG = 4.0, 0.5
+_RADIAN_RANGE = 2.0 * np.pi + 1e-6
+
+
+def _wrapped_deg(x):
+    """Angles [deg] wrapped into [-180, 180)."""
+    return (np.asarray(x, float) + 180.0) % 360.0 - 180.0
+
+
+def _rms(x):
+    return float(np.sqrt(np.mean(np.square(x))))
+
+
+def _spread(idx, limit=UNIT_CHECK_MAX_EPOCHS):
+    """At most ``limit`` of the indices ``idx``, evenly spread."""
+    return idx if len(idx) <= limit else idx[np.linspace(0, len(idx) - 1, limit).astype(int)]
+
+
+def _yaw_radians_evidence(nav) -> str | None:
+    """Why the ``yaw_deg`` column of ``nav`` holds radians, or None: on a
+    moving track that turns, its values stay within +-2 pi and, read as
+    radians, follow the direction of travel (``atan2(ve, vn)``) where read
+    as degrees they do not.  A vehicle's yaw follows its course up to the
+    side-slip and crab (tens of degrees at most), and a track that turns
+    rules out a chance fit of the radian reading; a track that does not turn
+    (or a body turned from its direction of travel) says nothing."""
+    speed = np.hypot(nav.v_n[:, 0], nav.v_n[:, 1])
+    idx = _spread(np.nonzero(speed > COURSE_MIN_SPEED_M_S)[0])
+    if len(idx) < UNIT_CHECK_MIN_EPOCHS:
+        return None
+    course = np.arctan2(nav.v_n[idx, 1], nav.v_n[idx, 0])
+    if abs(np.mean(np.exp(1j * course))) > COURSE_MAX_RESULTANT:
+        return None
+    y = rot.euler_from_quat(nav.q_nb[idx])[:, 2] / DEG  # the numbers as the file holds them
+    if np.abs(y).max() > _RADIAN_RANGE:
+        return None
+    as_deg = float(np.median(np.abs(_wrapped_deg(y - np.degrees(course)))))
+    as_rad = float(np.median(np.abs(_wrapped_deg(np.degrees(y) - np.degrees(course)))))
+    if as_rad < COURSE_FIT_DEG and as_deg > COURSE_MISFIT_DEG:
+        return (f"column 'yaw_deg' seems to hold radians, not degrees: its values stay within "
+                f"{y.min():.4g}..{y.max():.4g} and, read as radians, follow the direction of travel (median "
+                f"difference {as_rad:.3g} deg over {len(idx)} moving epochs of a track that turns) where read as "
+                f"degrees they differ from it by {as_deg:.3g} deg: the yaw errors are meaningless (write the "
+                "attitude in degrees)")
+    return None
+
+
+def attitude_unit_warnings(sol, truth, solution_file="solution", truth_file="truth") -> list[str]:
+    """Attitude columns (``roll_deg``, ``pitch_deg``, ``yaw_deg``) that seem
+    to hold radians under their degree headers, in words naming the file and
+    the column: their errors would be scored as nonsense (a yaw in radians
+    is off by up to 180 deg, a roll in radians looks 57 times better than it
+    is).
+
+    Two tests, each of which tells radians with confidence where it speaks:
+
+    * a file's yaw against its own direction of travel
+      (:func:`_yaw_radians_evidence`), on a moving track that turns;
+    * a column of one file against the same column of the other, at the
+      epochs the truth scores: its values lie within +-2 pi and, times
+      180/pi, fit the other file's :data:`SCALED_FIT_RATIO` times better
+      (RMS) than as written, which differ by more than
+      :data:`SCALED_MIN_MISFIT_DEG`.  Angles near zero (a level drive's
+      roll) fit either way and are not judged: their errors are small
+      either way.
+
+    Two files that both hold radians fit each other as written: only the
+    first test can see them (a yaw on a turning track).
+    """
+    files = (("solution", sol, str(solution_file)), ("truth", truth, str(truth_file)))
+    out, said = [], set()
+    for key, nav, name in files:
+        why = _yaw_radians_evidence(nav)
+        if why:
+            out.append(f"{name}: {why}")
+            said.add((key, 2))
+    idx = _spread(np.nonzero(analysis.truth_covers(sol.time, truth.time))[0])
+    if len(idx) < UNIT_CHECK_MIN_EPOCHS:
+        return out
+    values = {"solution": rot.euler_from_quat(sol.q_nb[idx]) / DEG,
+              "truth": rot.euler_from_quat(truth.interpolate(sol.time[idx]).q_nb) / DEG}
+    for j, column in enumerate(ATTITUDE_COLUMNS):
+        as_written = _rms(_wrapped_deg(values["solution"][:, j] - values["truth"][:, j]))
+        if as_written <= SCALED_MIN_MISFIT_DEG:
+            continue
+        for key, nav, name in files:
+            other = "truth" if key == "solution" else "solution"
+            mine = values[key][:, j]
+            if (key, j) in said or np.abs(mine).max() > _RADIAN_RANGE:
+                continue
+            scaled = _rms(_wrapped_deg(np.degrees(mine) - values[other][:, j]))
+            if scaled * SCALED_FIT_RATIO <= as_written:
+                other_name = dict((k, n) for k, _, n in files)[other]
+                out.append(f"{name}: column '{column}' seems to hold radians, not degrees: its values stay within "
+                           f"{mine.min():.4g}..{mine.max():.4g} and, times 180/pi, they match {other_name}'s "
+                           f"'{column}' to {scaled:.3g} deg (RMS over {len(idx)} epochs) where as written they "
+                           f"differ by {as_written:.3g} deg: the {column[:-4]} errors are meaningless (write the "
+                           "attitude in degrees)")
+                said.add((key, j))
+                break
+    return out
 
 
 def coverage_warnings(cover: dict, truth_time) -> list[str]:
