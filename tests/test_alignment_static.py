@@ -188,9 +188,23 @@ def test_deg_s_read_as_rad_s_is_recognised_at_rest():
 @pytest.mark.parametrize("start", [600.0, 5000.0, float("nan")])
 def test_a_start_at_or_past_the_logs_end_is_refused(static_log, start):
     """`inskit align --start 500` on a 120 s log was 'internal error: ValueError: cannot reshape ...', exit 3."""
-    with pytest.raises(InputError, match=r"imu\.csv: --start .* s is not before the log's end \(the log spans "
-                                         r"0\.000\.\.600\.000 s\)"):
+    with pytest.raises(InputError, match=r"imu\.csv: --start .* s (is not before the log's end|lies outside the "
+                                         r"log) \(the log spans 0\.000\.\.600\.000 s"):
         align_static(static_log, np.radians(45), t_start=start)
+
+
+@pytest.mark.parametrize("kw, option", [({"t_end": 9999.0}, "--end 9999"), ({"t_start": 0.0, "t_end": 601.0},
+                                                                                "--end 601"),
+                                        ({"t_start": -100.0, "t_end": 50.0}, "--start -100")])
+def test_a_bound_outside_the_log_is_refused(static_log, kw, option):
+    """--end past the log's end was clipped in silence to the last sample (the interval said [0, 600] s of a
+    --end 9999), and --start before its first sample to the first, while --start past the end was refused:
+    either bound outside the log (by more than a sample) is now refused naming the option and the log's span."""
+    with pytest.raises(InputError, match=rf"imu\.csv: {option} s lies outside the log \(the log spans "
+                                         r"0\.000\.\.600\.000 s"):
+        align_static(static_log, np.radians(45), method="accel", **kw)
+    r = align_static(static_log, np.radians(45), method="accel", t_start=0.0, t_end=600.005)  # within a sample
+    assert r["static_end_s"] == pytest.approx(600.0)
 
 
 @pytest.mark.parametrize("given_deg", [0.785, -45.0])

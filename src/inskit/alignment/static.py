@@ -351,10 +351,18 @@ def align_imu(imu: ImuData, lat, *, method="blend", m=None, t_start=None, t_end=
     if not (np.isfinite(lat) and abs(lat) < np.pi / 2):
         raise InputError(f"latitude must be within (-90, 90) deg, got {np.degrees(float(lat)):g}")
     prior = bias_prior(accel_bias_sigma, gyro_bias_sigma, grade)
-    a = float(imu.time[0]) if t_start is None else float(t_start)
-    if not a < float(imu.time[-1]):  # beyond the last sample (or NaN): nothing to detect the static end in
-        raise InputError(f"{name}: --start {a:g} s is not before the log's end (the log spans "
-                         f"{float(imu.time[0]):.3f}..{float(imu.time[-1]):.3f} s)")
+    t0, t1 = float(imu.time[0]), float(imu.time[-1])
+    span = f"the log spans {t0:.3f}..{t1:.3f} s"
+    tol = float(np.median(np.diff(imu.time))) if len(imu) > 1 else 0.0
+    # a bound outside the log is refused, either side, as the window of evaluate is: clipped in silence, the
+    # interval reported would not be the one asked for
+    for option, v in (("--start", t_start), ("--end", t_end)):
+        if v is not None and not (t0 - tol <= float(v) <= t1 + tol):
+            raise InputError(f"{name}: {option} {float(v):g} s lies outside the log ({span}; times are those of "
+                             "its time column)")
+    a = t0 if t_start is None else float(t_start)
+    if not a < t1:  # the last sample: nothing to detect the static end in
+        raise InputError(f"{name}: --start {a:g} s is not before the log's end ({span})")
     if t_end is None:
         b = detect_static_start(imu.slice(int(np.searchsorted(imu.time, a))))
     else:
