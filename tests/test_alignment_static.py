@@ -207,11 +207,11 @@ def test_a_bound_outside_the_log_is_refused(static_log, kw, option):
     assert r["static_end_s"] == pytest.approx(600.0)
 
 
-@pytest.mark.parametrize("given_deg", [0.785, -45.0])
+@pytest.mark.parametrize("given_deg", [-45.0, 10.0])
 def test_a_wrong_latitude_is_named_as_the_suspect(given_deg):
-    """--lat in radians (0.785 for 45 deg) or of the wrong sign: the message blamed a turn or a gyro bias
-    only, and sent the user to --start/--end.  The rate fits the Earth rate at the latitude the gyros
-    measure, which the message now gives."""
+    """--lat of the wrong sign, or another place's: the message blamed a turn or a gyro bias only, and sent
+    the user to --start/--end.  The rate fits the Earth rate at the latitude the gyros measure, which the
+    message now gives.  (--lat in radians has its own message: the next test.)"""
     from inskit.units import DEG_PER_HOUR
 
     lat = np.radians(45.0)
@@ -223,6 +223,41 @@ def test_a_wrong_latitude_is_named_as_the_suspect(given_deg):
         align_imu(imu, np.radians(given_deg), method="accel", gyro_bias_sigma=1.0 * DEG_PER_HOUR)
     r = align_imu(imu, lat, method="accel", gyro_bias_sigma=1.0 * DEG_PER_HOUR)
     assert abs(r["yaw_deg"] - 30.0) < 0.1
+
+
+def test_a_latitude_in_radians_is_told_by_the_gyros_or_warned():
+    """--lat 0.785 (45 deg in radians) was checked only against the gyro prior: with the default consumer-MEMS
+    prior (1 deg/s) a log whose gyros measure 45 deg was aligned at 0.785 deg without a word.  Gyros that see
+    the Earth rate now refuse it whatever the prior; gyros that cannot (a MEMS bias) leave a warning; a
+    latitude near the equator that the gyros confirm, and 0, say nothing."""
+    lat = np.radians(45.0)
+    t = np.arange(0.0, 60.0 + 1e-9, 0.01)
+    imu = ideal_imu(StationaryTrajectory((lat, 0.0, 0.0), (0.0, 0.0, np.radians(30.0))), t, nodes=1)
+    with pytest.raises(InputError, match=r"^the IMU log: --lat 0\.785 looks like a latitude in radians \(44\.98 deg\): "
+                                         r"the gyros measure a latitude of 45\.0 deg .*give --lat in degrees$"):
+        align_imu(imu, np.radians(0.785), method="accel")
+    assert align_imu(imu, lat, method="accel")["warnings"] == []
+    bias = np.zeros_like(imu.dtheta_b)
+    bias[1:] = np.array([0.3, -0.2, 0.5]) * DEG * 0.01  # a MEMS gyro bias of 0.3..0.5 deg/s
+    mems = ImuData(t, imu.dtheta_b + bias, imu.dv_b)
+    r = align_imu(mems, np.radians(0.785), method="accel")
+    assert len(r["warnings"]) == 1 and r["warnings"][0].startswith("--lat 0.785 deg: near the equator, or 44.98 deg "
+                                                                   "written in radians? the gyros cannot tell"), r
+    assert align_imu(mems, 0.0, method="accel")["warnings"] == []
+    eq = np.radians(1.2)
+    near = ideal_imu(StationaryTrajectory((eq, 0.0, 0.0), (0.0, 0.0, 0.0)), t, nodes=1)
+    assert align_imu(near, eq, method="accel")["warnings"] == []
+
+
+@pytest.mark.parametrize("lat_deg", [90.0, -90.0])
+def test_a_pole_is_refused_naming_lat(static_log, lat_deg):
+    """--lat 90 passed the command's [-90, 90] and met the library's '(-90, 90)': 'latitude must be within
+    (-90, 90) deg, got 90', naming no option."""
+    with pytest.raises(InputError, match=r"^--lat must be within \(-90, 90\) deg \(at a pole north is undefined\)"):
+        align_static(static_log, np.radians(lat_deg), method="accel")
+    r = subprocess.run([sys.executable, "-m", "inskit.cli", "align", str(static_log), "--lat", f"{lat_deg:g}"],
+                       capture_output=True, text=True)
+    assert r.returncode == 2 and r.stderr.startswith("inskit: error: --lat must be within (-90, 90) deg"), r.stderr
 
 
 def test_a_turn_gets_no_latitude_hint():

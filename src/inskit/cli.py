@@ -598,8 +598,8 @@ def align(imu_file, lat_deg, method, m_gain, t_start, t_end, imu_format, mount_r
     """
     from .alignment import align_static
 
-    if not -90.0 <= lat_deg <= 90.0:
-        raise InputError(f"--lat must be within [-90, 90] deg, got {lat_deg}")
+    if not -90.0 < lat_deg < 90.0:
+        raise InputError(f"--lat must be within (-90, 90) deg (at a pole north is undefined), got {lat_deg:g}")
     mount = (0.0, 0.0, 0.0)
     if mount_rpy:
         from .config_files import check_option_angles
@@ -637,6 +637,7 @@ def align(imu_file, lat_deg, method, m_gain, t_start, t_end, imu_format, mount_r
             lines.append(res["converge_note"])
     lines.append(f"heading from gyros usable: {'yes' if res['heading_usable'] else 'no'}: {res['heading_reason']}")
     lines.append(f"sigma basis: {res['sigma_basis']}")
+    lines += [f"warning: {w}" for w in res["warnings"]]
     _emit(res, as_json, "\n".join(lines))
 
 

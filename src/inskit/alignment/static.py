@@ -305,6 +305,53 @@ def _check_gyro_units(name, w_mean, f_mean, lat, cov_w_noise):
             )
 
 
+#: the gyros measure the latitude when their static mean is the Earth rate within this fraction
+LAT_MEASURE_RATE_TOL = 0.25
+#: a measured latitude within this [deg] of a reading of --lat supports it; further than the next, refutes it
+LAT_SUPPORT_DEG, LAT_REFUTE_DEG = 5.0, 15.0
+
+
+def check_latitude_unit(name, lat, w_mean, f_mean, cov_w_noise):
+    """A latitude given in radians where degrees were asked (``--lat 0.785``
+    for 45 deg): refused when the gyros measure the latitude (their static
+    mean within :data:`LAT_MEASURE_RATE_TOL` of the Earth rate) and it is the
+    radian reading's, not the degree reading's; else, when the two readings
+    differ by more than :data:`LAT_SUPPORT_DEG` and the gyros cannot tell
+    them apart, a warning (returned; None when there is nothing to say).
+
+    Parameters
+    ----------
+    name : str
+        The log, for the message.
+    lat : float
+        The latitude as taken [rad] (the degrees given, converted).
+    w_mean, f_mean : (3,) ndarray
+        Static mean rate [rad/s] and specific force [m/s^2], body axes.
+    cov_w_noise : (3, 3) ndarray
+        Noise covariance of the mean rate [(rad/s)^2].
+    """
+    given = float(np.degrees(lat))  # the number the user wrote
+    as_rad = float(np.degrees(given))  # that number read as radians [deg]
+    if not (0.0 < abs(given) <= 90.0 / np.degrees(1.0)) or abs(as_rad - given) <= LAT_SUPPORT_DEG:
+        return None
+    ratio = float(np.linalg.norm(w_mean) / earth.OMEGA_IE)
+    noise = float(np.sqrt(np.trace(cov_w_noise)))
+    measured = None
+    if abs(ratio - 1.0) < LAT_MEASURE_RATE_TOL and noise < 0.1 * earth.OMEGA_IE:
+        measured = float(np.degrees(measured_latitude(f_mean, w_mean)))
+        if abs(measured - as_rad) < LAT_SUPPORT_DEG and abs(measured - given) > LAT_REFUTE_DEG:
+            raise InputError(f"{name}: --lat {given:g} looks like a latitude in radians ({as_rad:.4g} deg): the gyros "
+                             f"measure a latitude of {measured:.1f} deg (their static mean is {ratio:.2f} times the "
+                             "Earth rate); give --lat in degrees")
+        if abs(measured - given) < LAT_SUPPORT_DEG:
+            return None  # the gyros confirm the degrees: a place near the equator
+    why = ("the gyros cannot tell (their static mean is "
+           f"{ratio:.3g} times the Earth rate)" if measured is None else
+           f"the gyros measure {measured:.1f} deg, which fits neither well")
+    return (f"--lat {given:g} deg: near the equator, or {as_rad:.4g} deg written in radians? {why}; the "
+            "alignment takes it as degrees")
+
+
 def align_imu(imu: ImuData, lat, *, method="blend", m=None, t_start=None, t_end=None, accel_bias_sigma=None,
               gyro_bias_sigma=None, grade=DEFAULT_GRADE, name="the IMU log", check_units=True) -> dict:
     """Align on the static interval of an IMU log, with honest sigmas.
@@ -343,13 +390,15 @@ def align_imu(imu: ImuData, lat, *, method="blend", m=None, t_start=None, t_end=
         ``error_sigma_ned_deg`` (one-step methods), ``sigma_basis``,
         ``accel_bias_sigma_ug``, ``gyro_bias_sigma_deg_h``, ``heading_usable``,
         ``heading_reason``, the interval, ``m`` (blend), ``converge_time_s``
-        and ``converge_note`` (fine).  ``yaw_sigma_deg`` is
+        and ``converge_note`` (fine), ``warnings`` (a latitude that may be
+        radians: :func:`check_latitude_unit`).  ``yaw_sigma_deg`` is
         :data:`NO_HEADING_SIGMA_DEG` when the heading is unusable.
     """
     if method not in METHODS:
         raise InputError(f"`method` must be one of {', '.join(METHODS)}, got {method!r}")
     if not (np.isfinite(lat) and abs(lat) < np.pi / 2):
-        raise InputError(f"latitude must be within (-90, 90) deg, got {np.degrees(float(lat)):g}")
+        raise InputError(f"--lat must be within (-90, 90) deg (at a pole north is undefined), got "
+                         f"{np.degrees(float(lat)):g}")
     prior = bias_prior(accel_bias_sigma, gyro_bias_sigma, grade)
     t0, t1 = float(imu.time[0]), float(imu.time[-1])
     span = f"the log spans {t0:.3f}..{t1:.3f} s"
@@ -387,6 +436,7 @@ def align_imu(imu: ImuData, lat, *, method="blend", m=None, t_start=None, t_end=
     cov_f_noise, cov_w_noise = mean_noise_cov(f), mean_noise_cov(w)
     if check_units:
         _check_gyro_units(name, w_mean, f_mean, lat, cov_w_noise)
+    lat_warning = check_latitude_unit(name, lat, w_mean, f_mean, cov_w_noise)
     _check_gyro_consistency(name, seg, w_mean, f_mean, lat, prior, cov_w_noise)
     C0 = accel_basis(f_mean, w_mean)
     w_earth_b = C0.T @ earth.rate_ie_n(lat)
@@ -401,7 +451,8 @@ def align_imu(imu: ImuData, lat, *, method="blend", m=None, t_start=None, t_end=
            "measured_latitude_deg": float(np.degrees(measured_latitude(f_mean, w_mean))),
            "gyro_norm_over_earth_rate": float(np.linalg.norm(w_mean) / earth.OMEGA_IE),
            "heading_usable": usable, "heading_reason": reason, "sigma_basis": prior.basis,
-           "accel_bias_sigma_ug": prior.accel / MICRO_G, "gyro_bias_sigma_deg_h": prior.gyro / DEG_PER_HOUR}
+           "accel_bias_sigma_ug": prior.accel / MICRO_G, "gyro_bias_sigma_deg_h": prior.gyro / DEG_PER_HOUR,
+           "warnings": [lat_warning] if lat_warning else []}
     if method == "fine":
         rpy0 = rot.euler_from_dcm(C0)
         lla = np.array([lat, 0.0, 0.0])
