@@ -422,3 +422,43 @@ def test_data_line_counts_blank_lines_before_the_header_and_quoted_cells_over_tw
     p.write_text('\n\na,b\r\n1,2\r\n\r\n3,"x\ny"\n4,5\n')
     assert [C.data_line(p, i) for i in range(3)] == [4, 6, 8]
     assert C.data_line(tmp_path / "absent.csv", 5) == 7  # unreadable: the plain count
+
+
+@pytest.mark.parametrize("column, value, match", [
+    ("height_m", 1e300, r"height_m=1e\+300 is beyond \+-100 km of the ellipsoid"),
+    ("height_m", -150_000.0, r"height_m=-150000\.0 is beyond \+-100 km"),
+    ("roll_deg", 1e6, r"roll_deg=1000000\.0 is beyond \+-360 degrees"),
+    ("yaw_deg", -720.0, r"yaw_deg=-720\.0 is beyond \+-360 degrees"),
+])
+@pytest.mark.parametrize("kind", ["lean", "pandas", "parquet", "head"])
+def test_a_solution_height_or_angle_beyond_reason_is_refused(tmp_path, monkeypatch, column, value, match, kind):
+    """A solution or truth file whose height_m held 1e300 was read, and `inskit evaluate` printed a horizontal
+    RMS of inf; a roll_deg of 1e6 was wrapped into an 80 deg error; both without a word.  A height beyond
+    +-100 km (the bound of every height a user gives) or an angle beyond a full turn is refused naming the
+    line (or row) and the column, on every way a solution file is read."""
+    import pandas as pd
+
+    n = 50
+    df = pd.DataFrame({"time_s": 0.1 * np.arange(n), "lat_deg": 45.0, "lon_deg": 7.0, "height_m": 300.0,
+                       "vn_m_s": 1.0, "ve_m_s": 0.0, "vd_m_s": 0.0, "roll_deg": 1.0, "pitch_deg": -2.0,
+                       "yaw_deg": 170.0})
+    df.loc[7, column] = value
+    if kind == "pandas":
+        df["note"] = "x"  # a text column: not the lean path
+        monkeypatch.setattr(C, "_read_solution_lean", lambda path: None)
+    p = tmp_path / ("sol.parquet" if kind == "parquet" else "sol.csv")
+    df.to_parquet(p) if kind == "parquet" else df.to_csv(p, index=False)
+    where = "row 7" if kind == "parquet" else "line 9"
+    with pytest.raises(InputError, match=rf"sol\.(csv|parquet): {where}: {match}"):
+        if kind == "pandas":
+            C.read_solution(p)  # the text column is refused after the solution columns are checked
+        elif kind == "head":
+            C.read_solution(p, until_s=2.0)
+        else:
+            C.read_solution(p)
+    df.loc[7, column] = 359.0 if column.endswith("_deg") else -99_000.0  # within the bounds: read
+    if kind == "pandas":
+        df = df.drop(columns=["note"])
+    p.unlink()
+    df.to_parquet(p) if kind == "parquet" else df.to_csv(p, index=False)
+    assert len(C.read_solution(p).time) == n

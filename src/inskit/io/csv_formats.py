@@ -907,6 +907,28 @@ def _check_latlon(path, lat, lon):
         raise InputError(f"{path}: {at_row(path, i)}: lon_deg={float(lon[i])!r} is outside [-180, 360] degrees")
 
 
+#: the largest attitude angle [deg] a solution file may hold: a full turn (config_files.ANGLE_LIMIT_DEG)
+SOLUTION_ANGLE_LIMIT_DEG = 360.0
+
+
+def _check_height_attitude(path, cols):
+    """Heights within +-:data:`~inskit.units.MAX_HEIGHT_M` and attitude
+    angles within a full turn either way, else refused naming the row and
+    the column: beyond them the number is another unit or column (a height
+    in mm, a pressure; a yaw of 1e6), which the scoring would wrap or
+    square into nonsense (a height of 1e300: an RMS of inf)."""
+    checks = [("height_m", MAX_HEIGHT_M, f"+-{MAX_HEIGHT_M / 1000:g} km of the ellipsoid (a height in metres)")]
+    checks += [(c, SOLUTION_ANGLE_LIMIT_DEG, f"+-{SOLUTION_ANGLE_LIMIT_DEG:g} degrees (no attitude needs more than "
+                                            "a full turn)") for c in ("roll_deg", "pitch_deg", "yaw_deg")]
+    for c, lim, what in checks:
+        v = cols[c]
+        bad = np.abs(v) > lim
+        if bad.any():
+            i = int(np.argmax(bad))
+            raise InputError(f"{path}: {at_row(path, i)}: {c}={plain_number(v[i])} is beyond {what}; another unit "
+                             "or column?")
+
+
 def _check_positive(path, df, a, columns):
     bad = a <= 0
     if bad.any():
@@ -974,6 +996,7 @@ def read_solution(path, *, until_s=None) -> NavSolution:
     a = numeric_columns(path, df, SOLUTION_COLUMNS)
     check_time_column(path, a[:, 0])
     _check_latlon(path, a[:, 1], a[:, 2])
+    _check_height_attitude(path, dict(zip(SOLUTION_COLUMNS, a.T)))
     extra = {}
     for c in df.columns:
         if c not in SOLUTION_COLUMNS:
@@ -998,6 +1021,7 @@ def _read_solution_lean(path) -> NavSolution | None:
     cols = {c: a[:, j] for j, c in enumerate(names)}
     check_time_column(path, cols["time_s"])
     _check_latlon(path, cols["lat_deg"], cols["lon_deg"])
+    _check_height_attitude(path, cols)
     return _solution_of_columns({c: np.ascontiguousarray(v) for c, v in cols.items()})
 
 
@@ -1059,6 +1083,7 @@ def _read_solution_head(path, until_s) -> NavSolution | None:
     cols = {c: np.ascontiguousarray(v[:stop]) for c, v in cols.items()}
     check_time_column(path, cols["time_s"])
     _check_latlon(path, cols["lat_deg"], cols["lon_deg"])
+    _check_height_attitude(path, cols)
     return _solution_of_columns(cols)
 
 
@@ -1101,6 +1126,7 @@ def _read_solution_parquet(path) -> NavSolution:
             i = int(np.argmax(bad))
             raise InputError(f"{path}: row {i}: {c}={float(cols[c][i])!r} is outside [{lim[0]:g}, {lim[1]:g}] "
                              "degrees")
+    _check_height_attitude(path, cols)
     return _solution_of_columns(cols)
 
 
