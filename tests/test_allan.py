@@ -95,6 +95,24 @@ def test_short_and_moving_logs_are_refused():
 
 
 
+def test_a_gyro_spike_is_named_at_its_time_in_readable_numbers():
+    """One gyro sample of 1e300 rad (a corrupt row) was said as 'around t = 102.0 s' (the time where the
+    accelerometers' noise peaked, not the spike's) with a rate of 300 digits; now the window of the channel
+    furthest beyond its own limit is named, and the figures have 3 significant digits."""
+    from inskit.errors import InputError
+
+    rng = np.random.default_rng(2)
+    t = np.arange(0.0, 200.0 + 1e-9, 0.01)
+    dth = 1e-7 * rng.standard_normal((len(t), 3))
+    dv = np.tile([0.0, 0.0, -0.0980665], (len(t), 1)) + 1e-5 * rng.standard_normal((len(t), 3))
+    dth[0] = dv[0] = 0.0
+    dth[7000, 0] = 1e300
+    with pytest.raises(InputError, match=r"^the log is not static \(around t = 69\.0 s its 1 s mean specific force "
+                                         r"moves [0-9.e-]+ m/s\^2, its rate 5\.73e\+301 deg/s from the median; at "
+                                         r"rest they stay within 0\.2 m/s\^2 and 1 deg/s\)"):
+        allan_imu(ImuData(t, dth, dv))
+
+
 def test_an_irregular_log_names_its_worst_step():
     from inskit.errors import InputError
 
