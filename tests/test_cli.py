@@ -197,6 +197,21 @@ def test_simulate_navigate_evaluate_pipeline(tmp_path):
     s = json.loads(r.stdout)
     assert s["horizontal_m"]["rms"] < 1.0  # 0.5 m white GNSS noise, filtered
     assert abs(s["roll_arcmin"]["final"]) < 30 and abs(s["pitch_arcmin"]["final"]) < 30
+    assert not [w for w in nav["health"]["warnings"] if "radians" in w]
+    # a truth whose attitude columns hold radians under their _deg headers is said by navigate --truth too
+    import pandas as pd
+
+    tr = pd.read_csv(tmp_path / "sim" / "truth.csv")
+    for c in ("roll_deg", "pitch_deg", "yaw_deg"):
+        tr[c] = np.radians(tr[c])
+    tr.to_csv(tmp_path / "truth_rad.csv", index=False)
+    r = inskit("navigate", "--imu", tmp_path / "sim" / "imu.csv", "--gnss", tmp_path / "sim" / "gnss.csv",
+               "--lever-arm", "0,0,-1", "--out", tmp_path / "nav_rad", "--no-plots", "--json",
+               "--truth", tmp_path / "truth_rad.csv")
+    assert r.returncode == 0, r.stderr
+    w = [w for w in json.loads(r.stdout)["health"]["warnings"] if "radians" in w]
+    assert w and all(x.startswith(f"truth: {tmp_path / 'truth_rad.csv'}: column '") for x in w), w
+    assert any("'yaw_deg'" in x for x in w), w
 
 
 def test_evaluate_window_offset_and_per_epoch(files, tmp_path):

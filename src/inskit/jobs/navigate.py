@@ -1328,11 +1328,14 @@ def summary(res: NavigateResult) -> dict:
     out["health"]["warnings"] += aiding_warnings(res.aiding, fw.counts, res.imu.time, res.settings.scheme)
     if res.truth is not None:  # what the truth could not score, said (not silently left out)
         from .. import analysis
-        from .evaluate import coverage_warnings
+        from .evaluate import attitude_unit_warnings, coverage_warnings
 
         cover = analysis.truth_coverage(res.imu.time, res.truth.time)
         out["truth_coverage"] = cover
         out["health"]["warnings"] += [f"truth: {w}" for w in coverage_warnings(cover, res.truth.time)]
+        # a truth whose _deg columns hold radians (the solution's are this run's own: only the truth's are said)
+        out["health"]["warnings"] += [f"truth: {w}" for w in attitude_unit_warnings(
+            fw.solution, res.truth, "the solution", out["truth_file"]) if w.startswith(out["truth_file"])]
     notes = res.imu_notes or {}
     if notes.get("repeated_rows"):
         out["imu_repeated_rows"] = {k: notes[k] for k in ("repeated_rows", "repeated_rows_fraction",
