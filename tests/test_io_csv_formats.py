@@ -429,9 +429,11 @@ def test_data_line_counts_blank_lines_before_the_header_and_quoted_cells_over_tw
     ("height_m", -150_000.0, r"height_m=-150000\.0 is beyond \+-100 km"),
     ("roll_deg", 1e6, r"roll_deg=1000000\.0 is beyond \+-360 degrees"),
     ("yaw_deg", -720.0, r"yaw_deg=-720\.0 is beyond \+-360 degrees"),
+    ("ve_m_s", 1e300, r"ve_m_s=1e\+300 is beyond \+-12000 m/s \(faster than the Earth's escape speed\)"),
+    ("vd_m_s", -25_000.0, r"vd_m_s=-25000\.0 is beyond \+-12000 m/s"),
 ])
 @pytest.mark.parametrize("kind", ["lean", "pandas", "parquet", "head"])
-def test_a_solution_height_or_angle_beyond_reason_is_refused(tmp_path, monkeypatch, column, value, match, kind):
+def test_a_solution_height_speed_or_angle_beyond_reason_is_refused(tmp_path, monkeypatch, column, value, match, kind):
     """A solution or truth file whose height_m held 1e300 was read, and `inskit evaluate` printed a horizontal
     RMS of inf; a roll_deg of 1e6 was wrapped into an 80 deg error; both without a word.  A height beyond
     +-100 km (the bound of every height a user gives) or an angle beyond a full turn is refused naming the
@@ -456,7 +458,7 @@ def test_a_solution_height_or_angle_beyond_reason_is_refused(tmp_path, monkeypat
             C.read_solution(p, until_s=2.0)
         else:
             C.read_solution(p)
-    df.loc[7, column] = 359.0 if column.endswith("_deg") else -99_000.0  # within the bounds: read
+    df.loc[7, column] = {"_deg": 359.0, "_m_s": -11_000.0}.get(column[-4:], -99_000.0)  # within the bounds: read
     if kind == "pandas":
         df = df.drop(columns=["note"])
     p.unlink()

@@ -37,3 +37,7 @@ MAX_SAMPLES = 10_000_000
 #: with room to spare.  Beyond it the number is a wrong unit or column (101325, a pressure in Pa; millimetres),
 #: or, below -6.4e6 m, a point past the Earth's centre; taken in silence it sent a run off the Earth.
 MAX_HEIGHT_M = 100_000.0
+#: The velocity components [m/s] a solution or truth file may hold: below 100 km of height nothing moves at
+#: the Earth's escape speed (11.2 km/s); beyond it the number is another unit or column (mm/s, a position),
+#: and squared into the error statistics it made them infinite.
+MAX_SPEED_M_S = 12_000.0

@@ -21,7 +21,7 @@ from .. import rotations as rot
 from ..errors import InputError
 from ..files import require_file, write_csv
 from ..types import GnssData, ImuData, NavSolution
-from ..units import DEG, DEG_PER_HOUR, G0, MAX_HEIGHT_M
+from ..units import DEG, DEG_PER_HOUR, G0, MAX_HEIGHT_M, MAX_SPEED_M_S
 from ..types import plain_number
 
 AXES = ("x", "y", "z")
@@ -912,12 +912,15 @@ SOLUTION_ANGLE_LIMIT_DEG = 360.0
 
 
 def _check_height_attitude(path, cols):
-    """Heights within +-:data:`~inskit.units.MAX_HEIGHT_M` and attitude
+    """Heights within +-:data:`~inskit.units.MAX_HEIGHT_M`, velocity
+    components within +-:data:`~inskit.units.MAX_SPEED_M_S` and attitude
     angles within a full turn either way, else refused naming the row and
     the column: beyond them the number is another unit or column (a height
     in mm, a pressure; a yaw of 1e6), which the scoring would wrap or
     square into nonsense (a height of 1e300: an RMS of inf)."""
     checks = [("height_m", MAX_HEIGHT_M, f"+-{MAX_HEIGHT_M / 1000:g} km of the ellipsoid (a height in metres)")]
+    checks += [(c, MAX_SPEED_M_S, f"+-{MAX_SPEED_M_S:g} m/s (faster than the Earth's escape speed)")
+               for c in ("vn_m_s", "ve_m_s", "vd_m_s")]
     checks += [(c, SOLUTION_ANGLE_LIMIT_DEG, f"+-{SOLUTION_ANGLE_LIMIT_DEG:g} degrees (no attitude needs more than "
                                             "a full turn)") for c in ("roll_deg", "pitch_deg", "yaw_deg")]
     for c, lim, what in checks:
