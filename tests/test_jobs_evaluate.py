@@ -155,6 +155,13 @@ def test_a_one_row_truth_scores_the_epoch_at_its_time(files, tmp_path):
     full = evaluate(files / "sol.csv", files / "truth.csv", t_from=150.0, t_to=150.0 + 1e-9)
     assert s["north_m"]["final"] == pytest.approx(full["north_m"]["final"], abs=1e-9)
     assert s["truth_coverage"]["epochs_outside_truth_span"] == 2999
+    assert any(w.startswith("only 1 solution epoch scored") for w in s["warnings"]), s["warnings"]
+    sol = io.read_solution(files / "sol.csv")  # a one-row solution against the whole truth: said too (it was not)
+    io.write_solution(tmp_path / "one.csv", sol.slice(20, 21))
+    w = evaluate(tmp_path / "one.csv", files / "truth.csv")["warnings"]
+    assert w == ["only 1 solution epoch scored: an RMS and a maximum of so few errors say little (a solution file "
+                 "cut short, or written at a low rate?)"], w
+    assert not [x for x in evaluate(files / "sol.csv", files / "truth.csv")["warnings"] if "scored:" in x]
     tr = truth.slice(10, 11)
     one = tr.interpolate(tr.time)
     assert np.array_equal(one.lla, tr.lla) and np.allclose(one.q_nb, tr.q_nb)

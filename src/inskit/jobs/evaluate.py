@@ -339,8 +339,14 @@ def coverage_warnings(cover: dict, truth_time) -> list[str]:
                    "across them")
     if out:
         out.append(f"scored {done} of {n} solution epochs")
+    if 0 < done < FEW_EPOCHS:
+        out.append(f"only {done} solution epoch{'s' if done > 1 else ''} scored: an RMS and a maximum of so few "
+                   "errors say little (a solution file cut short, or written at a low rate?)")
     return out
 
+
+#: fewer scored epochs than this is a warning: the statistics of a handful of errors are no accuracy figure
+FEW_EPOCHS = 10
 
 SUMMARY_ROWS = (("north_m", "m"), ("east_m", "m"), ("down_m", "m"), ("horizontal_m", "m"), ("3d_m", "m"),
                 ("vn_m_s", "m/s"), ("ve_m_s", "m/s"), ("vd_m_s", "m/s"),
