@@ -471,3 +471,38 @@ def test_mechanize_summary_wraps_the_longitude_as_the_file_does(files, tmp_path)
     lon_file = float(np.degrees(sol.lla[-1, 1]))
     assert -180.0 < final["lon_deg"] <= 180.0 and final["lon_deg"] < 0  # it crossed: about 6 km east of 179.995
     assert final["lon_deg"] == pytest.approx(lon_file, abs=1e-9)
+
+
+SMALL_SCENARIO = """name = "small"
+[start]
+lat_deg = 40.0
+lon_deg = -105.0
+height_m = 1600.0
+[imu]
+rate_hz = 20.0
+grade = "industrial-mems"
+[gnss]
+rate_hz = 1.0
+[[segment]]
+type = "static"
+duration_s = 10.0
+[[segment]]
+type = "accelerate"
+speed_m_s = 5.0
+duration_s = 5.0
+"""
+
+
+def test_simulate_force_never_deletes_a_folder_of_an_output_name(capsys, tmp_path):
+    """A folder out/scenario.png of the user's: `simulate --force` replaced it by the plot and removed it with
+    all it held (exit 0); now refused before the work, naming it, and nothing in out changes."""
+    sc = tmp_path / "small.toml"
+    sc.write_text(SMALL_SCENARIO)
+    out = tmp_path / "out"
+    (out / "scenario.png").mkdir(parents=True)
+    (out / "scenario.png" / "mine.txt").write_text("keep")
+    code, stdout, err = _in_process(capsys, "simulate", sc, "--out", out, "--force", "--json")
+    assert code == 2 and stdout == "", err
+    assert "scenario.png: is a folder" in err and "Traceback" not in err
+    assert (out / "scenario.png" / "mine.txt").read_text() == "keep"
+    assert sorted(p.name for p in out.iterdir()) == ["scenario.png"]

@@ -264,3 +264,17 @@ def test_staged_folder_moves_what_the_block_wrote_and_names_final_paths(tmp_path
     assert str(e.value) == f"{out / 'c.csv'}: could not be written (No space left on device)"
     assert (out / "b.csv").read_text() == "b.csv"
     assert sorted(p.name for p in out.iterdir()) == ["a.png", "b.csv", "old.txt", "summary.json"]
+
+
+def test_an_output_that_is_a_folder_is_refused_even_with_force(tmp_path):
+    """`inskit simulate S --out D --force` with a folder D/scenario.png (the user's, holding files): the set's
+    commit moved the folder aside and removed it with the staging folder, and all it held; now refused before
+    the work, --force or not."""
+    from inskit.files import check_outputs
+
+    (tmp_path / "scenario.png").mkdir()
+    (tmp_path / "scenario.png" / "mine.txt").write_text("keep")
+    for overwrite in (False, True):
+        with pytest.raises(InputError, match=r"scenario.png: is a folder; refusing to replace it by a file"):
+            check_outputs([tmp_path / "imu.csv", tmp_path / "scenario.png"], [], overwrite)
+    assert (tmp_path / "scenario.png" / "mine.txt").read_text() == "keep"

@@ -213,7 +213,9 @@ def check_outputs(outputs, inputs=(), overwrite=False, option="--force"):
     an output that is one of the command's ``inputs`` (never, whatever
     ``overwrite`` says: the run would replace what it reads), or one that
     exists when ``overwrite`` is false (the user's file: ``option`` lifts
-    that), or one whose folder cannot hold it (:func:`check_output_place`).
+    that), or one that is a folder (never: ``option`` overwrites files,
+    it does not delete a folder and what it holds), or one whose folder
+    cannot hold it (:func:`check_output_place`).
     ``None`` entries of either list are skipped.  Every command that
     writes files calls this on the whole list of what it will write."""
     ins = [Path(i) for i in inputs if i is not None]
@@ -224,6 +226,9 @@ def check_outputs(outputs, inputs=(), overwrite=False, option="--force"):
             if same_file(out, inp):
                 raise InputError(f"{out}: is an input of this command; refusing to overwrite it (choose another "
                                  "output)")
+        if Path(out).is_dir():  # never replaced, --force or not: the set's commit took it, and all it held, away
+            raise InputError(f"{out}: is a folder; refusing to replace it by a file (move it, or choose another "
+                             "output)")
         if Path(out).exists() and not overwrite:
             raise InputError(f"{out}: already exists; refusing to overwrite it (use {option})")
         check_output_place(out)
