@@ -352,3 +352,31 @@ def test_omega0_beside_init_from_is_said(tmp_path):
     assert r.returncode == 0, r.stderr
     assert json.loads(r.stdout)["omega0_from"] == "--omega0"
     assert "note: --omega0 3, 1, 2 rad/s is used, not the initial rate of" in r.stderr
+
+
+def test_simulate_and_navigate_write_their_files_as_a_set(tmp_path, monkeypatch):
+    """A failure after the first files were written left them: `gyrofree navigate ... --truth BAD` failed
+    (exit 2) with rates.csv and solution.csv in --out; a simulate whose truth.csv could not be written had
+    replaced array.csv and layout.csv already.  Now nothing of a failed run is left, and an earlier run's
+    files stay as they were."""
+    from inskit.gyrofree import files as GF
+
+    sim = tmp_path / "sim"
+    r = invoke(gyrofree, "simulate", "source003", "--out", sim, "--rate", 100, "--duration", 1, "--json")
+    assert r.exit_code == 0, r.output
+    before = {p.name: p.read_bytes() for p in sim.iterdir()}
+    bad = tmp_path / "bad.csv"
+    bad.write_text("garbage\n")
+    r = invoke(gyrofree, "navigate", sim / "array.csv", "--out", tmp_path / "nav", "--init-from", sim / "truth.csv",
+               "--truth", bad)
+    assert r.exit_code != 0 and isinstance(r.exception, InputError)
+    assert not (tmp_path / "nav").exists() or not any((tmp_path / "nav").iterdir())
+
+    def disk_full(*a, **k):
+        raise InputError("truth.csv: could not be written (No space left on device)")
+
+    monkeypatch.setattr(GF, "write_inertial", disk_full)
+    r = invoke(gyrofree, "simulate", "source003", "--out", sim, "--rate", 100, "--duration", 1, "--noise-ug", 100,
+               "--force")
+    assert r.exit_code != 0 and isinstance(r.exception, InputError)
+    assert {p.name: p.read_bytes() for p in sim.iterdir()} == before  # the earlier set, no staging folder

@@ -162,20 +162,23 @@ def simulate_job(scenario, layout_spec, out_dir, *, d=None, rate_hz=None, durati
         kind = f"Earth (scenario {sc.name})"
     err = array_errors_from_datasheet(layout, rng, rate, **errors)
     data = simulate_array(layout, mot, err, rng)
-    write_array(out / "array.csv", data, overwrite=True)
-    write_layout(out / "layout.csv", layout, overwrite=True)
     extra = {}
     for j, a in enumerate("xyz"):
         extra[f"w{a}_rad_s"] = mot.omega_ib_b[:, j]
     for j, a in enumerate("xyz"):
         extra[f"f{a}_m_s2"] = mot.f_b[:, j]
-    if scenario == SOURCE_SCENARIO:
-        write_inertial(out / "truth.csv", truth, extra=extra, overwrite=True)
-    else:
-        from ..types import NavSolution
+    from ..files import staged_files
 
-        io.write_solution(out / "truth.csv", NavSolution(truth.time, truth.lla, truth.v_n, truth.q_nb, extra),
-                          overwrite=True)
+    with staged_files(out) as stage:  # the three files whole or none (a failure leaves the earlier set)
+        write_array(stage(out / "array.csv"), data, overwrite=True)
+        write_layout(stage(out / "layout.csv"), layout, overwrite=True)
+        if scenario == SOURCE_SCENARIO:
+            write_inertial(stage(out / "truth.csv"), truth, extra=extra, overwrite=True)
+        else:
+            from ..types import NavSolution
+
+            io.write_solution(stage(out / "truth.csv"),
+                              NavSolution(truth.time, truth.lla, truth.v_n, truth.q_nb, extra), overwrite=True)
     files = [str(out / n) for n in ("array.csv", "layout.csv", "truth.csv")]
     return {"scenario": scenario, "kind": kind, "layout": layout.label, "accelerometers": len(layout),
             "d_m": layout.d, "rate_hz": rate, "samples": len(t), "duration_s": float(t[-1] - t[0]), "seed": seed,
@@ -393,25 +396,30 @@ def navigate_job(array_file, layout_spec, out_dir, *, d=None, solver="auto", fra
             raise InputError(f"{' and '.join(given)} would be ignored: {them[0]} of the closed-form solver and "
                              f"{why}; drop {them[1]}, or give --solver closed-form (the ten layout)")
     sol = solve(data, layout, method="least-squares" if solver == "auto" else solver, **opts)
-    write_rates(out / "rates.csv", sol, overwrite=True)
-    summary = {"array_file": str(array_file), "layout": layout.label, "solver": sol.method, "frame": frame,
-               "samples": len(sol), "duration_s": float(sol.time[-1] - sol.time[0]),
-               "omega0_rad_s": None if w0 is None else w0, "omega0_from": omega0_from}
-    if frame == "source":
-        kw = {}
-        if ref_inertial is not None:
-            kw = {"q_ib0": ref_inertial.q_ib[0], "v_i0": ref_inertial.v_i[0], "r_i0": ref_inertial.r_i[0]}
-        nav = navigate_solution_inertial(sol, **kw)
-        write_inertial(out / "solution.csv", nav, overwrite=True)
-        summary["final"] = {"time_s": float(nav.time[-1]), "r_i_m": nav.r_i[-1], "v_i_m_s": nav.v_i[-1]}
-    else:
-        nav = navigate_earth(sol, initial, frame=frame)
-        io.write_solution(out / "solution.csv", nav, overwrite=True)
-        end = nav.state(len(nav) - 1)
-        summary["final"] = {"time_s": end.time, "lat_deg": end.lla[0] / DEG, "lon_deg": end.lla[1] / DEG,
-                            "height_m": end.lla[2]}
-    if truth_file:
-        summary["truth_errors"] = _truth_errors(frame, nav, sol, truth_file)
+    from ..files import staged_files
+
+    # both files whole or neither, and only once the run is through (a truth file that could not be read, after
+    # them, left them behind beside a failed command)
+    with staged_files(out) as stage:
+        write_rates(stage(out / "rates.csv"), sol, overwrite=True)
+        summary = {"array_file": str(array_file), "layout": layout.label, "solver": sol.method, "frame": frame,
+                   "samples": len(sol), "duration_s": float(sol.time[-1] - sol.time[0]),
+                   "omega0_rad_s": None if w0 is None else w0, "omega0_from": omega0_from}
+        if frame == "source":
+            kw = {}
+            if ref_inertial is not None:
+                kw = {"q_ib0": ref_inertial.q_ib[0], "v_i0": ref_inertial.v_i[0], "r_i0": ref_inertial.r_i[0]}
+            nav = navigate_solution_inertial(sol, **kw)
+            write_inertial(stage(out / "solution.csv"), nav, overwrite=True)
+            summary["final"] = {"time_s": float(nav.time[-1]), "r_i_m": nav.r_i[-1], "v_i_m_s": nav.v_i[-1]}
+        else:
+            nav = navigate_earth(sol, initial, frame=frame)
+            io.write_solution(stage(out / "solution.csv"), nav, overwrite=True)
+            end = nav.state(len(nav) - 1)
+            summary["final"] = {"time_s": end.time, "lat_deg": end.lla[0] / DEG, "lon_deg": end.lla[1] / DEG,
+                                "height_m": end.lla[2]}
+        if truth_file:
+            summary["truth_errors"] = _truth_errors(frame, nav, sol, truth_file)
     summary["warnings"] = warnings_
     summary["elapsed_s"] = time.perf_counter() - t0
     summary["files"] = [str(out / "rates.csv"), str(out / "solution.csv")]
