@@ -231,3 +231,35 @@ def test_outage_plot_spans_the_errors_below_a_centimetre_and_names_its_zeros(tmp
             assert 0 < y[0] < 1e-4 and (y[:3] == y[0]).all()  # below every positive error of the panel
         else:
             assert not zero_labels
+
+
+@pytest.mark.parametrize("command, plots", [("simulate", ["errors.png", "platform.png"]),
+                                            ("integrate", ["errors.png"])])
+def test_plots_are_checked_and_written_with_the_files_as_a_set(scenario, tmp_path, monkeypatch, command, plots):
+    """The plots were outside the outputs checked before the run: a user's errors.png in --out was replaced
+    without --force (exit 0), and a plot that failed left the new solution.csv and truth.csv beside the
+    earlier run's plots.  Now an existing plot is refused like the CSV files, and a failed plot leaves the
+    folder as it was."""
+    import inskit.analysis as A
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "errors.png").write_text("mine")
+    r = CliRunner().invoke(platform, [command, str(scenario), "--out", str(out), "--duration", 120])
+    assert r.exit_code != 0 and isinstance(r.exception, InputError) and "errors.png" in str(r.exception)
+    assert sorted(p.name for p in out.iterdir()) == ["errors.png"]
+    assert (out / "errors.png").read_text() == "mine"
+    (out / "errors.png").unlink()
+    s = json.loads(run(platform, [command, scenario, "--out", out, "--duration", 120, "--json"]).stdout)
+    assert sorted(s["files"]) == sorted(str(p) for p in out.iterdir())  # exactly the files written
+    assert all((out / p).is_file() for p in plots)
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+
+    def broken(*a, **k):
+        raise RuntimeError("the plot failed")
+
+    monkeypatch.setattr(A, "plot_errors", broken)
+    r = CliRunner().invoke(platform, [command, str(scenario), "--out", str(out), "--duration", 120, "--seed", 3,
+                                      "--force"])
+    assert r.exit_code != 0 and "the plot failed" in str(r.exception)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before

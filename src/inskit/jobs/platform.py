@@ -24,7 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..files import save_figure, write_csv, write_json
+from ..files import save_figure, staged_files, write_csv, write_json
 from .. import analysis, earth, io
 from ..errors import ConfigError, InputError
 from ..platform import design as D
@@ -606,7 +606,8 @@ def simulate_job(scenario_file, out_dir, *, kind="semi-analytical", earth_model=
         raise InputError(f"--kind must be one of {', '.join(KINDS)}, got {kind!r}")
     out = Path(out_dir)
     files = [out / "solution.csv", out / "truth.csv"]
-    _refuse(files, overwrite, scenario_file)
+    plots = [out / "errors.png", out / "platform.png"] if plot else []
+    _refuse(files + plots, overwrite, scenario_file)  # the plots too: a user's errors.png was replaced unasked
     sc, truth, errors, rng = _scenario_setup(scenario_file, dt=dt, earth_model=earth_model, seed=seed,
                                              gyro_drift_deg_h=gyro_drift_deg_h, accel_bias_ug=accel_bias_ug,
                                              duration=duration)
@@ -614,15 +615,16 @@ def simulate_job(scenario_file, out_dir, *, kind="semi-analytical", earth_model=
     t0 = time.perf_counter()
     run = mechanize_platform(truth, kind, errors=errors, rng=rng)
     elapsed = time.perf_counter() - t0
-    out.mkdir(parents=True, exist_ok=True)
     ts = truth.solution()
-    io.write_solution(files[0], run.solution, overwrite=True)
-    io.write_solution(files[1], ts, overwrite=True)
     s = _summary(run.solution, ts)
-    if plot:
-        files.append(analysis.plot_errors(analysis.nav_error(run.solution, ts), out / "errors.png",
-                                          title=f"{sc.name}: {kind} platform INS"))
-        files.append(_plot_platform(run, out / "platform.png", f"{sc.name}: {kind}"))
+    with staged_files(out) as stage:  # whole or not at all, as a set: a failed plot leaves the earlier run's files
+        io.write_solution(stage(files[0]), run.solution, overwrite=True)
+        io.write_solution(stage(files[1]), ts, overwrite=True)
+        if plot:
+            analysis.plot_errors(analysis.nav_error(run.solution, ts), stage(plots[0]),
+                                 title=f"{sc.name}: {kind} platform INS")
+            _plot_platform(run, stage(plots[1]), f"{sc.name}: {kind}")
+    files += plots
     tilt = run.tilt_enu / ARCMIN
     return {"scenario": sc.name, "kind": kind, "earth": earth_model, "dt_s": dt, "seed": seed,
             "epochs": len(truth.time), "duration_s": float(truth.time[-1] - truth.time[0]), "elapsed_s": elapsed,
@@ -644,7 +646,8 @@ def integrate_job(scenario_file, out_dir, *, scheme="closed", estimator="kalman"
     log = log or _log_default
     out = Path(out_dir)
     files = [out / "solution.csv", out / "ins.csv", out / "truth.csv", out / "estimates.csv"]
-    _refuse(files, overwrite, scenario_file)
+    plots = [out / "errors.png"] if plot else []
+    _refuse(files + plots, overwrite, scenario_file)  # the plot too: a user's errors.png was replaced unasked
     sc, truth, errors, rng = _scenario_setup(scenario_file, dt=dt, earth_model=earth_model, seed=seed,
                                              gyro_drift_deg_h=gyro_drift_deg_h, accel_bias_ug=accel_bias_ug,
                                              duration=duration)
@@ -664,16 +667,17 @@ def integrate_job(scenario_file, out_dir, *, scheme="closed", estimator="kalman"
     kt = KalmanTuning(sigma_position=sig_h / rn, sigma_velocity=max(sig_v, 0.1))
     run = integrate_platform(truth, sns, scheme=scheme, estimator=estimator, errors=errors, kalman=kt,
                              every=every, rng=rng)
-    out.mkdir(parents=True, exist_ok=True)
     ts = truth.solution()
-    io.write_solution(files[0], run.solution, overwrite=True)
-    io.write_solution(files[1], run.ins, overwrite=True)
-    io.write_solution(files[2], ts, overwrite=True)
-    _write_estimates(files[3], run)
     s = _summary(run.solution, ts)
-    if plot:
-        files.append(analysis.plot_errors(analysis.nav_error(run.solution, ts), out / "errors.png",
-                                          title=f"{sc.name}: {scheme} loop, {estimator}"))
+    with staged_files(out) as stage:  # whole or not at all, as a set: a failed plot leaves the earlier run's files
+        io.write_solution(stage(files[0]), run.solution, overwrite=True)
+        io.write_solution(stage(files[1]), run.ins, overwrite=True)
+        io.write_solution(stage(files[2]), ts, overwrite=True)
+        _write_estimates(stage(files[3]), run)
+        if plot:
+            analysis.plot_errors(analysis.nav_error(run.solution, ts), stage(plots[0]),
+                                 title=f"{sc.name}: {scheme} loop, {estimator}")
+    files += plots
     ss = steady_state_errors(run, min(2 * HOUR, 0.25 * (truth.time[-1] - truth.time[0])))
     return {"scenario": sc.name, "scheme": scheme, "filter": estimator, "earth": earth_model, "dt_s": dt,
             "seed": seed, "epochs": len(truth.time), "fixes": int(sns.available.sum()), "elapsed_s": run.elapsed_s,
