@@ -506,3 +506,43 @@ def test_simulate_force_never_deletes_a_folder_of_an_output_name(capsys, tmp_pat
     assert "scenario.png: is a folder" in err and "Traceback" not in err
     assert (out / "scenario.png" / "mine.txt").read_text() == "keep"
     assert sorted(p.name for p in out.iterdir()) == ["scenario.png"]
+
+
+def test_allan_writes_its_plot_and_toml_as_a_set(tmp_path, capsys, monkeypatch):
+    """--plot and --toml were written one after the other: a TOML that could not be written (disk full) left
+    the new plot in place of the old one, beside a failed command.  Now both land or neither; the earlier
+    files stay as they were and no temporary file is left in either folder."""
+    import inskit.files as F
+
+    rng = np.random.default_rng(5)
+    n = 1300
+    t = np.arange(n) * 0.1
+    dth = rng.normal(0.0, 1e-5, (n, 3))
+    dv = rng.normal(0.0, 1e-4, (n, 3)) + [0.0, 0.0, -0.981]
+    dth[0] = dv[0] = 0.0
+    from inskit.types import ImuData
+
+    io.write_imu(tmp_path / "static.csv", ImuData(t, dth, dv))
+    (tmp_path / "p").mkdir()
+    (tmp_path / "t").mkdir()
+    plot, toml = tmp_path / "p" / "allan.png", tmp_path / "t" / "noise.toml"
+    plot.write_text("old plot")
+    toml.write_text("old toml")
+
+    def full(path, text):
+        raise OSError(28, "No space left on device", str(path))
+
+    monkeypatch.setattr(F, "write_text", full)
+    code, out, err = _in_process(capsys, "allan", tmp_path / "static.csv", "--plot", plot, "--toml", toml, "--force",
+                                 "--json")
+    assert code == 2 and out == "" and "No space left on device" in err and "Traceback" not in err, err
+    assert plot.read_text() == "old plot" and toml.read_text() == "old toml"
+    assert sorted(p.name for p in tmp_path.rglob("*") if p.is_file()) == ["allan.png", "noise.toml", "static.csv"]
+    monkeypatch.undo()
+    code, out, err = _in_process(capsys, "allan", tmp_path / "static.csv", "--plot", plot, "--toml", toml, "--force",
+                                 "--json")
+    assert code == 0, err
+    s = json.loads(out)
+    assert s["plot"] == str(plot) and s["toml"] == str(toml) and toml.read_text() == s["noise_toml"]
+    assert plot.read_bytes()[:4] == b"\x89PNG"
+    assert sorted(p.name for p in tmp_path.rglob("*") if p.is_file()) == ["allan.png", "noise.toml", "static.csv"]

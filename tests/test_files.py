@@ -278,3 +278,39 @@ def test_an_output_that_is_a_folder_is_refused_even_with_force(tmp_path):
         with pytest.raises(InputError, match=r"scenario.png: is a folder; refusing to replace it by a file"):
             check_outputs([tmp_path / "imu.csv", tmp_path / "scenario.png"], [], overwrite)
     assert (tmp_path / "scenario.png" / "mine.txt").read_text() == "keep"
+
+
+def test_staged_paths_land_whole_or_leave_the_old_files_in_every_folder(tmp_path, monkeypatch):
+    """Files of one set in two folders (a command's --plot and --toml): a rename that fails midway undoes the
+    ones made; an error in the block leaves no temporary file."""
+    from inskit.files import staged_paths
+
+    a, b = tmp_path / "x" / "a.txt", tmp_path / "y" / "b.txt"
+    a.parent.mkdir()
+    b.parent.mkdir()
+    a.write_text("old a")
+    with pytest.raises(RuntimeError):
+        with staged_paths() as stage:
+            stage(a).write_text("new a")
+            raise RuntimeError("the work failed")
+    assert a.read_text() == "old a" and sorted(p.name for p in tmp_path.rglob("*") if p.is_file()) == ["a.txt"]
+    real = os.replace
+
+    def failing(src, dst):  # the disk fills as b.txt moves in
+        if os.path.basename(dst) == "b.txt":
+            raise OSError(28, "No space left on device")
+        return real(src, dst)
+
+    monkeypatch.setattr(os, "replace", failing)
+    with pytest.raises(InputError, match=r"b.txt: could not be written \(No space left on device\)"):
+        with staged_paths() as stage:
+            stage(a).write_text("new a")
+            stage(b).write_text("new b")
+    assert a.read_text() == "old a" and not b.exists()
+    assert sorted(p.name for p in tmp_path.rglob("*") if p.is_file()) == ["a.txt"]
+    monkeypatch.undo()
+    with staged_paths() as stage:
+        stage(a).write_text("new a")
+        stage(b).write_text("new b")
+    assert a.read_text() == "new a" and b.read_text() == "new b"
+    assert sorted(p.name for p in tmp_path.rglob("*") if p.is_file()) == ["a.txt", "b.txt"]

@@ -494,7 +494,7 @@ def allan(imu_file, plot_file, toml_file, force, no_unit_check, first_row, as_js
     other axes of its sensor; three constant gyro (or accelerometer) axes
     are refused."""
     from .analysis.allan import plot_allan
-    from .files import check_folder_writable, check_outputs, same_file, write_text
+    from .files import check_folder_writable, check_outputs, same_file, staged_paths, write_text
     from .jobs.allan import allan_report, read_static_log
 
     _check_plot_file(plot_file, force, [imu_file])
@@ -510,12 +510,13 @@ def allan(imu_file, plot_file, toml_file, force, no_unit_check, first_row, as_js
         raise InputError(f"{imu_file}: {exc}") from None
     gyro, acc = rep["gyro"], rep["accel"]
     res = {"file": imu_file, "duration_s": float(imu.time[-1] - imu.time[0]), **rep}
-    if plot_file:
-        plot_allan(r, plot_file, title=Path(imu_file).name)
-        res["plot"] = plot_file
-    if toml_file:
-        write_text(toml_file, rep["noise_toml"])
-        res["toml"] = toml_file
+    with staged_paths() as stage:  # the plot and the TOML whole or neither (a failed one left the other)
+        if plot_file:
+            plot_allan(r, stage(plot_file), title=Path(imu_file).name)
+            res["plot"] = plot_file
+        if toml_file:
+            write_text(stage(toml_file), rep["noise_toml"])
+            res["toml"] = toml_file
     def rrw(v):
         return f"{v:.3g}" if v is not None else "-"
 

@@ -133,6 +133,67 @@ def _commit(staged, previous):
         raise
 
 
+@contextmanager
+def staged_paths():
+    """Write a set of files that may lie in different folders (``--plot``
+    and ``--toml`` of one command) whole or not at all, as
+    :func:`staged_files` does for one folder: yield ``stage(path)``, a
+    temporary path beside ``path`` (:func:`atomic_write`'s name, same
+    suffixes); when the block completes each is renamed to its final name,
+    and should a rename fail (or be interrupted) the ones made are undone:
+    the files they replaced come back.  On any error or interrupt in the
+    block the temporary files go and every final file is left as it was.
+    A failed write raises :class:`InputError` naming the file."""
+    staged = {}
+
+    def stage(path):
+        path = Path(path)
+        staged[path] = path.with_name(f".part-{os.getpid()}-{path.name}")
+        return staged[path]
+
+    def drop_parts():
+        for part in staged.values():
+            part.unlink(missing_ok=True)
+
+    try:
+        yield stage
+    except OSError as exc:
+        drop_parts()
+        raise InputError(f"{exc.filename or 'an output'}: could not be written ({exc.strerror or exc})") from None
+    except BaseException:
+        drop_parts()
+        raise
+    moved = []  # (final, its earlier file moved aside or None)
+    current = None
+    try:
+        for final, part in staged.items():
+            current = final
+            if not part.exists():
+                continue
+            old = None
+            if final.exists():
+                old = final.with_name(f".previous-{os.getpid()}-{final.name}")
+                os.replace(final, old)
+            moved.append((final, old))
+            os.replace(part, final)
+    except BaseException as exc:
+        for final, old in reversed(moved):
+            try:
+                if old is not None:
+                    os.replace(old, final)
+                else:
+                    final.unlink(missing_ok=True)
+            except OSError:
+                pass
+        drop_parts()
+        if isinstance(exc, OSError):
+            raise InputError(f"{current}: could not be written ({exc.strerror or exc})") from None
+        raise
+    for _, old in moved:
+        if old is not None:
+            old.unlink(missing_ok=True)
+
+
 #: the output folders :func:`check_folder_writable` made in this command (the deepest first)
 _MADE: list = []
 
