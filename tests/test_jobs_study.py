@@ -384,3 +384,33 @@ def test_the_ideal_grade_runs(tmp_path):
         assert figures and all(np.isfinite(a[k]) for k in figures), a
         if "outage_end_horizontal_m" in a:
             assert a["outage_end_horizontal_m"] < b["outage_end_horizontal_m"]
+
+
+def test_the_result_files_land_as_a_set(one_worker, tmp_path, monkeypatch):
+    """A plot that failed as the study finished left runs.parquet and summary.parquet of the run without a
+    summary.json (or beside an earlier one); now the four result files land together or none does."""
+    import shutil
+
+    import inskit.jobs.study as S
+
+    out1, _ = one_worker
+    out = tmp_path / "out"
+    shutil.copytree(out1, out)
+    for name in ("runs.parquet", "summary.parquet", "study.png", "summary.json"):
+        (out / name).unlink()
+    before = sorted(str(p.relative_to(out)) for p in out.rglob("*"))
+
+    def broken(*a, **k):
+        raise RuntimeError("the plot failed")
+
+    monkeypatch.setattr(S, "_plot", broken)
+    with pytest.raises(RuntimeError, match="the plot failed"):
+        run_study(_spec(tmp_path), out)
+    assert sorted(str(p.relative_to(out)) for p in out.rglob("*")) == before
+    monkeypatch.undo()
+    res = run_study(_spec(tmp_path), out)  # the parts are all there: no cluster
+    assert res["runs_computed"] == 0
+    assert sorted(res["files"].values()) == sorted(str(out / n) for n in ("runs.parquet", "summary.parquet",
+                                                                            "study.png", "summary.json"))
+    assert all(Path(f).is_file() for f in res["files"].values())
+    assert (out1 / "runs.parquet").read_bytes() == (out / "runs.parquet").read_bytes()

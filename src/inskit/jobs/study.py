@@ -69,7 +69,8 @@ from .. import earth
 from .. import rotations as rot
 from ..config_files import check_magnitude, check_scalar_type, read_toml, validation_message
 from ..errors import ConfigError, InputError
-from ..files import atomic_write, check_folder_writable, check_outputs, save_figure, write_json, write_text
+from ..files import (atomic_write, check_folder_writable, check_outputs, save_figure, staged_files, write_json,
+                     write_text)
 from ..types import ImuData
 from ..units import DEG, DEG_PER_HOUR, G0, MICRO_G, PPM
 from .montecarlo import (CONSISTENCY_GNSS, ConsistencySpec, anees_band, consistency_errors,
@@ -844,10 +845,8 @@ def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None
     if df is None or len(df) != total:
         raise InputError(f"{out}: expected {total} runs after the study, found {0 if df is None else len(df)}")
     df = _frame(df.to_dict("records"), figures)  # one dtype set whatever the parts held
-    files = {"runs": _write_parquet(df, out / "runs.parquet"),
-             "summary": _write_parquet(statistics(df, figures), out / "summary.parquet")}
+    files = {"runs": out / "runs.parquet", "summary": out / "summary.parquet", "plot": out / "study.png"}
     rank = ranking(df, cases)
-    files["plot"] = _plot(df, cases, out / "study.png")
     res = {"study": str(Path(spec_path)), "kind": spec.kind, "scenario": str(scenario_path),
            "duration_s": spec.duration_s, "seed": spec.seed, "runs_per_case": spec.runs,
            "outage_s": list(cases[0].outage) if cases[0].outage else None, "ranking": rank, "grades": grades,
@@ -857,11 +856,13 @@ def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None
            "files": {k: str(v) for k, v in files.items()}}
     files["json"] = out / "summary.json"
     res["files"]["json"] = str(files["json"])
-    return _finish(res, files["json"])
-
-
-def _finish(res, path):
-    write_json(path, res)
+    # the four result files whole or none, as a set: a plot that failed (or Ctrl-C) left runs.parquet and
+    # summary.parquet of this run beside no summary.json, or beside the one of an earlier run
+    with staged_files(out) as stage:
+        _write_parquet(df, stage(files["runs"]))
+        _write_parquet(statistics(df, figures), stage(files["summary"]))
+        _plot(df, cases, stage(files["plot"]))
+        write_json(stage(files["json"]), res)
     return res
 
 
