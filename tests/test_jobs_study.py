@@ -414,3 +414,35 @@ def test_the_result_files_land_as_a_set(one_worker, tmp_path, monkeypatch):
                                                                             "study.png", "summary.json"))
     assert all(Path(f).is_file() for f in res["files"].values())
     assert (out1 / "runs.parquet").read_bytes() == (out / "runs.parquet").read_bytes()
+
+
+def test_ctrl_c_stops_a_study_with_one_line_and_no_traceback(tmp_path):
+    """Ctrl-C (SIGINT to the process group, as a terminal sends it) during the runs printed the traceback of
+    every Dask worker process and distributed's own 'Exception in callback ... NameError' beside 'inskit:
+    aborted'; now only that line (exit 130), and the parts written so far stay for the resume."""
+    import os
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    spec = _spec(tmp_path, TINY.replace("runs = 4", "runs = 200"))
+    p = subprocess.Popen([sys.executable, "-m", "inskit.cli", "study", str(spec), "--out", str(tmp_path / "out"),
+                          "--workers", "1", "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         start_new_session=True)
+    lines = []
+    try:
+        for line in p.stderr:
+            lines.append(line)
+            if "local cluster" in line:
+                break
+        time.sleep(1.0)
+        os.killpg(p.pid, signal.SIGINT)
+        out, err = p.communicate(timeout=60)
+    finally:
+        if p.poll() is None:
+            os.killpg(p.pid, signal.SIGKILL)
+    err = "".join(lines) + err
+    assert p.returncode == 130 and out == "", err
+    assert err.rstrip().endswith("inskit: aborted") and "Traceback" not in err and "ERROR" not in err, err
+    assert (tmp_path / "out" / "study.json").is_file() and not (tmp_path / "out" / "summary.json").exists()

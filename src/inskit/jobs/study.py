@@ -648,8 +648,22 @@ def _open_client(scheduler, workers):
     n = (os.cpu_count() or 1) if workers is None else int(workers)
     if n < 1:
         raise ConfigError(f"--workers must be at least 1, got {workers}")
-    cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
-                           silence_logs=logging.ERROR)
+    # Ctrl-C is the study's to handle (the client stops, the parts stay): the worker processes start with SIGINT
+    # ignored (a disposition they inherit, and keep: Python installs its KeyboardInterrupt handler only over the
+    # default one), else each printed its traceback beside 'inskit: aborted'; and distributed's own error on the
+    # interrupted wait (a NameError in its sync's cancel, logged by tornado) is not the user's message either
+    import signal
+    import threading
+
+    main = threading.current_thread() is threading.main_thread()
+    old = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
+    try:
+        cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
+                               silence_logs=logging.ERROR)
+    finally:
+        if main:
+            signal.signal(signal.SIGINT, old)
+    logging.getLogger("tornado.application").setLevel(logging.CRITICAL)
     return Client(cluster), cluster
 
 
@@ -838,6 +852,10 @@ def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None
                 client.cancel(futures)
             t_runs = time.perf_counter() - t1
         finally:
+            if cluster is not None:  # its shutdown after an interrupt ('Removing worker ... lost scattered data')
+                import logging       # is not the user's message: 'inskit: aborted' is
+
+                logging.getLogger("distributed").setLevel(logging.CRITICAL)
             client.close()
             if cluster is not None:
                 cluster.close()
