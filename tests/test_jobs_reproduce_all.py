@@ -174,3 +174,36 @@ def test_cheap_experiments_match_the_doc(tmp_path):
 def test_every_experiment_matches_the_doc(tmp_path):
     res = RA.run_all(tmp_path)
     _check_against_doc(res)  # verdicts included: a claim the doc records as failed must still fail
+
+
+def test_a_folder_not_of_reproduce_all_is_not_overwritten_and_the_report_lands_as_a_set(tmp_path, monkeypatch):
+    """`reproduce all --out D` replaced the user's D/REPORT.md without a word (exit 0); now refused before any
+    experiment unless --force, while a folder an earlier `reproduce all` wrote (reproduce.json) is rerun into
+    freely; the three report files land together or none does."""
+    import inskit.jobs.reproduce_all as M
+
+    def good(out, log):
+        return [RA.published("closed form", 1.0, 1.0, 0.0)], {}
+
+    monkeypatch.setattr(RA, "EXPERIMENTS", {"good": ("test", good, True)})
+    d = tmp_path / "d"
+    d.mkdir()
+    (d / "REPORT.md").write_text("my notes")
+    r = CliRunner().invoke(_cli(), ["all", "--out", str(d), "--json"])
+    assert r.exit_code != 0 and r.stdout == ""
+    assert "holds REPORT.md but no reproduce.json" in str(r.exception) and "--force" in str(r.exception)
+    assert (d / "REPORT.md").read_text() == "my notes" and sorted(p.name for p in d.iterdir()) == ["REPORT.md"]
+    r = CliRunner().invoke(_cli(), ["all", "--out", str(d), "--force", "--json"])
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.stdout)["files"] == [str(d / n) for n in ("REPORT.md", "report.html", "reproduce.json")]
+    r = CliRunner().invoke(_cli(), ["all", "--out", str(d), "--json"])  # its own folder: rerun without --force
+    assert r.exit_code == 0, r.output
+    before = {p.name: p.read_bytes() for p in d.iterdir() if p.is_file()}
+
+    def broken(res, out):
+        raise RuntimeError("the page failed")
+
+    monkeypatch.setattr(M, "report_html", broken)
+    r = CliRunner().invoke(_cli(), ["all", "--out", str(d), "--json"])
+    assert r.exit_code != 0 and "the page failed" in str(r.exception)
+    assert {p.name: p.read_bytes() for p in d.iterdir() if p.is_file()} == before

@@ -27,8 +27,11 @@ from .cli_output import log as _log
               help="Output folder: REPORT.md, report.html (self-contained), reproduce.json and one folder of "
                    "figures per experiment.")
 @click.option("--only", metavar="A,B", help="Run only these experiments (comma-separated names).")
+@click.option("--force", is_flag=True, help="Write into a folder that is not an earlier reproduce all's although it "
+              "holds files of the report's names (REPORT.md, report.html, reproduce.json) or an experiment's "
+              "folder, replacing them.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def reproduce_all(out_dir, only, as_json):
+def reproduce_all(out_dir, only, force, as_json):
     """Every published experiment and every measured README claim, one report.
 
     Each experiment runs through the job of its own command; every quantity
@@ -42,7 +45,7 @@ def reproduce_all(out_dir, only, as_json):
     """
     from .jobs.reproduce_all import fmt, run_all
 
-    res = run_all(out_dir, only=only, log=_log)
+    res = run_all(out_dir, only=only, log=_log, force=force)
     lines = [f"{'experiment':<22}{'verdict':<9}{'pass':>5}{'differs':>8}{'fail':>5}{'info':>5}{'seconds':>9}"]
     for e in res["experiments"]:
         c = e["counts"]

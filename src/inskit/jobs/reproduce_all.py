@@ -58,7 +58,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
-from ..files import plain_json, write_json, write_text
+from ..files import plain_json, staged_files, write_json, write_text
 
 ROOT = Path(__file__).resolve().parents[3]
 DOC_PATH = ROOT / "docs" / "REPRODUCE.md"
@@ -438,7 +438,31 @@ def parse_only(text):
     return names
 
 
-def run_all(out_dir, *, only=None, log=None) -> dict:
+#: the report files of :func:`run_all`, beside one folder per experiment; ``reproduce.json`` marks the folder as
+#: one that ``inskit reproduce all`` wrote (rerun into it freely)
+OUTPUT_FILES = ("REPORT.md", "report.html", "reproduce.json")
+
+
+def check_outputs_all(out, names, force=False):
+    """Refuse, before any experiment runs, to write into a folder that is
+    not an earlier ``reproduce all``'s (no ``reproduce.json``) but holds
+    files of the report's names or a folder of an experiment's (the user's
+    REPORT.md was replaced without a word), unless ``force``; and, ``force``
+    or not, a report name that is a folder (:func:`inskit.files.check_outputs`)."""
+    from ..errors import InputError
+    from ..files import check_outputs
+
+    out = Path(out)
+    check_outputs([out / n for n in OUTPUT_FILES], (), overwrite=True)
+    if force or (out / "reproduce.json").is_file():
+        return
+    theirs = [p.name for p in [out / n for n in OUTPUT_FILES] + [out / n for n in names] if p.exists()]
+    if theirs:
+        raise InputError(f"{out}: holds {', '.join(theirs)} but no reproduce.json: not the folder of an earlier "
+                         "`inskit reproduce all`; refusing to overwrite them (use --force or another --out)")
+
+
+def run_all(out_dir, *, only=None, log=None, force=False) -> dict:
     """Run the experiments (all, or those named in ``only``), write
     ``REPORT.md``, ``report.html`` and ``reproduce.json`` into ``out_dir``.
 
@@ -450,6 +474,10 @@ def run_all(out_dir, *, only=None, log=None) -> dict:
         Experiment names (keys of :data:`EXPERIMENTS`), or ``"a,b"``.
     log : callable, optional
         Progress, one line per experiment (and the jobs' own lines).
+    force : bool, optional
+        Write into a folder that is not an earlier ``reproduce all``'s
+        although it holds files of the report's names
+        (:func:`check_outputs_all`), replacing them.
 
     Returns
     -------
@@ -464,6 +492,7 @@ def run_all(out_dir, *, only=None, log=None) -> dict:
     names = list(EXPERIMENTS) if only is None else (parse_only(only) if isinstance(only, str) else parse_only(
         ",".join(only)))
     out = Path(out_dir)
+    check_outputs_all(out, names, force)
     check_folder_writable(out)
     t_all = time.perf_counter()
     exps = []
@@ -492,10 +521,12 @@ def run_all(out_dir, *, only=None, log=None) -> dict:
             f"{counts['differs']} differ, {counts['fail']} fail, {counts['info']} info)" + (f": {err}" if err else ""))
     res = {"experiments": exps, "failed": [e["name"] for e in exps if e["verdict"] == "fail"],
            "seconds": time.perf_counter() - t_all, "python": sys.version.split()[0]}
-    files = [write_text(out / "REPORT.md", report_markdown(res)),
-             write_text(out / "report.html", report_html(res, out))]
-    res["files"] = [str(f) for f in files] + [str(out / "reproduce.json")]
-    write_json(out / "reproduce.json", res)
+    files = [out / n for n in OUTPUT_FILES]
+    res["files"] = [str(f) for f in files]
+    with staged_files(out) as stage:  # the three whole or none: an interrupted report left REPORT.md alone
+        write_text(stage(files[0]), report_markdown(res))
+        write_text(stage(files[1]), report_html(res, out))
+        write_json(stage(files[2]), res)
     return res
 
 
