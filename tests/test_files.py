@@ -314,3 +314,49 @@ def test_staged_paths_land_whole_or_leave_the_old_files_in_every_folder(tmp_path
         stage(b).write_text("new b")
     assert a.read_text() == "new a" and b.read_text() == "new b"
     assert sorted(p.name for p in tmp_path.rglob("*") if p.is_file()) == ["a.txt", "b.txt"]
+
+
+def test_staged_tree_moves_a_whole_tree_or_leaves_the_folder_as_it_was(tmp_path, monkeypatch):
+    """A reproduction's figures, tables and subfolders: all moved in at the end, or none; the paths the job
+    returns (in the staging folder) relocated to the folder."""
+    from inskit.files import check_results_folder, relocated, staged_tree
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "fig.png").write_text("old fig")
+    with pytest.raises(InputError, match=r"out: already holds files; refusing to overwrite them \(use --force"):
+        check_results_folder(out)
+    assert check_results_folder(out, overwrite=True) == out
+    with pytest.raises(RuntimeError):
+        with staged_tree(out) as tmp:
+            (tmp / "fig.png").write_text("new fig")
+            (tmp / "sim").mkdir()
+            (tmp / "sim" / "imu.csv").write_text("new imu")
+            raise RuntimeError("the job failed")
+    assert sorted(str(p.relative_to(out)) for p in out.rglob("*")) == ["fig.png"]
+    assert (out / "fig.png").read_text() == "old fig"
+    real = os.replace
+
+    def failing(src, dst):  # the disk fills as the second file moves in
+        if os.path.basename(dst) == "imu.csv":
+            raise OSError(28, "No space left on device")
+        return real(src, dst)
+
+    monkeypatch.setattr(os, "replace", failing)
+    with pytest.raises(InputError, match="could not be written"):
+        with staged_tree(out) as tmp:
+            (tmp / "fig.png").write_text("new fig")
+            (tmp / "sim").mkdir()
+            (tmp / "sim" / "imu.csv").write_text("new imu")
+    assert sorted(str(p.relative_to(out)) for p in out.rglob("*")) == ["fig.png"]
+    assert (out / "fig.png").read_text() == "old fig"
+    monkeypatch.undo()
+    with staged_tree(out) as tmp:
+        (tmp / "fig.png").write_text("new fig")
+        (tmp / "sim").mkdir()
+        (tmp / "sim" / "imu.csv").write_text("new imu")
+        res = {"figures": [str(tmp / "fig.png")], "sim": tmp / "sim", "note": "kept", "n": 1}
+    assert relocated(res, tmp, out) == {"figures": [str(out / "fig.png")], "sim": str(out / "sim"), "note": "kept",
+                                        "n": 1}
+    assert sorted(str(p.relative_to(out)) for p in out.rglob("*")) == ["fig.png", "sim", "sim/imu.csv"]
+    assert (out / "fig.png").read_text() == "new fig"

@@ -380,3 +380,33 @@ def test_simulate_and_navigate_write_their_files_as_a_set(tmp_path, monkeypatch)
                "--force")
     assert r.exit_code != 0 and isinstance(r.exception, InputError)
     assert {p.name: p.read_bytes() for p in sim.iterdir()} == before  # the earlier set, no staging folder
+
+
+def test_reproduce_refuses_a_folder_with_files_and_writes_as_a_set(tmp_path, monkeypatch):
+    """`reproduce gyrofree --out D` replaced the user's D/entries.json without a word (exit 0), and a run that
+    failed midway left the figures written so far; now a folder that holds files is refused before the work
+    unless --force, and the files land together (their paths in D) or none does."""
+    from inskit.jobs import gyrofree as JG
+
+    def fake(out_dir, quick=False, log=None):
+        (Path(out_dir) / "fig11_euler_angles.png").write_text("new fig")
+        (Path(out_dir) / "entries.json").write_text("[]")
+        if quick:
+            raise RuntimeError("the run failed")
+        return {"entries": [], "growth_60s": [], "growth_grades": "", "figures": [str(Path(out_dir) /
+                "fig11_euler_angles.png")], "tables": [str(Path(out_dir) / "entries.json")]}
+
+    monkeypatch.setattr(JG, "reproduce_gyrofree", fake)
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "entries.json").write_text("mine")
+    r = invoke(reproduce_gyrofree, "--out", out, "--json")
+    assert r.exit_code != 0 and isinstance(r.exception, InputError) and "already holds files" in str(r.exception)
+    r = invoke(reproduce_gyrofree, "--out", out, "--quick", "--force", "--json")
+    assert r.exit_code != 0 and "the run failed" in str(r.exception)
+    assert sorted(p.name for p in out.iterdir()) == ["entries.json"] and (out / "entries.json").read_text() == "mine"
+    r = invoke(reproduce_gyrofree, "--out", out, "--force", "--json")
+    assert r.exit_code == 0, r.output
+    s = json.loads(r.stdout)
+    assert s["figures"] == [str(out / "fig11_euler_angles.png")] and s["tables"] == [str(out / "entries.json")]
+    assert sorted(p.name for p in out.iterdir()) == ["entries.json", "fig11_euler_angles.png"]

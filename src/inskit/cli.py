@@ -649,12 +649,16 @@ def reproduce():
 
 @reproduce.command("alignment-ga")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Folder for the figures.")
+@click.option("--force", is_flag=True, help="Write into a folder that already holds files, replacing those of the "
+              "figures' names.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def reproduce_alignment(out_dir, as_json):
+def reproduce_alignment(out_dir, force, as_json):
     """Source 002: one-step alignment blended by a GA (figures 6-9, headline case)."""
     from .jobs.reproduce_alignment import run
 
-    res = run(out_dir, log=_log)
+    from .cli_output import reproduce_into
+
+    res = reproduce_into(out_dir, force, lambda d: run(d, log=_log))
     lines = [f"{'item':<72} {'published':<28} ours"]
     for e in res["entries"]:
         lines.append(f"{e['item']:<72} {str(e['published']):<28} {e['ours']}")

@@ -87,16 +87,20 @@ def spp(obs, nav, reference, mask_deg, iono, tropo, systems, no_raim, out_dir, f
               "(and the simulated blockage drive's files).")
 @click.option("--experiment", type=click.Choice(["walk", "blockage", "all"]), default="all", show_default=True)
 @click.option("--seed", type=SEED, default=1, show_default=True, help="Seed of the simulated blockage drive.")
+@click.option("--force", is_flag=True, help="Write into a folder that already holds files, replacing those of the "
+              "figures' and the simulated drive's names.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def reproduce_tight(out_dir, experiment, seed, as_json):
+def reproduce_tight(out_dir, experiment, seed, force, as_json):
     """Tight against loose coupling (source 000: tight coupling works with
     fewer than four satellites): the bundled walk_0827 raw log against its RTK
     track, and a simulated drive through blockages keeping 3, 2 and 1
     satellites."""
     from .jobs.reproduce_tight import run
 
+    from .cli_output import reproduce_into
+
     exps = ("walk", "blockage") if experiment == "all" else (experiment,)
-    res, text = run(out_dir, exps, seed=seed, log=_log)
+    res, text = reproduce_into(out_dir, force, lambda d: run(d, exps, seed=seed, log=_log))
     _emit(res, as_json, text + "\nfigures: " + ", ".join(res["files"]))
 
 

@@ -146,12 +146,15 @@ def navigate(array_file, layout_spec, d, out_dir, solver, sign_rule, frame, init
 @click.command("gyrofree")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Folder for figures and tables.")
 @click.option("--quick", is_flag=True, help="Coarser grids and fewer runs (a few seconds).")
+@click.option("--force", is_flag=True, help="Write into a folder that already holds files, replacing those of the "
+              "figures' and tables' names.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def reproduce_gyrofree(out_dir, quick, as_json):
+def reproduce_gyrofree(out_dir, quick, force, as_json):
     """Source 003: published vs ours, figures 11-14, sensitivity, 60 s comparison."""
+    from .cli_output import reproduce_into
     from .jobs.gyrofree import reproduce_gyrofree as job
 
-    res = job(out_dir, quick=quick, log=_log)
+    res = reproduce_into(out_dir, force, lambda d: job(d, quick=quick, log=_log))
     lines = [f"{'item':<70} {'published':<24} ours"]
     for e in res["entries"]:
         lines.append(f"{e['item']:<70} {e['published']!s:<24} {e['ours']}")

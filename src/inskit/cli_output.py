@@ -147,3 +147,21 @@ def emit(obj, as_json, table=None):
         click.echo(json.dumps(jsonable(obj), allow_nan=False))
     elif table is not None:
         click.echo(table)
+
+
+def reproduce_into(out_dir, force, job):
+    """``job(folder)`` of a reproduction, run into ``out_dir`` as a set: a
+    folder that already holds files refused before the work unless
+    ``force`` (the user's fig6_accel_sweep.png was replaced without a word),
+    the files written into a staging folder and moved into ``out_dir``
+    together once the job is through (a failed or interrupted run leaves
+    ``out_dir`` as it was: :func:`inskit.files.staged_tree`).  Returns the
+    job's result with its paths in ``out_dir``."""
+    from pathlib import Path
+
+    from .files import check_results_folder, relocated, staged_tree
+
+    check_results_folder(out_dir, force)
+    with staged_tree(out_dir) as tmp:
+        res = job(tmp)
+    return relocated(res, tmp, Path(out_dir))

@@ -132,13 +132,16 @@ def integrate(scenario_file, scheme, estimator, out_dir, earth_model, dt, durati
 @click.command("integration-filters")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Folder for the figures.")
 @click.option("--quick", is_flag=True, hidden=True, help="2 h instead of 8 h (tests).")
+@click.option("--force", is_flag=True, help="Write into a folder that already holds files, replacing those of the "
+              "figures' and tables' names.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
-def reproduce_integration_filters(out_dir, quick, as_json):
+def reproduce_integration_filters(out_dir, quick, force, as_json):
     """Source 004: table 1 (Kalman against first- and second-order filters),
     figure 3, open against closed loop through a satellite outage."""
+    from .cli_output import reproduce_into
     from .jobs.platform import reproduce_integration_filters as run
 
-    res = run(out_dir, log=_log, quick=quick)
+    res = reproduce_into(out_dir, force, lambda d: run(d, log=_log, quick=quick))
     lines = [f"{'item':<84} {'published':<16} ours"]
     for e in res["entries"]:
         ours = e["ours"] if isinstance(e["ours"], str) else f"{e['ours']:.3g}"

@@ -194,6 +194,97 @@ def staged_paths():
             old.unlink(missing_ok=True)
 
 
+def check_results_folder(folder, overwrite=False, option="--force"):
+    """Refuse, before the work, a results folder that already holds files
+    unless ``overwrite`` (``inskit navigate``'s rule, for a command whose
+    file names are known only once it has run: every figure of a
+    reproduction); make it and prove it writable
+    (:func:`check_folder_writable`)."""
+    folder = Path(folder)
+    if folder.is_dir() and any(folder.iterdir()) and not overwrite:
+        raise InputError(f"{folder}: already holds files; refusing to overwrite them (use {option} or another "
+                         "--out)")
+    return check_folder_writable(folder)
+
+
+@contextmanager
+def staged_tree(folder):
+    """Write a whole tree of results whole or not at all: yield a hidden
+    staging folder inside ``folder`` for the job to write into (subfolders
+    too, under the names they will have in ``folder``); when the block
+    completes every file is moved to its place in ``folder``, undone
+    should a move fail (the files replaced come back, the new ones go); on
+    any error or interrupt the staging folder goes and ``folder`` is left
+    as it was.  A file that would replace a folder is refused
+    (:func:`check_outputs`).  Paths the job returns name the staging folder:
+    :func:`relocated` maps them to ``folder``."""
+    import shutil
+    import tempfile
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    tmp = Path(tempfile.mkdtemp(prefix=".staging-", dir=folder))
+    previous = None
+    try:
+        yield tmp
+        parts = sorted(p for p in tmp.rglob("*") if p.is_file())
+        finals = [folder / p.relative_to(tmp) for p in parts]
+        check_outputs(finals, (), overwrite=True)  # a folder of the user's in a file's place is not replaced
+        previous = Path(tempfile.mkdtemp(prefix=".previous-", dir=folder))
+        moved, made = [], []  # (final, the file it replaced or None); folders made for them
+        try:
+            for k, (part, final) in enumerate(zip(parts, finals)):
+                for d in reversed(final.parents):
+                    if not d.exists():
+                        d.mkdir()
+                        made.append(d)
+                old = None
+                if final.exists():
+                    old = previous / str(k)
+                    os.replace(final, old)
+                moved.append((final, old))
+                os.replace(part, final)
+        except BaseException:
+            for final, old in reversed(moved):
+                try:
+                    if old is not None:
+                        os.replace(old, final)
+                    else:
+                        final.unlink(missing_ok=True)
+                except OSError:
+                    pass
+            for d in reversed(made):
+                try:
+                    d.rmdir()
+                except OSError:
+                    pass
+            raise
+    except OSError as exc:
+        raise InputError(f"{folder}: the results could not be written ({exc.strerror or exc})") from None
+    finally:
+        shutil.rmtree(tmp, ignore_errors=True)
+        if previous is not None:
+            shutil.rmtree(previous, ignore_errors=True)
+
+
+def relocated(obj, old, new):
+    """``obj`` (a JSON-like result) with every text that is the path
+    ``old`` or lies under it rewritten to lie under ``new`` (the paths a job
+    wrote into :func:`staged_tree`'s staging folder, as they are once moved)."""
+    old, new = str(old), str(new)
+    if isinstance(obj, dict):
+        return {k: relocated(v, old, new) for k, v in obj.items()}
+    if isinstance(obj, list):
+        return [relocated(v, old, new) for v in obj]
+    if isinstance(obj, tuple):
+        return tuple(relocated(v, old, new) for v in obj)
+    if isinstance(obj, Path):
+        obj = str(obj)
+    if isinstance(obj, str) and (obj == old or obj.startswith(old + os.sep)):
+        return new + obj[len(old):]
+    return obj
+
+
 #: the output folders :func:`check_folder_writable` made in this command (the deepest first)
 _MADE: list = []
 
