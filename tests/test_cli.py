@@ -546,3 +546,25 @@ def test_allan_writes_its_plot_and_toml_as_a_set(tmp_path, capsys, monkeypatch):
     assert s["plot"] == str(plot) and s["toml"] == str(toml) and toml.read_text() == s["noise_toml"]
     assert plot.read_bytes()[:4] == b"\x89PNG"
     assert sorted(p.name for p in tmp_path.rglob("*") if p.is_file()) == ["allan.png", "noise.toml", "static.csv"]
+
+
+def test_allan_makes_the_plot_folder_before_the_work(tmp_path, capsys):
+    """`allan LOG --plot new/a.png` (a folder not there yet) ran the whole analysis, then failed with
+    'new/.part-NNN-a.png: could not be written (No such file or directory)' (exit 2), naming a temporary
+    file; the folder is now made before the work, as --toml's is (and removed again when the command fails)."""
+    rng = np.random.default_rng(6)
+    n = 1300
+    t = np.arange(n) * 0.1
+    dth = rng.normal(0.0, 1e-5, (n, 3))
+    dv = rng.normal(0.0, 1e-4, (n, 3)) + [0.0, 0.0, -0.981]
+    dth[0] = dv[0] = 0.0
+    from inskit.types import ImuData
+
+    io.write_imu(tmp_path / "static.csv", ImuData(t, dth, dv))
+    plot = tmp_path / "new" / "deeper" / "a.png"
+    code, out, err = _in_process(capsys, "allan", tmp_path / "static.csv", "--plot", plot, "--json")
+    assert code == 0 and json.loads(out)["plot"] == str(plot), err
+    assert plot.read_bytes()[:4] == b"\x89PNG" and ".part" not in err
+    code, out, err = _in_process(capsys, "allan", tmp_path / "static.csv", "--plot", tmp_path / "gone" / "a.png",
+                                 "--toml", tmp_path / "gone" / "a.png")
+    assert code == 2 and "given as both" in err and not (tmp_path / "gone").exists()

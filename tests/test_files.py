@@ -360,3 +360,14 @@ def test_staged_tree_moves_a_whole_tree_or_leaves_the_folder_as_it_was(tmp_path,
                                         "n": 1}
     assert sorted(str(p.relative_to(out)) for p in out.rglob("*")) == ["fig.png", "sim", "sim/imu.csv"]
     assert (out / "fig.png").read_text() == "new fig"
+
+
+def test_staged_paths_messages_name_the_final_file(tmp_path):
+    """A writer's failure inside the set named its temporary file ('.part-NNN-a.png: could not be written')."""
+    from inskit.files import staged_paths, write_text
+
+    with pytest.raises(InputError) as info:
+        with staged_paths() as stage:
+            write_text(stage(tmp_path / "missing" / "a.txt"), "x")
+    assert str(info.value).startswith(f"{tmp_path / 'missing' / 'a.txt'}: could not be written"), info.value
+    assert ".part" not in str(info.value)

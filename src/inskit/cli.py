@@ -216,9 +216,10 @@ PLOT_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
 
 def _check_plot_file(plot_file, force, inputs=()):
     """A plot path the plotting library can write, not an input, and new
-    unless ``force`` (:func:`inskit.files.check_outputs`), checked before
-    the work."""
-    from .files import check_outputs
+    unless ``force`` (:func:`inskit.files.check_outputs`), in a folder made
+    if needed (:func:`inskit.files.check_folder_writable`: removed again if
+    the command fails), checked before the work."""
+    from .files import check_folder_writable, check_outputs
 
     if not plot_file:
         return
@@ -226,6 +227,7 @@ def _check_plot_file(plot_file, force, inputs=()):
         raise InputError(f"{plot_file}: unsupported plot format {Path(plot_file).suffix or '(none)'!r}; use one of "
                          f"{', '.join(PLOT_SUFFIXES)}")
     check_outputs([plot_file], inputs, force)
+    check_folder_writable(Path(plot_file).resolve().parent)  # the plot's folder was not made: the work was lost
 
 
 # --- evaluate ----------------------------------------------------------------------

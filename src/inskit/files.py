@@ -155,11 +155,20 @@ def staged_paths():
         for part in staged.values():
             part.unlink(missing_ok=True)
 
+    def finals(msg):  # a message names the file the user gave, not its temporary name
+        for final, part in staged.items():
+            msg = msg.replace(str(part), str(final))
+        return msg
+
     try:
         yield stage
     except OSError as exc:
         drop_parts()
-        raise InputError(f"{exc.filename or 'an output'}: could not be written ({exc.strerror or exc})") from None
+        raise InputError(finals(f"{exc.filename or 'an output'}: could not be written ({exc.strerror or exc})")) \
+            from None
+    except InputError as exc:
+        drop_parts()
+        raise InputError(finals(str(exc))) from None
     except BaseException:
         drop_parts()
         raise
@@ -261,6 +270,8 @@ def staged_tree(folder):
             raise
     except OSError as exc:
         raise InputError(f"{folder}: the results could not be written ({exc.strerror or exc})") from None
+    except InputError as exc:  # a writer's message names the file as it will be, not in the staging folder
+        raise InputError(str(exc).replace(str(tmp), str(folder))) from None
     finally:
         shutil.rmtree(tmp, ignore_errors=True)
         if previous is not None:
