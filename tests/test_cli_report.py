@@ -76,3 +76,12 @@ def test_report_never_overwrites_the_run_or_a_users_file(run_dir, tmp_path):
     r = CliRunner().invoke(_group(), ["report", str(run_dir), "--out", str(mine), "--force"])
     assert r.exit_code == 0, r.output
     assert mine.read_text().startswith("<!DOCTYPE html>")
+
+
+def test_report_into_a_folder_not_there_yet(run_dir, tmp_path):
+    """`report RUN --out new/r.html` built the page, then failed: 'new/r.html: could not be written (No such
+    file or directory)'; the folder is now made before the work, as every other output's."""
+    out = tmp_path / "new" / "deeper" / "r.html"
+    r = CliRunner().invoke(_group(), ["report", str(run_dir), "--out", str(out), "--json"])
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.stdout)["report"] == str(out) and out.read_text().startswith("<!DOCTYPE html>")

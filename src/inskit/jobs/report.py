@@ -729,11 +729,12 @@ def build_report(run_dir, out=None, overwrite=False):
     import plotly.graph_objects as go
     from plotly.subplots import make_subplots
 
-    from ..files import check_outputs
+    from ..files import check_folder_writable, check_outputs
 
     run = _Run(run_dir)
     out = Path(out) if out is not None else run.dir / "report.html"
     check_outputs([out], run.inputs, overwrite)
+    check_folder_writable(out.resolve().parent)  # a folder not there yet: made (the page was built, then lost)
     figs = [("track", "Track", *_fig_track(run, go), False),
             ("sigmas", "Position, velocity and attitude sigmas", *_fig_sigmas(run, go, make_subplots), True),
             ("innovations", "Innovations", *_fig_innovations(run, go, make_subplots), True),
