@@ -410,3 +410,4 @@ def test_reproduce_refuses_a_folder_with_files_and_writes_as_a_set(tmp_path, mon
     s = json.loads(r.stdout)
     assert s["figures"] == [str(out / "fig11_euler_angles.png")] and s["tables"] == [str(out / "entries.json")]
     assert sorted(p.name for p in out.iterdir()) == ["entries.json", "fig11_euler_angles.png"]
+    assert s["files"] == [str(out / "entries.json"), str(out / "fig11_euler_angles.png")]  # exactly those written

@@ -114,6 +114,8 @@ def test_reproduce_quick(tmp_path):
         assert (tmp_path / f.split("/")[-1]).stat().st_size > 10_000
     assert {r_["scheme"] for r_ in res["outage"]} == {"open", "closed"}
     assert (tmp_path / "table1.csv").exists() and (tmp_path / "results.json").exists()
+    # every file written, and only those (the figures were listed, not table1.csv nor results.json)
+    assert res["files"] == sorted(str(p) for p in tmp_path.iterdir()) and len(res["files"]) == 7
 
 
 @pytest.mark.slow

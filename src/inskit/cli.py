@@ -660,7 +660,7 @@ def reproduce_alignment(out_dir, force, as_json):
 
     from .cli_output import reproduce_into
 
-    res = reproduce_into(out_dir, force, lambda d: run(d, log=_log))
+    res, files = reproduce_into(out_dir, force, lambda d: run(d, log=_log))
     lines = [f"{'item':<72} {'published':<28} ours"]
     for e in res["entries"]:
         lines.append(f"{e['item']:<72} {str(e['published']):<28} {e['ours']}")
@@ -668,7 +668,8 @@ def reproduce_alignment(out_dir, force, as_json):
             lines.append(f"{'':<4}note: {e['note']}")
     lines.append(f"figures: {', '.join(res['figures'])}")
     _emit({"experiment": "alignment-ga", "source": "002", "entries": res["entries"], "headline": res["headline"],
-           "one_vs_two_step": res["one_vs_two_step"], "ga_checks": res["ga_checks"], "figures": res["figures"]},
+           "one_vs_two_step": res["one_vs_two_step"], "ga_checks": res["ga_checks"], "figures": res["figures"],
+           "files": files},
           as_json, "\n".join(lines))
 
 

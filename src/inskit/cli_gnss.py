@@ -100,8 +100,10 @@ def reproduce_tight(out_dir, experiment, seed, force, as_json):
     from .cli_output import reproduce_into
 
     exps = ("walk", "blockage") if experiment == "all" else (experiment,)
-    res, text = reproduce_into(out_dir, force, lambda d: run(d, exps, seed=seed, log=_log))
-    _emit(res, as_json, text + "\nfigures: " + ", ".join(res["files"]))
+    (res, text), files = reproduce_into(out_dir, force, lambda d: run(d, exps, seed=seed, log=_log))
+    res["figures"] = res["files"]
+    res["files"] = files  # every file written: the simulated drive's too (it listed the figures only)
+    _emit(res, as_json, text + "\nfigures: " + ", ".join(res["figures"]))
 
 
 def register(cli_group, reproduce_group=None):

@@ -154,7 +154,8 @@ def reproduce_gyrofree(out_dir, quick, force, as_json):
     from .cli_output import reproduce_into
     from .jobs.gyrofree import reproduce_gyrofree as job
 
-    res = reproduce_into(out_dir, force, lambda d: job(d, quick=quick, log=_log))
+    res, files = reproduce_into(out_dir, force, lambda d: job(d, quick=quick, log=_log))
+    res["files"] = files
     lines = [f"{'item':<70} {'published':<24} ours"]
     for e in res["entries"]:
         lines.append(f"{e['item']:<70} {e['published']!s:<24} {e['ours']}")

@@ -156,7 +156,9 @@ def reproduce_into(out_dir, force, job):
     the files written into a staging folder and moved into ``out_dir``
     together once the job is through (a failed or interrupted run leaves
     ``out_dir`` as it was: :func:`inskit.files.staged_tree`).  Returns the
-    job's result with its paths in ``out_dir``."""
+    job's result with its paths in ``out_dir`` and the list of every file
+    written (the summary's ``files``: a job's own lists left out its tables
+    or the simulated files beside its figures)."""
     from pathlib import Path
 
     from .files import check_results_folder, relocated, staged_tree
@@ -164,4 +166,5 @@ def reproduce_into(out_dir, force, job):
     check_results_folder(out_dir, force)
     with staged_tree(out_dir) as tmp:
         res = job(tmp)
-    return relocated(res, tmp, Path(out_dir))
+        written = sorted(str(p) for p in tmp.rglob("*") if p.is_file())
+    return relocated(res, tmp, Path(out_dir)), relocated(written, tmp, Path(out_dir))

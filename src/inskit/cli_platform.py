@@ -141,7 +141,8 @@ def reproduce_integration_filters(out_dir, quick, force, as_json):
     from .cli_output import reproduce_into
     from .jobs.platform import reproduce_integration_filters as run
 
-    res = reproduce_into(out_dir, force, lambda d: run(d, log=_log, quick=quick))
+    res, files = reproduce_into(out_dir, force, lambda d: run(d, log=_log, quick=quick))
+    res["files"] = files
     lines = [f"{'item':<84} {'published':<16} ours"]
     for e in res["entries"]:
         ours = e["ours"] if isinstance(e["ours"], str) else f"{e['ours']:.3g}"
