@@ -207,3 +207,41 @@ def test_a_folder_not_of_reproduce_all_is_not_overwritten_and_the_report_lands_a
     r = CliRunner().invoke(_cli(), ["all", "--out", str(d), "--json"])
     assert r.exit_code != 0 and "the page failed" in str(r.exception)
     assert {p.name: p.read_bytes() for p in d.iterdir() if p.is_file()} == before
+
+
+def test_an_interrupted_run_leaves_the_folder_as_it_was(tmp_path, monkeypatch):
+    """Ctrl-C in the second experiment left the first one's folder (its figure) and no reproduce.json: the
+    rerun into the same folder was then refused as another command's folder.  Now nothing lands until the
+    run is through, and the rerun goes ahead without --force."""
+    def first(out, log):
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        from inskit.files import save_figure
+
+        fig, ax = plt.subplots()
+        ax.plot([0, 1], [0, 1])
+        save_figure(fig, out / "first.png")
+        return [RA.published("closed form", 1.0, 1.0, 0.0)], {"figure": str(out / "first.png")}
+
+    state = {"interrupt": True}
+
+    def second(out, log):
+        if state["interrupt"]:
+            raise KeyboardInterrupt
+        return [RA.published("closed form", 2.0, 2.0, 0.0)], {}
+
+    monkeypatch.setattr(RA, "EXPERIMENTS", {"first": ("test", first, True), "second": ("test", second, True)})
+    out = tmp_path / "out"
+    with pytest.raises(KeyboardInterrupt):
+        RA.run_all(out)
+    assert not out.exists() or not any(out.iterdir())
+    state["interrupt"] = False
+    res = RA.run_all(out)
+    assert res["failed"] == [] and res["experiments"][0]["figures"] == ["first/first.png"]
+    assert res["experiments"][0]["extra"]["figure"] == str(out / "first" / "first.png")  # not the staging path
+    assert sorted(str(p.relative_to(out)) for p in out.rglob("*")) == [
+        "REPORT.md", "first", "first/first.png", "report.html", "reproduce.json"]  # no empty folder for second
+    assert "data:image/png;base64," in (out / "report.html").read_text()

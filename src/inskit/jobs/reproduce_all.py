@@ -58,7 +58,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ConfigError
-from ..files import plain_json, staged_files, write_json, write_text
+from ..files import plain_json, relocated, staged_tree, write_json, write_text
 
 ROOT = Path(__file__).resolve().parents[3]
 DOC_PATH = ROOT / "docs" / "REPRODUCE.md"
@@ -495,11 +495,23 @@ def run_all(out_dir, *, only=None, log=None, force=False) -> dict:
     check_outputs_all(out, names, force)
     check_folder_writable(out)
     t_all = time.perf_counter()
+    # every experiment's folder and the report land together once the run is through, or nothing does: an
+    # interrupted run left the folders of the experiments it had run (their figures, a simulated drive) and
+    # no reproduce.json, a folder its own rerun then took for another command's
+    with staged_tree(out) as tmp:
+        res = _run_experiments(names, tmp, out, log)
+    return res
+
+
+def _run_experiments(names, tmp, out, log):
+    """The experiments of :func:`run_all` into ``tmp`` (a staging folder of
+    ``out``) and the report files; the paths in the result name ``out``."""
+    t_all = time.perf_counter()
     exps = []
     quiet = (lambda s: None)
     for i, name in enumerate(names, 1):
         source, fn, _ = EXPERIMENTS[name]
-        d = out / name
+        d = tmp / name
         d.mkdir(parents=True, exist_ok=True)
         t0 = time.perf_counter()
         err, quantities, extra = None, [], {}
@@ -512,21 +524,20 @@ def run_all(out_dir, *, only=None, log=None, force=False) -> dict:
             q["verdict"] = verdict(q)
         v = "fail" if err or any(q["verdict"] == "fail" for q in quantities) else "pass"
         secs = time.perf_counter() - t0
-        figs = sorted(str(p.relative_to(out)) for p in d.rglob("*.png"))
+        figs = sorted(str(p.relative_to(tmp)) for p in d.rglob("*.png"))
         counts = {k: sum(q["verdict"] == k for q in quantities) for k in ("pass", "differs", "fail", "info")}
         exps.append({"name": name, "source": source, "verdict": v, "seconds": secs, "quantities": quantities,
                      "figures": figs, "error": err, "counts": counts,
-                     "extra": json.loads(json.dumps(plain_json(extra), allow_nan=False, default=str))})
+                     "extra": relocated(json.loads(json.dumps(plain_json(extra), allow_nan=False, default=str)),
+                                        tmp, out)})
         log(f"reproduce all [{i}/{len(names)}] {name}: {v.upper()} in {secs:.1f} s ({counts['pass']} pass, "
             f"{counts['differs']} differ, {counts['fail']} fail, {counts['info']} info)" + (f": {err}" if err else ""))
     res = {"experiments": exps, "failed": [e["name"] for e in exps if e["verdict"] == "fail"],
            "seconds": time.perf_counter() - t_all, "python": sys.version.split()[0]}
-    files = [out / n for n in OUTPUT_FILES]
-    res["files"] = [str(f) for f in files]
-    with staged_files(out) as stage:  # the three whole or none: an interrupted report left REPORT.md alone
-        write_text(stage(files[0]), report_markdown(res))
-        write_text(stage(files[1]), report_html(res, out))
-        write_json(stage(files[2]), res)
+    res["files"] = [str(out / n) for n in OUTPUT_FILES]
+    write_text(tmp / "REPORT.md", report_markdown(res))
+    write_text(tmp / "report.html", report_html(res, tmp))
+    write_json(tmp / "reproduce.json", res)
     return res
 
 
