@@ -568,3 +568,25 @@ def test_allan_makes_the_plot_folder_before_the_work(tmp_path, capsys):
     code, out, err = _in_process(capsys, "allan", tmp_path / "static.csv", "--plot", tmp_path / "gone" / "a.png",
                                  "--toml", tmp_path / "gone" / "a.png")
     assert code == 2 and "given as both" in err and not (tmp_path / "gone").exists()
+
+
+def test_simulate_verify_runs_before_the_files_are_written(capsys, tmp_path, monkeypatch):
+    """`simulate --verify --force` interrupted (Ctrl-C) or failing in its self-check had already replaced the
+    earlier run's files; the check now comes first, and a failed one leaves the folder as it was."""
+    import inskit.jobs.simulate as JS
+
+    sc = tmp_path / "small.toml"
+    sc.write_text(SMALL_SCENARIO)
+    out = tmp_path / "out"
+    code, stdout, err = _in_process(capsys, "simulate", sc, "--out", out, "--no-plot", "--json")
+    assert code == 0, err
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(JS, "verify_ideal", interrupted)
+    code, stdout, err = _in_process(capsys, "simulate", sc, "--out", out, "--no-plot", "--seed", 4, "--force",
+                                    "--verify", "--json")
+    assert code == 130 and stdout == "" and "aborted" in err and "Traceback" not in err
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before

@@ -450,6 +450,9 @@ def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, f
     with progress(len(steps), f"simulate {sc.name}", unit="step", leave=False) as bar:
         sim = run_sim(sc, seed, truth_rate_hz=truth_rate, progress=lambda _: bar.update(1))
         bar.update(1)
+        # the self-check before the files: a check that failed or was interrupted (Ctrl-C: it mechanizes the
+        # scenario twice) left the new files in place of the earlier run's beside a failed command
+        v = verify_ideal(sc) if verify else None
         files = write_simulation(sim, Path(out_dir), overwrite=force, plot=not no_plot, file_format=file_format,
                                  inputs=[scenario_file])
         bar.update(1)
@@ -463,7 +466,6 @@ def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, f
     text = (f"{sc.name}: {res['duration_s']:.0f} s, {len(sim.imu)} IMU epochs, {len(sim.gnss)} GNSS "
             f"fixes -> {out_dir}/ ({res['elapsed_s']:.1f} s)")
     if verify:
-        v = verify_ideal(sc)
         res["verify"] = v
         f = v["frames"]["ned"]
         text += (f"\nideal IMU mechanized (NED): horizontal max {f['horizontal_max_m']:.4g} m, vertical max "
