@@ -265,3 +265,22 @@ def test_plots_are_checked_and_written_with_the_files_as_a_set(scenario, tmp_pat
                                       "--force"])
     assert r.exit_code != 0 and "the plot failed" in str(r.exception)
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+def test_integrate_computes_its_whole_summary_before_the_files(scenario, tmp_path, monkeypatch):
+    """The steady-state errors were computed after the files were written: their failure (or Ctrl-C there)
+    left the new files in place of the earlier run's beside a failed command."""
+    import inskit.jobs.platform as JP
+
+    out = tmp_path / "out"
+    run(platform, ["integrate", scenario, "--out", out, "--duration", 120, "--no-plots"])
+    before = {p.name: p.read_bytes() for p in out.iterdir()}
+
+    def broken(*a, **k):
+        raise RuntimeError("the summary failed")
+
+    monkeypatch.setattr(JP, "steady_state_errors", broken)
+    r = CliRunner().invoke(platform, ["integrate", str(scenario), "--out", str(out), "--duration", 120, "--seed", 5,
+                                      "--no-plots", "--force"])
+    assert r.exit_code != 0 and "the summary failed" in str(r.exception)
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == before

@@ -669,6 +669,8 @@ def integrate_job(scenario_file, out_dir, *, scheme="closed", estimator="kalman"
                              every=every, rng=rng)
     ts = truth.solution()
     s = _summary(run.solution, ts)
+    # the whole summary before the files (the steady state came after them: its failure left them written)
+    ss = steady_state_errors(run, min(2 * HOUR, 0.25 * (truth.time[-1] - truth.time[0])))
     with staged_files(out) as stage:  # whole or not at all, as a set: a failed plot leaves the earlier run's files
         io.write_solution(stage(files[0]), run.solution, overwrite=True)
         io.write_solution(stage(files[1]), run.ins, overwrite=True)
@@ -678,7 +680,6 @@ def integrate_job(scenario_file, out_dir, *, scheme="closed", estimator="kalman"
             analysis.plot_errors(analysis.nav_error(run.solution, ts), stage(plots[0]),
                                  title=f"{sc.name}: {scheme} loop, {estimator}")
     files += plots
-    ss = steady_state_errors(run, min(2 * HOUR, 0.25 * (truth.time[-1] - truth.time[0])))
     return {"scenario": sc.name, "scheme": scheme, "filter": estimator, "earth": earth_model, "dt_s": dt,
             "seed": seed, "epochs": len(truth.time), "fixes": int(sns.available.sum()), "elapsed_s": run.elapsed_s,
             "settings": {**run.settings, "fix_interval_s": every * dt}, "errors": s,
