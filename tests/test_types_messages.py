@@ -52,3 +52,40 @@ def test_no_rows_are_valid_arrays():
     assert len(ImuData(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)))) == 0
     with pytest.raises(InputError, match=r"`lla` must have shape \(n, 3\), got \(0, 2\)"):
         GnssData(np.zeros(0), np.zeros((0, 2)), np.ones((0, 3)))
+
+
+def test_what_is_not_plain_numbers_is_named_not_a_numpy_error():
+    """Text, None, complex numbers, ragged lists and datetimes were numpy's bare ValueError or a ComplexWarning
+    (the imaginary part dropped), or, for a pandas datetime column, nanoseconds since 1970 taken as seconds."""
+    import pandas as pd
+
+    from inskit.types import NavState
+
+    z = np.zeros((2, 3))
+    cases = [
+        (lambda: ImuData(["a", "b"], z, z), r"^`time` holds the text 'a'; expected numbers$"),
+        (lambda: ImuData([0.0, 1.0], None, z), r"^`dtheta_b` is None; expected an array of numbers$"),
+        (lambda: ImuData([0.0, 1.0], z + 1j, z), r"^`dtheta_b` holds complex numbers; expected real numbers$"),
+        (lambda: ImuData([0.0, 1.0], z, [[0, 0, 0], [0, 0]]), r"^`dv_b` is not an array of numbers: a list whose"),
+        (lambda: ImuData(pd.date_range("2020", periods=2, freq="s"), z, z),
+         r"^`time` holds datetimes \(datetime64\[ns\]\); expected seconds as numbers"),
+        (lambda: NavState(0.0, [0.7, 0.1, 100.0, 1.0], [0, 0, 0], [1, 0, 0, 0]),
+         r"^`lla` must have shape \(3,\), got \(4,\)$"),
+        (lambda: NavState("x", [0.7, 0.1, 100.0], [0, 0, 0], [1, 0, 0, 0]), r"^`time` holds the text 'x'"),
+        (lambda: NavState(np.nan, [0.7, 0.1, 100.0], [0, 0, 0], [1, 0, 0, 0]),
+         r"^`time` of the state is nan; expected a finite number \[s\]$"),
+        (lambda: NavState([1.0, 2.0], [0.7, 0.1, 100.0], [0, 0, 0], [1, 0, 0, 0]),
+         r"^`time` must be one number \[s\], got shape \(2,\)$"),
+        (lambda: NavState(0.0, [0.7, np.inf, 100.0], [0, 0, 0], [1, 0, 0, 0]),
+         r"^`lla` of the state has a NaN or infinite value \(\[0\.7, inf, 100\.0\]\)$"),
+    ]
+    for make, message in cases:
+        with pytest.raises(InputError, match=message):
+            make()
+    # what converts exactly is taken: a timedelta column in seconds, integers, float32, a strided view, a DataFrame
+    t = pd.Series(pd.timedelta_range(0, periods=3, freq="10ms"))
+    imu = ImuData(t, pd.DataFrame(np.zeros((3, 3), np.float32)), np.zeros((3, 6), int)[:, ::2])
+    np.testing.assert_array_equal(imu.time, [0.0, 0.01, 0.02])
+    assert imu.dtheta_b.dtype == imu.dv_b.dtype == np.float64 and imu.dv_b.flags.c_contiguous
+    s = NavState(np.array([5.0]), [[0.7, 0.1, 100.0]], np.zeros(3, int), (1, 0, 0, 0))
+    assert s.time == 5.0 and s.lla.shape == (3,)

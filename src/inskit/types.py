@@ -33,8 +33,47 @@ def plain_number(x, digits=None) -> str:
     return repr(v) if digits is None else f"{v:.{digits}g}"
 
 
+def as_float_array(name, x) -> np.ndarray:
+    """``x`` as a C-contiguous float64 array, or an :class:`InputError`
+    naming ``name`` when it holds no plain real numbers.
+
+    Lists, tuples, pandas Series and DataFrames, integer and float32 arrays
+    and strided views are taken (converted, never modified).  Refused:
+    ``None``, text, complex numbers (numpy would drop the imaginary part with
+    a warning), ragged nesting, and datetimes (numpy would give nanoseconds
+    since 1970); a timedelta becomes seconds.
+    """
+    if x is None:
+        raise InputError(f"`{name}` is None; expected an array of numbers")
+    try:
+        a = np.asarray(x)
+    except (TypeError, ValueError) as exc:  # ragged nesting: [[1, 2, 3], [4, 5]]
+        raise InputError(f"`{name}` is not an array of numbers: a {type(x).__name__} whose rows differ in "
+                         "length") from None
+    kind = a.dtype.kind
+    if kind == "m":  # a timedelta (pandas' time since the start) is seconds
+        return np.ascontiguousarray(a / np.timedelta64(1, "s"), dtype=float)
+    if kind == "M":
+        raise InputError(f"`{name}` holds datetimes ({a.dtype}); expected seconds as numbers, e.g. "
+                         f"(t - t0) / np.timedelta64(1, 's')")
+    if kind == "c":
+        raise InputError(f"`{name}` holds complex numbers; expected real numbers")
+    if kind in "fiub":
+        return np.ascontiguousarray(a, dtype=float)
+    try:  # object or text: numbers held as objects convert, text does not
+        return np.ascontiguousarray(a, dtype=float)
+    except (TypeError, ValueError):
+        flat = a.ravel()
+        bad = next((v for v in flat if not isinstance(v, (int, float, np.integer, np.floating))), None)
+        if isinstance(bad, (str, bytes)):  # numpy's str_ and bytes_ are these too
+            shown = f"the text {str(bad)!r}"
+        else:
+            shown = f"{bad!r} ({type(bad).__name__})"
+        raise InputError(f"`{name}` holds {shown}; expected numbers") from None
+
+
 def _as_array(name, x, shape_tail, n=None):
-    a = np.ascontiguousarray(x, dtype=float)
+    a = as_float_array(name, x)
     if a.ndim != 1 + len(shape_tail) or a.shape[1:] != tuple(shape_tail):
         want = "(n" + "".join(f", {s}" for s in shape_tail) + ")"
         raise InputError(f"`{name}` must have shape {want}, got {a.shape}")
@@ -49,9 +88,17 @@ def _as_array(name, x, shape_tail, n=None):
     return a
 
 
+def _as_vector(name, x, size):
+    """One vector of ``size`` numbers (a (1, size) row too), float64."""
+    a = as_float_array(name, x)
+    if a.size != size or a.ndim > 2 or (a.ndim == 2 and a.shape[0] != 1):
+        raise InputError(f"`{name}` must have shape ({size},), got {a.shape}")
+    return a.reshape(size)
+
+
 def check_time(name, t):
     """Validate a strictly increasing, finite time vector; return it as float64."""
-    t = np.ascontiguousarray(t, dtype=float)
+    t = as_float_array(name, t)
     if t.ndim != 1:
         raise InputError(f"`{name}` must have shape (n,), got {t.shape}")
     if not np.isfinite(t).all():
@@ -196,17 +243,23 @@ class NavState:
     q_nb: np.ndarray
 
     def __post_init__(self):
-        lla = np.asarray(self.lla, dtype=float).reshape(3)
-        v = np.asarray(self.v_n, dtype=float).reshape(3)
-        q = np.asarray(self.q_nb, dtype=float).reshape(4)
-        if not (np.isfinite(lla).all() and np.isfinite(v).all() and np.isfinite(q).all()):
-            raise InputError("initial state has a NaN or infinite value")
+        lla, v, q = (_as_vector(name, x, size) for name, x, size in
+                     (("lla", self.lla, 3), ("v_n", self.v_n, 3), ("q_nb", self.q_nb, 4)))
+        time = as_float_array("time", self.time)
+        if time.ndim != 0 and time.shape != (1,):
+            raise InputError(f"`time` must be one number [s], got shape {time.shape}")
+        time = float(time.reshape(()))
+        if not np.isfinite(time):
+            raise InputError(f"`time` of the state is {plain_number(time)}; expected a finite number [s]")
+        for name, x in (("lla", lla), ("v_n", v), ("q_nb", q)):
+            if not np.isfinite(x).all():
+                raise InputError(f"`{name}` of the state has a NaN or infinite value ({plain_number(x)})")
         if abs(lla[0]) > np.pi / 2:
             raise InputError(f"latitude must be within +-90 deg, got {np.degrees(lla[0]):.6f} deg")
         nq = np.linalg.norm(q)
         if abs(nq - 1.0) > 1e-6:
             raise InputError(f"`q_nb` must be a unit quaternion, its norm is {nq}")
-        object.__setattr__(self, "time", float(self.time))
+        object.__setattr__(self, "time", time)
         object.__setattr__(self, "lla", lla)
         object.__setattr__(self, "v_n", v)
         object.__setattr__(self, "q_nb", q / nq)
