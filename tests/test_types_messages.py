@@ -89,3 +89,37 @@ def test_what_is_not_plain_numbers_is_named_not_a_numpy_error():
     assert imu.dtheta_b.dtype == imu.dv_b.dtype == np.float64 and imu.dv_b.flags.c_contiguous
     s = NavState(np.array([5.0]), [[0.7, 0.1, 100.0]], np.zeros(3, int), (1, 0, 0, 0))
     assert s.time == 5.0 and s.lla.shape == (3,)
+
+
+def test_degrees_for_radians_and_bad_quaternions_are_refused_by_every_type():
+    """NavState refused a latitude beyond 90 deg, NavSolution and GnssData took 45 'rad' (2578 deg) without a word
+    and NavSolution any quaternion (a zero row gave NaN attitude, 2 q a wrong one): one check for all."""
+    from inskit.types import GnssData, NavSolution, NavState
+
+    t = np.arange(3.0)
+    lla_deg = np.tile([45.0, 10.0, 100.0], (3, 1))
+    lla = np.radians(lla_deg) * [1, 1, 0] + [0, 0, 100.0]
+    q = np.tile([1.0, 0, 0, 0], (3, 1))
+    degrees = r"degrees where radians are expected\? \(np\.radians\)$"
+    with pytest.raises(InputError, match=r"^`lla` holds a latitude of 45\.0 rad at row 0 \(2578\.31 deg\), beyond "
+                                         r"\+-90 deg: " + degrees):
+        NavSolution(t, lla_deg, np.zeros((3, 3)), q)
+    with pytest.raises(InputError, match=r"^`lla` holds a latitude of 45\.0 rad at row 0 .*" + degrees):
+        GnssData(t, lla_deg, np.ones((3, 3)))
+    with pytest.raises(InputError, match=r"^`lla` holds a latitude of 45\.0 rad \(2578\.31 deg\)"):
+        NavState(0.0, lla_deg[0], np.zeros(3), q[0])
+    lla_lon = lla.copy()
+    lla_lon[2, 1] = 10.0 * 2 * np.pi / 10 + 1.0  # a longitude beyond a full turn
+    with pytest.raises(InputError, match=r"^`lla` holds a longitude of 7\.28\d* rad at row 2 .* beyond \+-360 deg"):
+        GnssData(t, lla_lon, np.ones((3, 3)))
+    q_bad = q.copy()
+    q_bad[1] = 0.0
+    with pytest.raises(InputError, match=r"^`q_nb` must hold unit quaternions \(scalar first\), its norm is 0\.0 "
+                                         r"at row 1$"):
+        NavSolution(t, lla, np.zeros((3, 3)), q_bad)
+    with pytest.raises(InputError, match=r"^`q_nb` must hold unit quaternions \(scalar first\), its norm is 2\.0$"):
+        NavState(0.0, lla[0], np.zeros(3), [2.0, 0, 0, 0])
+    # float32 quaternions (a norm off 1 by 1e-7) are normalised, as NavState always did
+    q32 = np.tile(np.array([0.6, 0.8, 0, 0], np.float32) * np.float32(1.0000001), (3, 1))
+    sol = NavSolution(t, lla, np.zeros((3, 3)), q32)
+    np.testing.assert_allclose(np.linalg.norm(sol.q_nb, axis=1), 1.0, rtol=0, atol=1e-15)

@@ -88,6 +88,36 @@ def _as_array(name, x, shape_tail, n=None):
     return a
 
 
+def check_lla(name, lla):
+    """Refuse a latitude beyond +-90 deg or a longitude beyond a full turn in
+    the ``(n, 3)`` or ``(3,)`` array ``lla`` [rad, rad, m]: both are what
+    degrees given where radians are expected look like (45 deg read as
+    45 rad is 2578 deg)."""
+    a = np.atleast_2d(lla)
+    for j, what, limit, shown in ((0, "latitude", np.pi / 2, "+-90 deg"), (1, "longitude", 2 * np.pi,
+                                                                           "+-360 deg (a full turn)")):
+        bad = np.abs(a[:, j]) > limit
+        if bad.any():
+            k = int(np.argmax(bad))
+            row = f" at row {k}" if np.ndim(lla) == 2 else ""
+            raise InputError(f"`{name}` holds a {what} of {plain_number(a[k, j])} rad{row} ({a[k, j] / DEG:.6g} deg), "
+                             f"beyond {shown}: degrees where radians are expected? (np.radians)")
+
+
+def check_quaternions(name, q):
+    """``q`` (``(n, 4)`` or ``(4,)``) normalised; refused when a norm is off 1
+    by more than 1e-6 (not an attitude quaternion: a zero row, Euler
+    angles, another layout)."""
+    nq = np.linalg.norm(q, axis=-1)
+    bad = np.abs(nq - 1.0) > 1e-6
+    if np.any(bad):
+        k = int(np.argmax(np.atleast_1d(bad)))
+        row = f" at row {k}" if np.ndim(q) == 2 else ""
+        raise InputError(f"`{name}` must hold unit quaternions (scalar first), its norm is "
+                         f"{plain_number(np.atleast_1d(nq)[k])}{row}")
+    return q / (nq[..., None] if np.ndim(q) == 2 else nq)
+
+
 def _as_vector(name, x, size):
     """One vector of ``size`` numbers (a (1, size) row too), float64."""
     a = as_float_array(name, x)
@@ -254,15 +284,12 @@ class NavState:
         for name, x in (("lla", lla), ("v_n", v), ("q_nb", q)):
             if not np.isfinite(x).all():
                 raise InputError(f"`{name}` of the state has a NaN or infinite value ({plain_number(x)})")
-        if abs(lla[0]) > np.pi / 2:
-            raise InputError(f"latitude must be within +-90 deg, got {np.degrees(lla[0]):.6f} deg")
-        nq = np.linalg.norm(q)
-        if abs(nq - 1.0) > 1e-6:
-            raise InputError(f"`q_nb` must be a unit quaternion, its norm is {nq}")
+        check_lla("lla", lla)
+        q = check_quaternions("q_nb", q)
         object.__setattr__(self, "time", time)
         object.__setattr__(self, "lla", lla)
         object.__setattr__(self, "v_n", v)
-        object.__setattr__(self, "q_nb", q / nq)
+        object.__setattr__(self, "q_nb", q)
 
     @classmethod
     def from_euler(cls, time, lla, v_n, rpy):
@@ -306,10 +333,12 @@ class NavSolution:
 
     def __post_init__(self):
         t = check_time("time", self.time)
+        lla = _as_array("lla", self.lla, (3,), len(t))
+        check_lla("lla", lla)
         object.__setattr__(self, "time", t)
-        object.__setattr__(self, "lla", _as_array("lla", self.lla, (3,), len(t)))
+        object.__setattr__(self, "lla", lla)
         object.__setattr__(self, "v_n", _as_array("v_n", self.v_n, (3,), len(t)))
-        object.__setattr__(self, "q_nb", _as_array("q_nb", self.q_nb, (4,), len(t)))
+        object.__setattr__(self, "q_nb", check_quaternions("q_nb", _as_array("q_nb", self.q_nb, (4,), len(t))))
         for k, v in self.extra.items():
             if len(v) != len(t):
                 raise InputError(f"extra column `{k}` has {len(v)} rows, expected {len(t)}")
@@ -474,8 +503,10 @@ class GnssData:
 
     def __post_init__(self):
         t = check_time("time", self.time)
+        lla = _as_array("lla", self.lla, (3,), len(t))
+        check_lla("lla", lla)
         object.__setattr__(self, "time", t)
-        object.__setattr__(self, "lla", _as_array("lla", self.lla, (3,), len(t)))
+        object.__setattr__(self, "lla", lla)
         s = _as_array("sigma_ned", self.sigma_ned, (3,), len(t))
         if (s <= 0).any():
             raise InputError(f"`sigma_ned` must be > 0, row {int(np.argmax((s <= 0).any(axis=1)))} has {s[(s <= 0).any(axis=1)][0]}")
