@@ -172,3 +172,23 @@ def test_blank_lines_before_the_header_or_between_rows_keep_the_format_and_the_l
     q.write_bytes(b"\n\n" + gzip.decompress(DRIVE_POS.read_bytes()))
     assert detect_gnss_format(q) == "rtklib-pos"
     assert len(io.read_gnss(q)) == 2197
+
+
+def test_a_mounting_rotation_in_degrees_is_refused_before_the_log_is_read(tmp_path, monkeypatch):
+    """read_imu(path, mount_rpy=[180, -6.79, 185.35]) (the config's degrees given to the radians argument) read
+    the drive rotated by 180 rad about x and 185 rad about z without a word; a pair of angles was an IndexError
+    from rotations.dcm_from_euler.  The check runs before the log is read (no reader is reached)."""
+    import inskit.io.rtklib as R
+    from inskit.io.rtklib import mount_dcm
+
+    def no_read(*a, **k):
+        raise AssertionError("the log was read")
+
+    monkeypatch.setattr(R, "read_rtklibexplorer_imu", no_read)
+    with pytest.raises(InputError, match=r"^`mount_rpy`: roll 180\.0 rad \(10313\.2 deg\) is beyond a full turn: "
+                                         r"degrees where radians are expected\? \(np\.radians\)$"):
+        io.read_imu(DRIVE_IMU, mount_rpy=[180.0, -6.79, 185.35])
+    with pytest.raises(InputError, match=r"^`mount_rpy` must be roll, pitch, yaw: shape \(3,\), got \(2,\)$"):
+        io.read_imu(DRIVE_IMU, mount_rpy=[1.0, 2.0])
+    with pytest.raises(InputError, match=r"`mount_rpy`: yaw 185\.35 rad"):  # the shared mechanism: every caller
+        mount_dcm([0.0, 0.0, 185.35])

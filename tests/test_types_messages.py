@@ -123,3 +123,24 @@ def test_degrees_for_radians_and_bad_quaternions_are_refused_by_every_type():
     q32 = np.tile(np.array([0.6, 0.8, 0, 0], np.float32) * np.float32(1.0000001), (3, 1))
     sol = NavSolution(t, lla, np.zeros((3, 3)), q32)
     np.testing.assert_allclose(np.linalg.norm(sol.q_nb, axis=1), 1.0, rtol=0, atol=1e-15)
+
+
+def test_euler_angles_in_degrees_are_refused():
+    """NavState.from_euler(t, lla, v, [0, 0, 90]) built a yaw of 90 rad (5157 deg, i.e. 116.6 deg) without a word."""
+    from inskit.types import NavSolution, NavState
+
+    lla = [0.7, 0.1, 100.0]
+    with pytest.raises(InputError, match=r"^`rpy`: yaw 90\.0 rad \(5156\.62 deg\) is beyond a full turn: degrees "
+                                         r"where radians are expected\? \(np\.radians\)$"):
+        NavState.from_euler(0.0, lla, np.zeros(3), [0.0, 0.0, 90.0])
+    rpy = np.zeros((3, 3))
+    rpy[2, 1] = 10.0
+    with pytest.raises(InputError, match=r"^`rpy`: pitch 10\.0 rad at row 2 \(572\.958 deg\) is beyond \+-90 deg, "
+                                         r"where every ZYX pitch lies: degrees"):
+        NavSolution.from_euler(np.arange(3.0), np.tile(lla, (3, 1)), np.zeros((3, 3)), rpy)
+    rpy[2] = [7.0, 0.0, 4 * np.pi + 0.1]  # a series may unwrap its roll and yaw over turns
+    assert len(NavSolution.from_euler(np.arange(3.0), np.tile(lla, (3, 1)), np.zeros((3, 3)), rpy)) == 3
+    with pytest.raises(InputError, match=r"^`rpy` has 2 rows but `time` has 3$"):
+        NavSolution.from_euler(np.arange(3.0), np.tile(lla, (3, 1)), np.zeros((3, 3)), np.zeros((2, 3)))
+    s = NavState.from_euler(0.0, lla, np.zeros(3), np.radians([10.0, -5.0, 350.0]))
+    np.testing.assert_allclose(np.degrees(s.euler), [10.0, -5.0, -10.0], atol=1e-12)

@@ -104,6 +104,37 @@ def check_lla(name, lla):
                              f"beyond {shown}: degrees where radians are expected? (np.radians)")
 
 
+def check_euler(name, rpy, n=None):
+    """Roll, pitch, yaw [rad] as float64, ``(3,)`` (``n=None``) or ``(n, 3)``,
+    refused when not finite or when they look like degrees where radians
+    are expected: one set of angles (an initial state, a mounting) with an
+    angle beyond a full turn (``[0, 0, 90]``); a series with a pitch beyond
+    +-90 deg, where every ZYX pitch lies (its roll and yaw may be unwrapped
+    over several turns)."""
+    a = as_float_array(name, rpy)
+    if n is None:
+        if a.size != 3 or a.ndim > 2 or (a.ndim == 2 and a.shape[0] != 1):
+            raise InputError(f"`{name}` must be roll, pitch, yaw: shape (3,), got {a.shape}")
+        a = a.reshape(3)
+    else:
+        a = _as_array(name, a, (3,), n)
+    flat = np.atleast_2d(a)
+    if not np.isfinite(flat).all():
+        raise InputError(f"`{name}` has a NaN or infinite value ({plain_number(flat[~np.isfinite(flat)][0])})")
+    if a.ndim == 1:
+        bad, beyond = np.abs(flat) > 2 * np.pi, "a full turn"
+    else:
+        bad, beyond = np.zeros_like(flat, dtype=bool), "+-90 deg, where every ZYX pitch lies"
+        bad[:, 1] = np.abs(flat[:, 1]) > np.pi / 2 + 1e-9
+    if bad.any():
+        k, j = np.argwhere(bad)[0]
+        row = f" at row {k}" if a.ndim == 2 else ""
+        raise InputError(f"`{name}`: {('roll', 'pitch', 'yaw')[j]} {plain_number(flat[k, j])} rad{row} "
+                         f"({flat[k, j] / DEG:.6g} deg) is beyond {beyond}: degrees where radians are expected? "
+                         "(np.radians)")
+    return a
+
+
 def check_quaternions(name, q):
     """``q`` (``(n, 4)`` or ``(4,)``) normalised; refused when a norm is off 1
     by more than 1e-6 (not an attitude quaternion: a zero row, Euler
@@ -294,7 +325,7 @@ class NavState:
     @classmethod
     def from_euler(cls, time, lla, v_n, rpy):
         """State from roll, pitch, yaw [rad] (ZYX) instead of a quaternion."""
-        return cls(time, lla, v_n, rot.quat_from_euler(np.asarray(rpy, dtype=float)))
+        return cls(time, lla, v_n, rot.quat_from_euler(check_euler("rpy", rpy)))
 
     @property
     def C_nb(self):
@@ -358,7 +389,9 @@ class NavSolution:
 
     @classmethod
     def from_euler(cls, time, lla, v_n, rpy, extra=None):
-        return cls(time, lla, v_n, rot.quat_from_euler(np.asarray(rpy, dtype=float)), extra or {})
+        """Solution from ``(n, 3)`` roll, pitch, yaw [rad] (ZYX) instead of quaternions."""
+        return cls(time, lla, v_n, rot.quat_from_euler(check_euler("rpy", rpy, len(np.atleast_1d(time)))),
+                   extra or {})
 
     @property
     def euler(self):

@@ -29,7 +29,7 @@ formats.  These functions only forward: the readers do all the checking.
 from __future__ import annotations
 
 from ..errors import InputError
-from ..types import GnssData, ImuData
+from ..types import GnssData, ImuData, check_euler
 
 #: IMU format -> (columns its header must hold, one line of description)
 IMU_FORMATS = {
@@ -152,7 +152,8 @@ def read_imu(path, format=None, *, check_units=True, sampled=None, first_row=Non
         rtklibexplorer only: added to every time tag.
     mount_rpy : (3,) radians, optional
         rtklibexplorer only: mounting rotation, body to sensor (ZYX;
-        :func:`inskit.io.rtklib.mount_dcm`); default the sensor axes.
+        :func:`inskit.io.rtklib.mount_dcm`); default the sensor axes.  An
+        angle beyond a full turn (degrees) is refused.
     repeated : {"keep", "drop"}
         Rate logs (both formats): a row repeating the previous one in all six
         channels, a sample the logger read twice
@@ -175,6 +176,8 @@ def read_imu(path, format=None, *, check_units=True, sampled=None, first_row=Non
     """
     fmt = format if format is not None else (detect_imu_format(path) or "inskit")
     _check_format("IMU", fmt, IMU_FORMATS)
+    if mount_rpy is not None:
+        check_euler("mount_rpy", mount_rpy)  # radians, before the whole log is read
     if fmt == "rtklibexplorer":
         from .rtklib import read_rtklibexplorer_imu
 

@@ -16,7 +16,7 @@ from .. import earth
 from .. import rotations as rot
 from ..errors import InputError
 from ..files import require_file
-from ..types import GnssData, ImuData
+from ..types import GnssData, ImuData, check_euler
 from ..units import DEG, G0, MAX_HEIGHT_M
 from .csv_formats import (_header_names, at_row, check_imu_time, check_imu_units, check_time_column,
                           lean_columns, numeric_columns, open_text, read_table, repeated_rows, require_columns)
@@ -345,8 +345,10 @@ def mount_dcm(mount_rpy):
     sensor axes, so ``C_bs = dcm_from_euler(mount_rpy).T`` and
     ``f_b = C_bs f_s``.  This is the convention of Groves' ``Euler_to_CTM``
     that the rtklibexplorer source uses for (180, -6.79, 185.35) deg.
+    An angle beyond a full turn (those degrees given as radians) is refused
+    (:func:`inskit.types.check_euler`).
     """
-    return rot.dcm_from_euler(np.asarray(mount_rpy, float)).T
+    return rot.dcm_from_euler(check_euler("mount_rpy", mount_rpy)).T
 
 
 def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0.0, 0.0, 0.0),
