@@ -144,3 +144,25 @@ def test_euler_angles_in_degrees_are_refused():
         NavSolution.from_euler(np.arange(3.0), np.tile(lla, (3, 1)), np.zeros((3, 3)), np.zeros((2, 3)))
     s = NavState.from_euler(0.0, lla, np.zeros(3), np.radians([10.0, -5.0, 350.0]))
     np.testing.assert_allclose(np.degrees(s.euler), [10.0, -5.0, -10.0], atol=1e-12)
+
+
+def test_extra_columns_are_arrays_of_the_solution_s_rows():
+    """extra=None was AttributeError ('NoneType' object has no attribute 'items'), a scalar 'object of type float
+    has no len()', a text of 5 characters a column of 5 rows, and a list column an AttributeError later in
+    interpolate; the caller's dict was held, so adding to it changed the solution."""
+    from inskit.types import NavSolution
+
+    t = np.arange(5.0)
+    args = (t, np.tile([0.7, 0.1, 100.0], (5, 1)), np.zeros((5, 3)), np.tile([1.0, 0, 0, 0], (5, 1)))
+    assert NavSolution(*args, None).extra == {}
+    with pytest.raises(InputError, match=r"^extra column `s` is one value \(1\.0\); expected an array of 5 rows$"):
+        NavSolution(*args, {"s": 1.0})
+    with pytest.raises(InputError, match=r"^extra column `s` is one value \('hello'\)"):
+        NavSolution(*args, {"s": "hello"})
+    with pytest.raises(InputError, match=r"^`extra` must be a dict of column name -> array of 5 rows, got list$"):
+        NavSolution(*args, [np.zeros(5)])
+    columns = {"sigma_n_m": [1.0, 2.0, 3.0, 4.0, 5.0]}
+    sol = NavSolution(*args, columns)
+    columns["late_m"] = np.zeros(5)
+    assert list(sol.extra) == ["sigma_n_m"] and isinstance(sol.extra["sigma_n_m"], np.ndarray)
+    np.testing.assert_allclose(sol.interpolate([1.5]).extra["sigma_n_m"], [2.5])

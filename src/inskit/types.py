@@ -337,6 +337,25 @@ class NavState:
         return rot.euler_from_quat(self.q_nb)
 
 
+def _extra_columns(extra, n) -> dict:
+    """``extra`` as a new dict of arrays of ``n`` rows each (None: no column)."""
+    if extra is None:
+        return {}
+    if not isinstance(extra, dict):
+        raise InputError(f"`extra` must be a dict of column name -> array of {n} rows, got {type(extra).__name__}")
+    out = {}
+    for k, v in extra.items():
+        if not isinstance(k, str):
+            raise InputError(f"`extra` column names must be text (units in the name: 'sigma_n_m'), got {k!r}")
+        a = np.asarray(v)
+        if a.ndim == 0:
+            raise InputError(f"extra column `{k}` is one value ({v!r}); expected an array of {n} rows")
+        if len(a) != n:
+            raise InputError(f"extra column `{k}` has {len(a)} rows, expected {n}")
+        out[k] = a
+    return out
+
+
 @dataclass(frozen=True)
 class NavSolution:
     """A navigation solution (or a truth trajectory) over time, in NED terms.
@@ -370,9 +389,7 @@ class NavSolution:
         object.__setattr__(self, "lla", lla)
         object.__setattr__(self, "v_n", _as_array("v_n", self.v_n, (3,), len(t)))
         object.__setattr__(self, "q_nb", check_quaternions("q_nb", _as_array("q_nb", self.q_nb, (4,), len(t))))
-        for k, v in self.extra.items():
-            if len(v) != len(t):
-                raise InputError(f"extra column `{k}` has {len(v)} rows, expected {len(t)}")
+        object.__setattr__(self, "extra", _extra_columns(self.extra, len(t)))
 
     def __len__(self):
         return len(self.time)
