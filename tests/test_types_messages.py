@@ -166,3 +166,26 @@ def test_extra_columns_are_arrays_of_the_solution_s_rows():
     columns["late_m"] = np.zeros(5)
     assert list(sol.extra) == ["sigma_n_m"] and isinstance(sol.extra["sigma_n_m"], np.ndarray)
     np.testing.assert_allclose(sol.interpolate([1.5]).extra["sigma_n_m"], [2.5])
+
+
+def test_concat_names_what_cannot_be_joined():
+    """concat([]) was numpy's 'need at least one array to concatenate', parts with different extra columns a
+    KeyError (or, the other way round, the later part's column dropped without a word)."""
+    from inskit.types import NavSolution
+
+    def part(t0, extra):
+        t = t0 + np.arange(3.0)
+        return NavSolution(t, np.tile([0.7, 0.1, 100.0], (3, 1)), np.zeros((3, 3)), np.tile([1.0, 0, 0, 0], (3, 1)),
+                           {k: np.zeros(3) for k in extra})
+
+    with pytest.raises(InputError, match=r"^NavSolution\.concat: no solution to join \(an empty list\)$"):
+        NavSolution.concat([])
+    for a, b in ((["s_m"], []), ([], ["s_m"])):
+        with pytest.raises(InputError, match=r"^NavSolution\.concat: the solutions hold different extra columns: "
+                                             r"s_m in one of solution 0 and solution 1 only$"):
+            NavSolution.concat([part(0.0, a), part(10.0, b)])
+    joined = NavSolution.concat([part(0.0, ["b_m", "a_m", "c_m"]), part(10.0, ["c_m", "a_m", "b_m"])])
+    assert list(joined.extra) == ["b_m", "a_m", "c_m"] and len(joined) == 6
+    empty = part(0.0, [])
+    empty = empty.slice(0, 0)
+    assert NavSolution.concat([empty]) is empty

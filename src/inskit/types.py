@@ -478,11 +478,26 @@ class NavSolution:
 
     @staticmethod
     def concat(parts):
-        """Join solutions that follow each other in time."""
-        parts = [p for p in parts if len(p)]
+        """Join solutions that follow each other in time.
+
+        Every part must hold the same ``extra`` columns; they keep the first
+        part's order.  Parts of no rows are skipped; a list of only such parts
+        gives the first of them.
+        """
+        given = list(parts)
+        if not given:
+            raise InputError("NavSolution.concat: no solution to join (an empty list)")
+        parts = [p for p in given if len(p)]
+        if not parts:
+            return given[0]
         if len(parts) == 1:
             return parts[0]
-        keys = set(parts[0].extra) if parts else set()
+        keys = list(parts[0].extra)  # a list, not a set: the columns keep their order from run to run
+        for i, p in enumerate(parts[1:], 1):
+            if set(p.extra) != set(keys):
+                diff = sorted(set(keys) ^ set(p.extra))
+                raise InputError(f"NavSolution.concat: the solutions hold different extra columns: "
+                                 f"{', '.join(diff)} in one of solution 0 and solution {i} only")
         return NavSolution(
             np.concatenate([p.time for p in parts]),
             np.concatenate([p.lla for p in parts]),
