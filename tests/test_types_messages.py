@@ -189,3 +189,22 @@ def test_concat_names_what_cannot_be_joined():
     empty = part(0.0, [])
     empty = empty.slice(0, 0)
     assert NavSolution.concat([empty]) is empty
+
+
+def test_sample_and_interpolate_name_bad_times():
+    """sol.sample(2.5) and sol.interpolate(2.0) were 'len() of unsized object', a NaN time gave NaN rows without
+    a word, and unsorted times to interpolate were named `time` (the solution's, not the argument)."""
+    from inskit.types import NavSolution
+
+    t = np.arange(5.0)
+    sol = NavSolution(t, np.tile([0.7, 0.1, 100.0], (5, 1)), np.c_[t, t, t], np.tile([1.0, 0, 0, 0], (5, 1)))
+    lla, v, q = sol.sample(2.5)
+    assert lla.shape == (1, 3) and q.shape == (1, 4)
+    np.testing.assert_allclose(v, [[2.5, 2.5, 2.5]])
+    assert len(sol.interpolate(2.0)) == 1
+    with pytest.raises(InputError, match=r"^`t` has a NaN or infinite value \(nan\) at row 1$"):
+        sol.sample([1.0, np.nan])
+    with pytest.raises(InputError, match=r"^`t` must strictly increase: row 1 \(1\.0\) goes back from row 0 \(3\.0\)$"):
+        sol.interpolate([3.0, 1.0])
+    with pytest.raises(InputError, match=r"^`t` must be one time or shape \(m,\), got \(2, 1\)$"):
+        sol.sample([[1.0], [2.0]])

@@ -337,6 +337,17 @@ class NavState:
         return rot.euler_from_quat(self.q_nb)
 
 
+def _query_times(t):
+    """Times asked of a solution: float64 ``(m,)`` (one number: ``(1,)``), finite."""
+    t = as_float_array("t", t)
+    if t.ndim != 1:
+        raise InputError(f"`t` must be one time or shape (m,), got {t.shape}")
+    if not np.isfinite(t).all():
+        k = int(np.argmax(~np.isfinite(t)))
+        raise InputError(f"`t` has a NaN or infinite value ({plain_number(t[k])}) at row {k}")
+    return t
+
+
 def _extra_columns(extra, n) -> dict:
     """``extra`` as a new dict of arrays of ``n`` rows each (None: no column)."""
     if extra is None:
@@ -508,8 +519,20 @@ class NavSolution:
 
     def sample(self, t):
         """``(lla, v_n, q_nb)`` at any times ``t`` inside the span, in any order
-        (linear in position and velocity, normalised linear quaternion blend)."""
-        t = np.asarray(t, dtype=float)
+        (linear in position and velocity, normalised linear quaternion blend).
+
+        Parameters
+        ----------
+        t : float or (m,) array_like
+            [s]; one time gives arrays of one row.
+
+        Returns
+        -------
+        lla : (m, 3) ndarray
+        v_n : (m, 3) ndarray
+        q_nb : (m, 4) ndarray
+        """
+        t = _query_times(t)
         if len(t) and (t.min() < self.time[0] or t.max() > self.time[-1]):
             raise InputError(
                 f"requested times {t.min():.3f}..{t.max():.3f} s fall outside the solution span "
@@ -533,8 +556,9 @@ class NavSolution:
         return i, i + 1, (t - self.time[i]) / (self.time[i + 1] - self.time[i])
 
     def interpolate(self, t):
-        """Solution at increasing times ``t`` inside the span (see :meth:`sample`)."""
-        t = np.asarray(t, dtype=float)
+        """Solution at strictly increasing times ``t`` (float or ``(m,)``)
+        inside the span (see :meth:`sample`)."""
+        t = check_time("t", _query_times(t))
         lla, v, q = self.sample(t)
         i, j, w = self._bracket(t)
         extra = {k: (x[i] * (1 - w) + x[j] * w) if x.ndim == 1 else (x[i] * (1 - w)[:, None] + x[j] * w[:, None])
