@@ -208,3 +208,13 @@ def test_sample_and_interpolate_name_bad_times():
         sol.interpolate([3.0, 1.0])
     with pytest.raises(InputError, match=r"^`t` must be one time or shape \(m,\), got \(2, 1\)$"):
         sol.sample([[1.0], [2.0]])
+
+
+def test_no_samples_have_no_rates():
+    """ImuData of no rows: rates(), to_dataframe(rates=True) and from_rates were 'index 0 is out of bounds'."""
+    empty = ImuData(np.zeros(0), np.zeros((0, 3)), np.zeros((0, 3)))
+    gyro, accel = empty.rates()
+    assert gyro.shape == accel.shape == (0, 3) and len(empty.to_dataframe(rates=True)) == 0
+    assert len(ImuData.from_rates([], np.zeros((0, 3)), np.zeros((0, 3)))) == 0
+    with pytest.raises(InputError, match=r"`sampled` must be 'instant' or 'average', got 'avg'"):
+        ImuData.from_rates([], np.zeros((0, 3)), np.zeros((0, 3)), sampled="avg")

@@ -231,23 +231,26 @@ class ImuData:
         t = check_time("time", time)
         w = _as_array("gyro_b", gyro_b, (3,), len(t))
         f = _as_array("accel_b", accel_b, (3,), len(t))
+        if sampled not in ("instant", "average"):
+            raise InputError(f"`sampled` must be 'instant' or 'average', got {sampled!r}")
+        if len(t) == 0:  # no samples: no increments
+            return cls(t, w, f)
         dt = np.empty_like(t)
         dt[1:] = np.diff(t)
         dt[0] = dt[1] if len(t) > 1 else 0.0
         if sampled == "instant":
             wm = np.vstack([w[:1], 0.5 * (w[1:] + w[:-1])])
             fm = np.vstack([f[:1], 0.5 * (f[1:] + f[:-1])])
-        elif sampled == "average":
+        else:  # "average"
             wm, fm = w, f
-        else:
-            raise InputError(f"`sampled` must be 'instant' or 'average', got {sampled!r}")
         return cls(t, wm * dt[:, None], fm * dt[:, None])
 
     def rates(self):
         """Mean rates over each interval: ``(gyro_b, accel_b)`` [rad/s, m/s^2]."""
         dt = np.empty_like(self.time)
         dt[1:] = np.diff(self.time)
-        dt[0] = dt[1] if len(dt) > 1 else 1.0
+        if len(dt):  # no samples: no rates
+            dt[0] = dt[1] if len(dt) > 1 else 1.0
         return self.dtheta_b / dt[:, None], self.dv_b / dt[:, None]
 
     def slice(self, start, stop=None):
