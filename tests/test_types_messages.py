@@ -218,3 +218,16 @@ def test_no_samples_have_no_rates():
     assert len(ImuData.from_rates([], np.zeros((0, 3)), np.zeros((0, 3)))) == 0
     with pytest.raises(InputError, match=r"`sampled` must be 'instant' or 'average', got 'avg'"):
         ImuData.from_rates([], np.zeros((0, 3)), np.zeros((0, 3)), sampled="avg")
+
+
+def test_a_mask_is_one_flag_per_fix():
+    """GnssData.select([0, 2, 1, 0, 1]) took the row numbers as flags (rows 1, 2, 4) without a word, and a mask
+    of another length was numpy's 'boolean index did not match'."""
+    from inskit.types import GnssData
+
+    g = GnssData(np.arange(5.0), np.tile([0.7, 0.1, 100.0], (5, 1)), np.ones((5, 3)))
+    with pytest.raises(InputError, match=r"^`mask` must hold booleans, one per fix, got int64 values \(row numbers\?"):
+        g.select([0, 2, 1, 0, 1])
+    with pytest.raises(InputError, match=r"^`mask` must have shape \(5,\), one flag per fix, got \(2,\)$"):
+        g.select([True, False])
+    np.testing.assert_array_equal(g.select(g.time > 2.5).time, [3.0, 4.0])

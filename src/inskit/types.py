@@ -640,8 +640,19 @@ class GnssData:
         return pd.DataFrame(cols)
 
     def select(self, mask):
-        """Fixes where ``mask`` is true."""
-        m = np.asarray(mask, dtype=bool)
+        """Fixes where ``mask`` is true.
+
+        Parameters
+        ----------
+        mask : (n,) bool array_like
+            One flag per fix (not row numbers: ``g.select(np.isin(np.arange(len(g)), rows))``).
+        """
+        m = np.asarray(mask)
+        if m.dtype.kind != "b":
+            raise InputError(f"`mask` must hold booleans, one per fix, got {m.dtype} values (row numbers? "
+                             "a mask is one True or False per fix)")
+        if m.shape != (len(self),):
+            raise InputError(f"`mask` must have shape ({len(self)},), one flag per fix, got {m.shape}")
         return GnssData(self.time[m], self.lla[m], self.sigma_ned[m],
                         None if self.v_n is None else self.v_n[m],
                         None if self.sigma_v_ned is None else self.sigma_v_ned[m])
