@@ -172,3 +172,29 @@ def test_simulate_and_mechanize(tmp_path):
 
     err = nav_error(sol, truth)
     assert np.abs(err.pos_ned).max() < 1e-3
+
+
+def test_arguments_of_the_wrong_type_are_named_before_any_work(tmp_path):
+    """navigate(cfg, truth=3) and out_dir=3 were 'expected str, bytes or os.PathLike object, not int' after the
+    whole run, smooth='no' smoothed (a non-empty string is true); simulate(sc, 1.5) was numpy's 'SeedSequence
+    expects int', seed=-1 'expected non-negative integer', a dict scenario a TypeError from pathlib."""
+    cfg = ROOT / "examples" / "drive_0708.toml"
+    with pytest.raises(InputError, match=r"^truth must be a file path \(str or Path\) or a NavSolution, got int 3$"):
+        inskit.navigate(cfg, truth=3)
+    with pytest.raises(InputError, match=r"^out_dir must be a file path \(str or Path\), True or None, got int 3$"):
+        inskit.navigate(cfg, out_dir=3)
+    with pytest.raises(InputError, match=r"^smooth must be True or False, got 'no'$"):
+        inskit.navigate(cfg, smooth="no")
+    with pytest.raises(InputError, match=r"^log must be a function \(or None\), got str 'x'$"):
+        inskit.navigate(cfg, log="x")
+    sc = tmp_path / "still.toml"
+    sc.write_text(SCENARIO)
+    for seed, shown in ((1.5, "float 1.5"), ("1", "str '1'"), (-1, "-1"), (True, "bool True")):
+        with pytest.raises(InputError, match=rf"^seed must be an integer >= 0, got {re.escape(shown)}$"):
+            inskit.simulate(sc, seed)
+    with pytest.raises(InputError, match=r"^scenario must be a file path \(str or Path\) or a Scenario, got dict"):
+        inskit.simulate({"name": "still"})
+    with pytest.raises(InputError, match=r"^truth_rate_hz must be a number \[Hz\] \(or None\), got str '10'$"):
+        inskit.simulate(sc, truth_rate_hz="10")
+    a, b = inskit.simulate(sc, np.int64(3)), inskit.simulate(str(sc), 3, truth_rate_hz=np.float64(100.0))
+    np.testing.assert_array_equal(a.imu.dv_b, b.imu.dv_b)

@@ -17,6 +17,7 @@ pandas, matplotlib) are imported by the functions that need them, so
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -78,6 +79,35 @@ class NavigationRun:
         return (f"NavigationRun({s.get('name')!r}: {s.get('solution')} {s.get('scheme')} solution, "
                 f"{len(self.solution)} epochs over {s.get('duration_s', 0.0):.1f} s, "
                 f"health {self.health.get('verdict')!r}, {len(self.files)} files written)")
+
+
+def _check_flag(name, value):
+    """A keyword that is True or False (``smooth="no"`` is a non-empty string, so truthy)."""
+    if not isinstance(value, bool) and not (hasattr(value, "dtype") and getattr(value, "dtype").kind == "b"):
+        raise InputError(f"{name} must be True or False, got {value!r}")
+    return bool(value)
+
+
+def _check_path(name, value, also=""):
+    """A file or folder argument: a str or a path-like object."""
+    import os
+
+    if not isinstance(value, (str, os.PathLike)):
+        raise InputError(f"{name} must be a file path (str or Path){also}, got {type(value).__name__} {value!r}")
+    return Path(value)
+
+
+def _check_seed(seed):
+    """A seed numpy's default_rng and SeedSequence take alike: an int >= 0 (or None: fresh entropy)."""
+    import numpy as np
+
+    if seed is None or isinstance(seed, np.random.Generator):
+        return seed
+    if isinstance(seed, bool) or not isinstance(seed, numbers.Integral):
+        raise InputError(f"seed must be an integer >= 0, got {type(seed).__name__} {seed!r}")
+    if seed < 0:
+        raise InputError(f"seed must be an integer >= 0, got {seed}")
+    return int(seed)
 
 
 def _config(config, overrides):
@@ -147,13 +177,21 @@ def navigate(config, *, smooth=False, truth=None, out_dir=None, overwrite=False,
     from .files import check_folder_writable
     from .jobs import navigate as N
 
+    smooth, overwrite = _check_flag("smooth", smooth), _check_flag("overwrite", overwrite)
+    if truth is not None and not isinstance(truth, NavSolution):
+        truth = _check_path("truth", truth, " or a NavSolution")
+    for name, f in (("progress", progress), ("log", log)):
+        if f is not None and not callable(f):
+            raise InputError(f"{name} must be a function (or None), got {type(f).__name__} {f!r}")
+    if out_dir is not None and out_dir is not True and out_dir is not False:
+        out_dir = _check_path("out_dir", out_dir, ", True or None")
     cfg = _config(config, overrides)
     target = None
     if out_dir is not None and out_dir is not False:
         if out_dir is True:
             target = cfg.resolve(cfg.output.dir) if cfg.output.dir else Path("out") / cfg.name
         else:
-            target = Path(out_dir)
+            target = out_dir
         if target.exists() and any(target.iterdir()) and not overwrite:
             raise InputError(f"{target}: already holds results; refusing to overwrite them (overwrite=True)")
         check_folder_writable(target)  # before the computation, not after it
@@ -180,8 +218,9 @@ def simulate(scenario, seed=0, *, truth_rate_hz=None, out_dir=None, overwrite=Fa
     scenario : str, Path or Scenario
         A scenario TOML file (``docs/config.md``, "Scenario files") or a
         validated :class:`inskit.simulation.scenario.Scenario`.
-    seed : int
-        Seed of every random draw (same seed, same numbers).
+    seed : int >= 0
+        Seed of every random draw (same seed, same numbers; None: fresh
+        entropy, another run every call).
     truth_rate_hz : float, optional
         Rate of the truth (default: the IMU rate).
     out_dir : str or Path, optional
@@ -201,12 +240,20 @@ def simulate(scenario, seed=0, *, truth_rate_hz=None, out_dir=None, overwrite=Fa
     from .simulation.scenario import Scenario, load_scenario
     from .simulation.scenario import simulate as run
 
-    sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
-    sim = run(sc, seed, truth_rate_hz=truth_rate_hz)
+    seed = _check_seed(seed)
+    overwrite, plot = _check_flag("overwrite", overwrite), _check_flag("plot", plot)
+    if out_dir is not None:
+        out_dir = _check_path("out_dir", out_dir, " or None")
+    if truth_rate_hz is not None and (isinstance(truth_rate_hz, bool) or not isinstance(truth_rate_hz, numbers.Real)):
+        raise InputError(f"truth_rate_hz must be a number [Hz] (or None), got {type(truth_rate_hz).__name__} "
+                         f"{truth_rate_hz!r}")
+    if not isinstance(scenario, Scenario):
+        scenario = load_scenario(_check_path("scenario", scenario, " or a Scenario"))
+    sim = run(scenario, seed, truth_rate_hz=truth_rate_hz)
     if out_dir is not None:
         from .jobs.simulate import write_simulation
 
-        write_simulation(sim, Path(out_dir), overwrite=overwrite, plot=plot)
+        write_simulation(sim, out_dir, overwrite=overwrite, plot=plot)
     return sim
 
 
