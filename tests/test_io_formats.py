@@ -192,3 +192,17 @@ def test_a_mounting_rotation_in_degrees_is_refused_before_the_log_is_read(tmp_pa
         io.read_imu(DRIVE_IMU, mount_rpy=[1.0, 2.0])
     with pytest.raises(InputError, match=r"`mount_rpy`: yaw 185\.35 rad"):  # the shared mechanism: every caller
         mount_dcm([0.0, 0.0, 185.35])
+
+
+def test_a_path_argument_that_is_no_path_is_named(tmp_path):
+    """read_imu(3), read_gnss(3), read_solution(3) were pathlib's 'expected str, bytes or os.PathLike object, not
+    int' (no argument named); write_solution(path, dataframe) an AttributeError inside the writer."""
+    import inskit
+
+    for read in (inskit.read_imu, inskit.read_gnss, inskit.read_solution):
+        with pytest.raises(InputError, match=r"^`path` must be a file path \(str or Path\), got int 3$"):
+            read(3)
+    with pytest.raises(InputError, match=r"^`sol` must be a NavSolution, got dict$"):
+        inskit.write_solution(tmp_path / "sol.csv", {"time_s": [0.0]})
+    assert not (tmp_path / "sol.csv").exists()
+    assert len(inskit.read_gnss(DRIVE_POS)) == len(inskit.read_gnss(str(DRIVE_POS)))

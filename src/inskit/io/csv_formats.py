@@ -198,6 +198,17 @@ def _is_gzip(path) -> bool:
         return fh.read(2) == b"\x1f\x8b"
 
 
+def check_path_argument(path, name="path"):
+    """``path`` as a Path when it is a str or path-like, else an InputError
+    naming the argument (pathlib's 'expected str, bytes or os.PathLike
+    object, not int' names none)."""
+    import os
+
+    if not isinstance(path, (str, os.PathLike)):
+        raise InputError(f"`{name}` must be a file path (str or Path), got {type(path).__name__} {path!r:.80}")
+    return Path(path)
+
+
 def open_text(path):
     """A text handle on ``path``: gzip recognised by its first bytes (not
     its name), a byte-order mark (Windows editors) dropped, an undecodable
@@ -982,7 +993,7 @@ def read_solution(path, *, until_s=None) -> NavSolution:
     """
     from .parquet import is_parquet
 
-    p = Path(path)
+    p = check_path_argument(path)
     if until_s is not None:
         head = _read_solution_head(p, float(until_s))
         if head is not None:
@@ -1163,7 +1174,9 @@ def write_solution(path, sol: NavSolution, *, overwrite=False, rate_hz=None, col
     """
     from .parquet import prepare, write_csv_fast, write_parquet
 
-    path = check_writable(path, overwrite)
+    if not isinstance(sol, NavSolution):
+        raise InputError(f"`sol` must be a NavSolution, got {type(sol).__name__}")
+    path = check_writable(check_path_argument(path), overwrite)
     cols = prepare(sol, path, rate_hz=rate_hz, columns=columns)
     if path.suffix == ".parquet":
         return write_parquet(path, cols, metadata)

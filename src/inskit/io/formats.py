@@ -50,6 +50,13 @@ GNSS_FORMATS = {
 _PEEK_LINES = 60
 
 
+def check_path_argument(path):
+    """:func:`.csv_formats.check_path_argument` (loaded on first use)."""
+    from .csv_formats import check_path_argument as check
+
+    return check(path)
+
+
 def _open(path):
     """A text handle on ``path`` (:func:`.csv_formats.open_text`)."""
     from .csv_formats import open_text
@@ -174,6 +181,7 @@ def read_imu(path, format=None, *, check_units=True, sampled=None, first_row=Non
         an unknown format (the message lists them), or an option of another
         format.
     """
+    path = check_path_argument(path)
     fmt = format if format is not None else (detect_imu_format(path) or "inskit")
     _check_format("IMU", fmt, IMU_FORMATS)
     if mount_rpy is not None:
@@ -217,6 +225,7 @@ def read_gnss(path, format=None, *, quality=None, week0=None, time_offset_s=None
     GnssData
         Times as in the file (rtklib-pos: seconds of GPS week ``week0``).
     """
+    path = check_path_argument(path)
     fmt = format if format is not None else (detect_gnss_format(path) or "inskit")
     _check_format("GNSS", fmt, GNSS_FORMATS)
     if fmt == "rtklib-pos":
