@@ -241,10 +241,10 @@ def test_write_json_is_strict_json_whole_or_nothing(tmp_path, monkeypatch):
     assert sorted(x.name for x in tmp_path.iterdir()) == ["r.json"]
 
 
-def test_staged_folder_moves_what_the_block_wrote_and_names_final_paths(tmp_path, monkeypatch):
-    """files.staged_folder: the files a writer put into the staging folder land in the folder, summary.json
+def test_staged_tree_moves_summary_last_and_names_final_paths(tmp_path, monkeypatch):
+    """files.staged_tree (last=): the files a writer put into the staging folder land in the folder, summary.json
     last; a failure leaves the folder as it was, and a writer's message names the file by its final path."""
-    from inskit.files import staged_folder
+    from inskit.files import staged_tree
 
     out = tmp_path / "run"
     out.mkdir()
@@ -252,13 +252,13 @@ def test_staged_folder_moves_what_the_block_wrote_and_names_final_paths(tmp_path
     order = []
     real = os.replace
     monkeypatch.setattr(os, "replace", lambda a, b: (order.append(os.path.basename(b)), real(a, b))[1])
-    with staged_folder(out) as stage:
+    with staged_tree(out, last=("summary.json",)) as stage:
         for name in ("summary.json", "b.csv", "a.png"):
             (stage / name).write_text(name)
     assert [n for n in order if n != "old.txt"][-1] == "summary.json"
     assert sorted(p.name for p in out.iterdir()) == ["a.png", "b.csv", "old.txt", "summary.json"]
     with pytest.raises(InputError) as e:
-        with staged_folder(out) as stage:
+        with staged_tree(out, last=("summary.json",)) as stage:
             (stage / "b.csv").write_text("new")
             raise InputError(f"{stage / 'c.csv'}: could not be written (No space left on device)")
     assert str(e.value) == f"{out / 'c.csv'}: could not be written (No space left on device)"
@@ -371,3 +371,16 @@ def test_staged_paths_messages_name_the_final_file(tmp_path):
             write_text(stage(tmp_path / "missing" / "a.txt"), "x")
     assert str(info.value).startswith(f"{tmp_path / 'missing' / 'a.txt'}: could not be written"), info.value
     assert ".part" not in str(info.value)
+
+
+def test_staged_files_messages_name_the_final_path(tmp_path):
+    """A writer's failure inside files.staged_files named the file by its staging path
+    (D/.staging-xxxx/imu.csv: could not be written); now by the path the user asked for."""
+    from inskit.files import staged_files
+
+    out = tmp_path / "run"
+    with pytest.raises(InputError) as e:
+        with staged_files(out) as stage:
+            raise InputError(f"{stage(out / 'imu.csv')}: could not be written (No space left on device)")
+    assert str(e.value) == f"{out / 'imu.csv'}: could not be written (No space left on device)"
+    assert not list(out.iterdir())

@@ -62,40 +62,9 @@ def staged_files(folder):
     try:
         yield stage
         _commit(staged, tmp / "previous")
-    except OSError as exc:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise InputError(f"{folder}: the results could not be written ({exc.strerror or exc})") from None
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        raise
-    shutil.rmtree(tmp, ignore_errors=True)
-
-
-@contextmanager
-def staged_folder(folder, last=("summary.json",)):
-    """Write a set of files whole or not at all, as :func:`staged_files`,
-    for writers that take a folder (plots, a run's outputs): yield a hidden
-    staging folder inside ``folder``; when the block completes every file
-    the block left in it moves to ``folder`` (those named in ``last`` after
-    the others: a run's summary lands last, as the mark of a complete set);
-    on any error or interrupt the staging folder goes and ``folder`` is left
-    as it was.  The moves are undone when one of them fails
-    (:func:`_commit`)."""
-    import shutil
-    import tempfile
-
-    folder = Path(folder)
-    folder.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=".staging-", dir=folder))
-    work = tmp / "files"
-    work.mkdir()
-    try:
-        yield work
-        parts = sorted((p for p in work.iterdir() if p.is_file()), key=lambda p: (p.name in last, p.name))
-        _commit({folder / p.name: p for p in parts}, tmp / "previous")
     except InputError as exc:  # a writer's message names the file by its final name, not the staging one
         shutil.rmtree(tmp, ignore_errors=True)
-        raise InputError(str(exc).replace(f"{work}{os.sep}", f"{folder}{os.sep}")) from None
+        raise InputError(str(exc).replace(f"{tmp}{os.sep}", f"{folder}{os.sep}")) from None
     except OSError as exc:
         shutil.rmtree(tmp, ignore_errors=True)
         raise InputError(f"{folder}: the results could not be written ({exc.strerror or exc})") from None
@@ -217,12 +186,13 @@ def check_results_folder(folder, overwrite=False, option="--force"):
 
 
 @contextmanager
-def staged_tree(folder):
+def staged_tree(folder, last=()):
     """Write a whole tree of results whole or not at all: yield a hidden
     staging folder inside ``folder`` for the job to write into (subfolders
     too, under the names they will have in ``folder``); when the block
-    completes every file is moved to its place in ``folder``, undone
-    should a move fail (the files replaced come back, the new ones go); on
+    completes every file is moved to its place in ``folder`` (the files
+    named in ``last`` after the others: a run's summary lands last, as the
+    mark of a complete set), undone should a move fail (the files replaced come back, the new ones go); on
     any error or interrupt the staging folder goes and ``folder`` is left
     as it was.  A file that would replace a folder is refused
     (:func:`check_outputs`).  Paths the job returns name the staging folder:
@@ -236,7 +206,7 @@ def staged_tree(folder):
     previous = None
     try:
         yield tmp
-        parts = sorted(p for p in tmp.rglob("*") if p.is_file())
+        parts = sorted((p for p in tmp.rglob("*") if p.is_file()), key=lambda p: (p.name in last, p))
         finals = [folder / p.relative_to(tmp) for p in parts]
         check_outputs(finals, (), overwrite=True)  # a folder of the user's in a file's place is not replaced
         previous = Path(tempfile.mkdtemp(prefix=".previous-", dir=folder))

@@ -319,7 +319,7 @@ class SolutionStream:
     def commit(self, folder=None) -> Path:
         """Close and rename the file to its final name (with ``folder``: to
         its name in that folder, e.g. a staging folder of
-        :func:`inskit.files.staged_folder` that moves a run's files into
+        :func:`inskit.files.staged_tree` that moves a run's files into
         place as a set); returns the path it now has."""
         self.close()
         if not self.tmp.exists():

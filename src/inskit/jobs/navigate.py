@@ -1634,7 +1634,7 @@ def write_outputs(res: NavigateResult, out_dir: Path, s: dict, *, replace_previo
     ``summary.json`` (with the list of files) into ``out_dir``, as a set:
     written into a staging folder and moved into place together, the
     summary last, as the mark of a complete run
-    (:func:`inskit.files.staged_folder`).  A failure on the way (a plot, a
+    (:func:`inskit.files.staged_tree`).  A failure on the way (a plot, a
     full disk, an interrupt) leaves ``out_dir`` as it was: no new file
     beside the old ones, no result without its summary.
 
@@ -1647,13 +1647,13 @@ def write_outputs(res: NavigateResult, out_dir: Path, s: dict, *, replace_previo
     ``[output] rate_hz``, or both; ``[output] columns`` selects the columns of
     both (:func:`inskit.io.parquet.select_columns`).
     """
-    from ..files import staged_folder
+    from ..files import staged_tree
 
     out_dir = Path(out_dir)
     o = res.config.output
     previous = previous_run_files(out_dir) if replace_previous else []
     tracks = [("forward", res.forward)] + ([("smoothed", res.smoothed)] if res.smoothed is not None else [])
-    with staged_folder(out_dir) as stage:
+    with staged_tree(out_dir, last=("summary.json",)) as stage:
         names = []
         if res.streams:  # written while the filter ran: moved into the set now
             finish_streams(res)
