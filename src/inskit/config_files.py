@@ -200,7 +200,13 @@ def check_option_init(option, x):
     """A ``lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg``
     state given with ``option`` (``inskit mechanize --init``, ``inskit
     gyrofree navigate --init``): its height and angles held to the config
-    keys' ranges, the option named; returns ``x``."""
+    keys' ranges, the option named (a latitude beyond +-90 deg was said
+    by the state's own check in radians' words); returns ``x``."""
+    if not -90.0 <= x[0] <= 90.0:
+        raise InputError(f"{option}: latitude must be within [-90, 90] deg, got {x[0]:g}")
+    lo, hi = LONGITUDE_RANGE_DEG
+    if not lo <= x[1] <= hi:
+        raise InputError(f"{option}: longitude must be within [{lo:g}, {hi:g}] deg, got {x[1]:g}")
     check_option_height(option, x[2], "height_m ")
     check_option_angles(option, x[6:9])
     return x

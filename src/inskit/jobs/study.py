@@ -633,6 +633,12 @@ def check_cluster_options(scheduler, workers):
             "no host" if not host else f"port {port} is outside 1..65535") + f"); {expected}")
 
 
+#: the level of distributed's own logs in a study's local cluster: none.  A run's error reaches the study as its
+#: exception (it fails the study, named); what distributed logs is about itself, and on Ctrl-C its workers and
+#: scheduler log their lost connections as ERROR and CRITICAL with tracebacks, beside 'inskit: aborted'
+_QUIET = 100
+
+
 def _open_client(scheduler, workers):
     """A distributed client and the cluster it started (or None)."""
     import logging
@@ -659,7 +665,7 @@ def _open_client(scheduler, workers):
     old = signal.signal(signal.SIGINT, signal.SIG_IGN) if main else None
     try:
         cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True, dashboard_address=":0",
-                               silence_logs=logging.ERROR)
+                               silence_logs=_QUIET)
     finally:
         if main:
             signal.signal(signal.SIGINT, old)
@@ -855,7 +861,7 @@ def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None
             if cluster is not None:  # its shutdown after an interrupt ('Removing worker ... lost scattered data')
                 import logging       # is not the user's message: 'inskit: aborted' is
 
-                logging.getLogger("distributed").setLevel(logging.CRITICAL)
+                logging.getLogger("distributed").setLevel(_QUIET)
             client.close()
             if cluster is not None:
                 cluster.close()
