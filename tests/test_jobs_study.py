@@ -429,7 +429,10 @@ def test_ctrl_c_stops_a_study_with_one_line_and_no_traceback(tmp_path):
     spec = _spec(tmp_path, TINY.replace("runs = 4", "runs = 200"))
     p = subprocess.Popen([sys.executable, "-m", "inskit.cli", "study", str(spec), "--out", str(tmp_path / "out"),
                           "--workers", "1", "--json"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                         start_new_session=True)
+                         start_new_session=True,
+                         # as a terminal's shell starts a command: Ctrl-C not ignored (a test run started in the
+                         # background, `make test &`, hands its children SIGINT ignored, and Python keeps that)
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     lines = []
     try:
         for line in p.stderr:
