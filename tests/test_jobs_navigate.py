@@ -712,3 +712,13 @@ def test_a_run_whose_writing_fails_leaves_the_previous_run_as_it_was(drive_input
     names = sorted(p.name for p in out.iterdir())
     assert names == sorted(f.name for f in files) and "solution_smoothed.parquet" not in names
     assert json.loads((out / "summary.json").read_text())["files"] == [str(f) for f in files]
+
+
+def test_the_yaw_bank_log_line_rounds_both_scores():
+    """walk_0827's log said 'mean NIS per dof 0.85, next best 0.8485957923300557'."""
+    from inskit.jobs.navigate import bank_line
+
+    bank = {"scores": [0.85] * 12, "span_s": 40.0, "elapsed_s": 0.6, "chosen_yaw_deg": 169.9,
+            "score": 0.8471, "runner_up_score": 0.8485957923300557}
+    assert bank_line(bank).endswith("kept 169.9 deg (mean NIS per dof 0.847, next best 0.849)")
+    assert bank_line({**bank, "runner_up_score": None}).endswith("next best none)")

@@ -820,9 +820,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
             startup = after_bank(startup, bank)
             initial = startup.state
             if log:
-                log(f"yaw bank: {len(bank['scores'])} hypotheses over {bank['span_s']:.0f} s in "
-                    f"{bank['elapsed_s']:.1f} s; kept {bank['chosen_yaw_deg']:.1f} deg (mean NIS per dof "
-                    f"{bank['score']:.2f}, next best {bank['runner_up_score']})")
+                log(bank_line(bank))
         streams = pending = truth_parts = None
         if stream_dir is not None and streams_run(cfg):
             out, sm, streams, pending, truth_parts = _run_streamed(cfg, imu, gnss, windows, initial, meas, settings,
@@ -1562,6 +1560,14 @@ def outage_table_text(s: dict) -> str:
     counts = ", ".join(f"{k} {v['used']} used/{v['rejected']} rejected" for k, v in s["measurements"].items())
     lines.append(f"updates: {counts}")
     return "\n".join(lines)
+
+
+def bank_line(bank: dict) -> str:
+    """The log line of a yaw bank (:func:`inskit.alignment.inmotion.yaw_bank`'s result)."""
+    runner_up = bank["runner_up_score"]
+    return (f"yaw bank: {len(bank['scores'])} hypotheses over {bank['span_s']:.0f} s in {bank['elapsed_s']:.1f} s; "
+            f"kept {bank['chosen_yaw_deg']:.1f} deg (mean NIS per dof {bank['score']:.3f}, next best "
+            + (f"{runner_up:.3f})" if runner_up is not None else "none)"))
 
 
 def previous_run_files(out_dir: Path) -> list:
