@@ -188,3 +188,17 @@ def test_vehicle_axes_given_makes_a_mismatch_unhealthy_and_names_the_mount(tmp_p
     assert s["health"]["verdict"] == "unhealthy"
     msg = [r for r in s["health"]["reasons"] if r.startswith("vehicle axes:")]
     assert msg and "mount_rpy_deg = [" in msg[0] and "90.00]" in msg[0], s["health"]["reasons"]
+
+
+def test_drive_0708_read_without_its_mount_is_found_upside_down_and_backwards():
+    """docs/guide.md's figure: the bundled drive with [imu] mount_rpy_deg = 0
+    (it said [180, 0, -174.68] from before the direction of travel was taken
+    as the right angle it lies within 3 standard errors of)."""
+    cfg = load_config(ROOT / "examples" / "drive_0708.toml",
+                      {"output": {"plots": False}, "imu": {"mount_rpy_deg": [0.0, 0.0, 0.0]}})
+    s = summary(navigate(cfg))
+    ax = s["startup"]["vehicle_axes"]
+    assert ax["rotated"] and ax["upside_down"] and ax["rotation_yaw_deg"] == 180.0
+    assert ax["mount_rpy_deg_suggested"] == pytest.approx([180.0, 0.0, 179.79], abs=0.01)
+    assert s["health"]["verdict"] == "healthy"
+    assert s["forward"]["outage_end_horizontal_rms_m"] == pytest.approx(3.11, abs=0.01)
