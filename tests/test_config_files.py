@@ -166,3 +166,17 @@ def test_a_file_of_no_known_kind_goes_to_the_model(tmp_path):
     assert read_toml(p, "study") == {"name": "x"} and toml_kind({"name": "x"}) is None
     both = {"segment": [], "imu": {"file": "a.csv"}}
     assert toml_kind(both) is None
+
+
+def test_a_folder_given_as_a_config_file_is_said_to_be_one(tmp_path):
+    """inskit.navigate('examples') said 'examples: no such config file' of a folder that exists; now it says it is
+    a folder and names TOML files in it."""
+    (tmp_path / "full").mkdir()
+    (tmp_path / "full" / "drive.toml").write_text('name = "d"\n')
+    with pytest.raises(ConfigError, match=r"is a folder; expected a config file \(a \.toml file, e\.g\. drive\.toml in"):
+        read_toml(tmp_path / "full")
+    (tmp_path / "empty").mkdir()
+    with pytest.raises(ConfigError, match=r"empty: is a folder; expected a scenario file \(a \.toml file\)$"):
+        read_toml(tmp_path / "empty", "scenario")
+    with pytest.raises(ConfigError, match="absent.toml: no such config file"):
+        read_toml(tmp_path / "absent.toml")

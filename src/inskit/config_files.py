@@ -18,6 +18,10 @@ from .errors import ConfigError, InputError
 def read_toml(path, kind="config"):
     """The parsed TOML of ``path``; a missing file or bad syntax is a ConfigError."""
     path = Path(path)
+    if path.is_dir():  # inskit.navigate("examples"): a folder, not a missing file
+        tomls = sorted(p.name for p in path.glob("*.toml"))[:5]
+        raise ConfigError(f"{path}: is a folder; expected a {kind} file (a .toml file"
+                          + (f", e.g. {', '.join(tomls)} in it)" if tomls else ")"))
     if not path.is_file():
         raise ConfigError(f"{path}: no such {kind} file")
     raw = path.read_bytes()
