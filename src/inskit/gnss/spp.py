@@ -896,6 +896,46 @@ def spp(obs, nav, *, mask_deg=10.0, iono="klobuchar", tropo="saastamoinen", raim
     return sol
 
 
+def clock_drift_from_bias(sol, epoch, system=None, span_s=60.0):
+    """Receiver clock drift [m/s] from the single-point clock bias alone:
+    the median over consecutive solved epochs within ``span_s`` of
+    ``epoch`` (after it first, then before it) of the bias difference over
+    the time difference.  For observations without Doppler, whose
+    single-point solution has no drift; the median passes over one clock
+    jump and the epochs' code noise (a few m/s with 1 s epochs).
+
+    Parameters
+    ----------
+    sol : SppSolution
+    epoch : int
+        Epoch index near which the drift is wanted.
+    system : str, optional
+        System letter of the clock (default the solution's first system).
+    span_s : float
+        Half width of the window [s].
+
+    Returns
+    -------
+    (drift [m/s], pairs used) : (float, int)
+        NaN and 0 with fewer than two consecutive solved epochs in the window.
+    """
+    systems = list(sol.systems)
+    k = systems.index(system) if system in systems else 0
+    t = np.asarray(sol.time, dtype=float)
+    b = np.asarray(sol.clock_m, dtype=float)[:, k]
+    ok = sol.solved & np.isfinite(b)
+    t0 = t[int(epoch)]
+    for window in ((t >= t0) & (t <= t0 + span_s), np.abs(t - t0) <= span_s):
+        idx = np.flatnonzero(ok & window)
+        if idx.size >= 2:
+            dt = np.diff(t[idx])
+            good = dt > 0
+            if good.any():
+                rates = np.diff(b[idx])[good] / dt[good]
+                return float(np.median(rates)), int(good.sum())
+    return math.nan, 0
+
+
 def _span(t):
     from .time import to_datetime64
 
@@ -950,6 +990,7 @@ __all__ = [
     "UNSOLVED",
     "SppSolution",
     "chi2_limits",
+    "clock_drift_from_bias",
     "solve_epochs",
     "spp",
 ]

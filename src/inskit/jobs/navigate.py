@@ -514,13 +514,25 @@ def clock_blocks(cfg: NavigateConfig, raw: RawGnss, initial: NavState, lever, us
             bias, source = b_spp, "single-point solution"
             d_spp = float(np.asarray(s.clock_drift_m_s)[e0])
             drift = d_spp if np.isfinite(d_spp) else drift
+    sigma_drift = 2.0
+    drift_from = "Doppler" if np.isfinite(drift) else None
+    if not np.isfinite(drift):
+        # no Doppler: the drift from the single-point clock bias's slope; started at 0 with 2 m/s sigma, a
+        # common TCXO's 1e-7 s/s (30 m/s) ran the bias away and every pseudorange was rejected
+        from ..gnss.spp import clock_drift_from_bias
+
+        d, pairs = clock_drift_from_bias(s, e0, system=ref)
+        if np.isfinite(d):
+            drift, sigma_drift, drift_from = d, 5.0, f"single-point clock bias slope ({pairs} epoch pairs)"
+        else:
+            drift, sigma_drift, drift_from = 0.0, 300.0, "unknown (no Doppler, no clock slope): 0 +- 300 m/s"
     if not np.isfinite(bias):
         bias, drift, source = 0.0, 0.0, "none (no range at the start)"
-    drift = 0.0 if not np.isfinite(drift) else drift
+        sigma_drift, drift_from = 300.0, "unknown: 0 +- 300 m/s"
     # the estimate starts at the initial time, which may lie before or after that epoch: carry it by the drift
     t_e0 = float(t[np.argmax(ok)])
     bias += drift * (initial.time - t_e0)
-    blocks = [ReceiverClock(sigma0=(30.0 + 3.0 * float(max(cfg.init.sigma_pos_m, 1.0)), 2.0),
+    blocks = [ReceiverClock(sigma0=(30.0 + 3.0 * float(max(cfg.init.sigma_pos_m, 1.0)), sigma_drift),
                             h0=cfg.gnss.clock_h0, h_2=cfg.gnss.clock_h_2, estimate0=(bias, drift))]
     for s in systems[1:]:
         e_s = ep[use & (sys == s)]
@@ -528,8 +540,8 @@ def clock_blocks(cfg: NavigateConfig, raw: RawGnss, initial: NavState, lever, us
         if len(e_s):
             b_s, _, _ = clock_from_ranges(tb, int(e_s[0]), r_a, v_a, system=s)
         blocks.append(SystemTimeOffset(s, sigma0=100.0, estimate0=0.0 if not np.isfinite(b_s) else b_s - bias))
-    return blocks, {"bias_m": bias, "drift_m_s": drift, "from": source, "satellites": n, "epoch_index": e0,
-                    "systems": systems}
+    return blocks, {"bias_m": bias, "drift_m_s": drift, "from": source, "drift_from": drift_from,
+                    "sigma_drift_m_s": sigma_drift, "satellites": n, "epoch_index": e0, "systems": systems}
 
 
 def outage_windows(cfg: NavigateConfig, gnss: GnssData):
