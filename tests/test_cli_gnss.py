@@ -162,3 +162,14 @@ def test_a_high_mask_run_is_unhealthy_and_strict_exits_3():
     assert r.returncode == 3, r.stderr
     assert s["health"]["verdict"] == "unhealthy" and s["epochs_unsolved"] > 0.1 * s["epochs_total"]
     assert "unhealthy:" in r.stderr
+
+
+def test_a_receiver_clock_reset_is_named(tmp_path):
+    """spp solves each epoch's clock on its own, so a 1 ms receiver clock
+    reset costs nothing, but it was not said; now it is a note."""
+    from test_jobs_navigate import _step_codes
+
+    _step_codes(DATA / "gnss_1730_first40.obs", tmp_path / "o.obs", 20, -299792.458)
+    s = run_spp(tmp_path / "o.obs", DATA / "gnss_1730.nav", systems="G")
+    assert s["epochs_solved"] == 40
+    assert any("clock jumps 1 time (-1.000 ms" in n and "o.obs" in n for n in s["notes"]), s["notes"]

@@ -783,3 +783,55 @@ def test_tight_clock_drift_without_doppler_comes_from_the_clock_slope(tmp_path):
     assert ref["drift_from"] == "Doppler" and ref["drift_m_s"] < -50.0
     assert got["drift_from"].startswith("single-point clock bias slope")
     assert abs(got["drift_m_s"] - ref["drift_m_s"]) < got["sigma_drift_m_s"]
+
+
+def _step_codes(src, dst, first_epoch, step_m):
+    """Copy of a RINEX 3 observation file with ``step_m`` added to every code
+    (C..) field from epoch ``first_epoch`` (0-based) on: a receiver clock reset."""
+    lines = Path(src).read_text().split("\n")
+    types = {}
+    for line in lines:
+        if line[60:].strip() == "SYS / # / OBS TYPES":
+            types[line[0]] = line[7:60].split()
+    out, epoch, body = [], -1, False
+    for line in lines:
+        if body and line.startswith(">"):
+            epoch += 1
+        elif body and epoch >= first_epoch and line[:1] in types:
+            for k, code in enumerate(types[line[0]]):
+                a = 3 + 16 * k
+                if code[0] == "C" and line[a:a + 14].strip():
+                    line = line[:a] + f"{float(line[a:a + 14]) + step_m:14.3f}" + line[a + 14:]
+        body = body or "END OF HEADER" in line
+        out.append(line)
+    Path(dst).write_text("\n".join(out))
+
+
+def test_a_receiver_clock_reset_is_taken_out_of_the_ranges(tmp_path):
+    """A 1 ms receiver clock reset (every pseudorange of an epoch steps by
+    299.8 km): the tight filter's clock state ran on by its drift, rejected
+    every later range and stopped with 'covariance lost positiveness ... the
+    filter diverged (check sensor noise settings and the initial state)' (the
+    simulated blockage drive with a reset at epoch 300).  The reset is now
+    found in the single-point clock, taken out of the ranges and named."""
+    from inskit.gnss.spp import receiver_clock_jumps
+    from inskit.jobs.config import config_from_dict
+    from inskit.jobs.navigate import load_raw_gnss
+
+    data = Path(__file__).resolve().parent / "data" / "gnss"
+    _step_codes(data / "gnss_1730_first40.obs", tmp_path / "o.obs", 20, 299792.458)
+    cfg = config_from_dict({"imu": {"file": "imu.csv"},
+                            "gnss": {"coupling": "tight", "obs": "o.obs", "nav": str(data / "gnss_1730.nav"),
+                                     "systems": ["G"]}}, base_dir=tmp_path, source="walk")
+    logged = []
+    raw = load_raw_gnss(cfg, log=logged.append)
+    assert raw.clock_jumps == ((20, 299792.458),)
+    assert any("+1.000 ms" in n and "o.obs" in n for n in raw.notes)
+    assert any("+1.000 ms" in m for m in logged)
+    # what the filter sees: one continuous clock, as in the file without the reset (to the metres the
+    # edited file's transmit times, 1 ms early for an unchanged reception, move the satellites)
+    clean = _walk_raw()
+    np.testing.assert_allclose(raw.table.pseudorange_m, clean.table.pseudorange_m, atol=0.01)
+    ok = raw.spp.solved
+    np.testing.assert_allclose(raw.spp.clock_m[ok, 0], clean.spp.clock_m[ok, 0], atol=5.0)
+    assert len(receiver_clock_jumps(clean.spp)[0]) == 0

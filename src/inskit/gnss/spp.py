@@ -936,6 +936,102 @@ def clock_drift_from_bias(sol, epoch, system=None, span_s=60.0):
     return math.nan, 0
 
 
+#: Smallest receiver clock step taken as a jump [m] (0.1 ms): far above a free-running TCXO's 1e-6 s/s over
+#: a minute's gap left unpredicted (18 km) and the code noise, far below the 1 ms (299.8 km) steps of receivers
+#: that keep their clock within a millisecond of GPS time by resetting it.
+CLOCK_JUMP_MIN_M = 0.1e-3 * C_LIGHT
+
+
+def receiver_clock_jumps(sol, system=None, min_jump_m=CLOCK_JUMP_MIN_M):
+    """Steps of the receiver clock between consecutive solved epochs.
+
+    A receiver that keeps its clock near GPS time by resetting it (a
+    millisecond reset, common in consumer receivers) steps every pseudorange
+    of an epoch by the same ``c dt`` (299.8 km for 1 ms).  Single-point
+    positioning absorbs it into each epoch's clock; a filter whose clock
+    state runs on by its drift does not (tight coupling diverged).  A step
+    is the change of the single-point clock bias between consecutive
+    solved epochs less what the drift predicts (the mean Doppler drift of
+    the two epochs, else the rate of the previous step, else none), when it
+    exceeds ``min_jump_m``; one within 1 km of a whole number of
+    milliseconds is taken as exactly that number.
+
+    Parameters
+    ----------
+    sol : SppSolution
+    system : str, optional
+        System letter of the clock (default: the solution's system with the
+        most solved clocks).
+    min_jump_m : float
+        Smallest step taken as a jump [m].
+
+    Returns
+    -------
+    (epochs, jumps_m) : ((k,) int64 ndarray, (k,) ndarray)
+        Index of the first epoch after each step and the step [m].
+    """
+    clk = np.asarray(sol.clock_m, dtype=float)
+    systems = list(sol.systems)
+    if system in systems:
+        k = systems.index(system)
+    else:
+        k = int(np.argmax(np.isfinite(clk).sum(axis=0))) if clk.size else 0
+    t = np.asarray(sol.time, dtype=float)
+    b = clk[:, k] if clk.size else np.zeros(len(t))
+    d = np.asarray(sol.clock_drift_m_s, dtype=float)
+    idx = np.flatnonzero(sol.solved & np.isfinite(b))
+    ms = 1e-3 * C_LIGHT
+    epochs, jumps = [], []
+    rate = math.nan
+    for i, j in zip(idx[:-1], idx[1:]):
+        dt = t[j] - t[i]
+        pred = 0.5 * (d[i] + d[j]) if np.isfinite(d[i]) and np.isfinite(d[j]) else rate
+        step = b[j] - b[i] - (pred * dt if np.isfinite(pred) else 0.0)
+        if abs(step) > min_jump_m:
+            n_ms = round(step / ms)
+            if n_ms != 0 and abs(step - n_ms * ms) < 1000.0:
+                step = n_ms * ms
+            epochs.append(int(j))
+            jumps.append(float(step))
+            continue  # the rate across a jump means nothing
+        if dt > 0:
+            rate = (b[j] - b[i]) / dt
+    return np.array(epochs, dtype=np.int64), np.array(jumps, dtype=float)
+
+
+def remove_clock_jumps(sol, table, epochs, jumps_m):
+    """The single-point solution and range table with the receiver clock
+    steps of :func:`receiver_clock_jumps` taken out of every later epoch's
+    clock and pseudoranges (the geometry, from the ranges as measured, is
+    unchanged): a clock that runs on continuously.
+
+    Returns
+    -------
+    (SppSolution, RangeTable)
+    """
+    cum = np.zeros(len(sol.time))
+    for e, j in zip(np.asarray(epochs, dtype=np.int64), np.asarray(jumps_m, dtype=float)):
+        cum[e:] += j
+    if not np.any(cum):
+        return sol, table
+    sol = dataclasses.replace(sol, clock_m=np.asarray(sol.clock_m, dtype=float) - cum[:, None])
+    ep = np.asarray(table.epoch, dtype=np.int64)
+    table = dataclasses.replace(table, pseudorange_m=np.asarray(table.pseudorange_m, dtype=float) - cum[ep])
+    return sol, table
+
+
+def clock_jump_note(sol, epochs, jumps_m, path="observations"):
+    """One sentence naming the receiver clock jumps (empty string for none)."""
+    if len(epochs) == 0:
+        return ""
+    ms = 1e-3 * C_LIGHT
+    parts = [f"{j / ms:+.3f} ms at week {int(sol.week[e])} sow {float(sol.sow[e]):.3f}"
+             for e, j in zip(epochs[:5], jumps_m[:5])]
+    more = f" and {len(epochs) - 5} more" if len(epochs) > 5 else ""
+    return (f"{path}: the receiver clock jumps {len(epochs)} time{'s' if len(epochs) != 1 else ''} "
+            f"({', '.join(parts)}{more}; every pseudorange of the epoch steps with it)")
+
+
 def _span(t):
     from .time import to_datetime64
 
@@ -990,7 +1086,10 @@ __all__ = [
     "UNSOLVED",
     "SppSolution",
     "chi2_limits",
+    "clock_jump_note",
     "clock_drift_from_bias",
+    "receiver_clock_jumps",
+    "remove_clock_jumps",
     "solve_epochs",
     "spp",
 ]

@@ -244,6 +244,8 @@ class RawGnss:
     table: object
     week: int
     offset_s: float  #: subtracted from GPS seconds since 1980 to give seconds of week ``week``
+    notes: tuple = ()  #: what reading and solving the files found (health warnings of the run)
+    clock_jumps: tuple = ()  #: (epoch index, step [m]) of each receiver clock jump taken out of the ranges
 
 
 def load_raw_gnss(cfg: NavigateConfig, log=None) -> RawGnss:
@@ -251,7 +253,7 @@ def load_raw_gnss(cfg: NavigateConfig, log=None) -> RawGnss:
     atmosphere corrections need a position) and build the range table."""
     from ..gnss.ranges import range_table
     from ..gnss.rinex import read_nav, read_obs
-    from ..gnss.spp import spp
+    from ..gnss.spp import clock_jump_note, receiver_clock_jumps, remove_clock_jumps, spp
 
     g = cfg.gnss
     systems = tuple(g.systems)
@@ -265,11 +267,22 @@ def load_raw_gnss(cfg: NavigateConfig, log=None) -> RawGnss:
                          "observations and the systems")
     table = range_table(obs, nav, rx_e=np.where(solved[:, None], sol.r_e, np.nan), mask_deg=g.mask_deg,
                         iono=g.iono, tropo=g.tropo, systems=systems)
+    # a receiver clock reset (1 ms: 299.8 km on every range) is no oscillator noise: the clock state ran on by
+    # its drift, rejected every later range and the covariance lost positiveness ("the filter diverged")
+    jump_ep, jump_m = receiver_clock_jumps(sol)
+    notes = []
+    if len(jump_ep):
+        sol, table = remove_clock_jumps(sol, table, jump_ep, jump_m)
+        notes.append(clock_jump_note(sol, jump_ep, jump_m, g.obs) + ": taken out of the pseudoranges, the clock "
+                     "state runs on continuously")
     week = int(np.floor(obs.time[0] / WEEK_S))
     if log:
         log(f"RINEX: {len(obs.time)} epochs, {len(table.time)} usable ranges; single-point solved "
             f"{int(solved.sum())} epochs")
-    return RawGnss(obs, nav, sol, table, week, week * WEEK_S)
+        for n_ in notes:
+            log(f"RINEX: {n_}")
+    return RawGnss(obs, nav, sol, table, week, week * WEEK_S, notes=tuple(notes),
+                   clock_jumps=tuple((int(e), float(j)) for e, j in zip(jump_ep, jump_m)))
 
 
 def spp_fixes(raw: RawGnss) -> GnssData:
@@ -1327,7 +1340,10 @@ def summary(res: NavigateResult) -> dict:
             "satellites_per_epoch_min": int(n_per.min()),
             "spp_epochs_solved": int(np.isfinite(s.r_e).all(axis=1).sum()),
             "clock_start": res.clock_start,
+            "clock_jumps": [{"epoch_index": e, "step_m": j, "step_ms": j / 299792.458}
+                            for e, j in res.raw.clock_jumps],
             "reference": "gnss.file" if res.config.gnss.file is not None else "single-point solution",
+            "notes": list(res.raw.notes),
         }
     if res.truth is not None:
         out["truth_file"] = (str(res.config.resolve(res.config.truth.file)) if res.config.truth is not None
@@ -1335,6 +1351,8 @@ def summary(res: NavigateResult) -> dict:
         out["truth_errors"] = truth_errors(res, res.truth)
     out["health"] = health(fw, res.gaps or (), res.rate_changes or ())
     out["health"]["warnings"] += gnss_coverage_warnings(res.gnss.time, res.imu.time)
+    if res.raw is not None:
+        out["health"]["warnings"] += list(res.raw.notes)
     out["health"]["warnings"] += aiding_warnings(res.aiding, fw.counts, res.imu.time, res.settings.scheme)
     if res.truth is not None:  # what the truth could not score, said (not silently left out)
         from .. import analysis

@@ -217,6 +217,11 @@ def run_spp(obs_path, nav_path, *, reference=None, mask_deg=10.0, iono="klobucha
         sol = spp(obs, nav, mask_deg=mask_deg, iono=iono, tropo=tropo, raim=raim, systems=systems, timing=timing)
     t2 = time.perf_counter()
     notes = [str(w.message) for w in read_warnings] + list(sol.notes)
+    from ..gnss.spp import clock_jump_note, receiver_clock_jumps
+
+    jump_note = clock_jump_note(sol, *receiver_clock_jumps(sol), path=Path(obs_path).name)
+    if jump_note:
+        notes.append(jump_note + ": each epoch's clock takes it")
     notes += [str(w.message) for w in caught if str(w.message) not in notes]
     for n_ in notes[len(read_warnings):]:
         log(f"spp: {n_}")
