@@ -835,3 +835,28 @@ def test_a_receiver_clock_reset_is_taken_out_of_the_ranges(tmp_path):
     ok = raw.spp.solved
     np.testing.assert_allclose(raw.spp.clock_m[ok, 0], clean.spp.clock_m[ok, 0], atol=5.0)
     assert len(receiver_clock_jumps(clean.spp)[0]) == 0
+
+
+def test_tight_coupling_says_what_the_readers_and_the_single_point_solution_found(tmp_path):
+    """The command line silences library warnings, so a tightly coupled run
+    said nothing of the navigation records of other systems it skipped (the
+    bundled walk: 8 BeiDou, 5 SBAS) nor of the epochs single-point positioning
+    could not solve; now they are logged and listed in ``raw.notes``."""
+    import warnings
+
+    from inskit.jobs.config import config_from_dict
+    from inskit.jobs.navigate import load_raw_gnss
+
+    data = Path(__file__).resolve().parent / "data" / "gnss"
+    cfg = config_from_dict({"imu": {"file": "imu.csv"},
+                            "gnss": {"coupling": "tight", "obs": str(data / "gnss_1730_first40.obs"),
+                                     "nav": str(data / "gnss_1730.nav"), "systems": ["G"]}},
+                           base_dir=tmp_path, source="walk")
+    logged = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # as the command line runs
+        raw = load_raw_gnss(cfg, log=logged.append)
+    skipped = [n for n in raw.notes if "skipped" in n and "BeiDou" in n and "SBAS" in n]
+    assert skipped and skipped[0].startswith(str(data / "gnss_1730.nav"))
+    assert any(skipped[0] in m for m in logged)
+    assert not raw.warnings  # a note, not a health warning: nothing is wrong with the run

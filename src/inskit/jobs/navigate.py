@@ -5,6 +5,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import time
+import warnings
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -244,7 +245,8 @@ class RawGnss:
     table: object
     week: int
     offset_s: float  #: subtracted from GPS seconds since 1980 to give seconds of week ``week``
-    notes: tuple = ()  #: what reading and solving the files found (health warnings of the run)
+    notes: tuple = ()  #: what reading and solving the files found (logged, ``rinex.notes`` of the summary)
+    warnings: tuple = ()  #: those of the notes that are health warnings of the run
     clock_jumps: tuple = ()  #: (epoch index, step [m]) of each receiver clock jump taken out of the ranges
 
 
@@ -257,9 +259,21 @@ def load_raw_gnss(cfg: NavigateConfig, log=None) -> RawGnss:
 
     g = cfg.gnss
     systems = tuple(g.systems)
-    obs = read_obs(cfg.resolve(g.obs), systems=systems)
-    nav = read_nav(cfg.resolve(g.nav), systems=systems)
-    sol = spp(obs, nav, mask_deg=g.mask_deg, iono=g.iono, tropo=g.tropo, systems=systems)
+    # the readers' and the solver's warnings (systems left out, unsolved epochs ...) are the user's to read:
+    # the command line silences library warnings, so they went unsaid in a tightly coupled run
+    with warnings.catch_warnings(record=True) as said:
+        warnings.simplefilter("always")
+        obs = read_obs(cfg.resolve(g.obs), systems=systems)
+        nav = read_nav(cfg.resolve(g.nav), systems=systems)
+        sol = spp(obs, nav, mask_deg=g.mask_deg, iono=g.iono, tropo=g.tropo, systems=systems)
+    notes = []
+    files = tuple(str(p) for p in (g.obs, g.nav, cfg.resolve(g.obs), cfg.resolve(g.nav)))
+    for w in said:
+        text = str(w.message)
+        text = text if text.startswith(files) else f"single-point: {text}"
+        if text not in notes:
+            notes.append(text)
+    health_notes = []
     solved = np.isfinite(sol.r_e).all(axis=1)
     if not solved.any():
         raise InputError(f"{g.obs}: no epoch could be solved by single-point positioning (needed for the "
@@ -270,18 +284,18 @@ def load_raw_gnss(cfg: NavigateConfig, log=None) -> RawGnss:
     # a receiver clock reset (1 ms: 299.8 km on every range) is no oscillator noise: the clock state ran on by
     # its drift, rejected every later range and the covariance lost positiveness ("the filter diverged")
     jump_ep, jump_m = receiver_clock_jumps(sol)
-    notes = []
     if len(jump_ep):
         sol, table = remove_clock_jumps(sol, table, jump_ep, jump_m)
-        notes.append(clock_jump_note(sol, jump_ep, jump_m, g.obs) + ": taken out of the pseudoranges, the clock "
-                     "state runs on continuously")
+        health_notes.append(clock_jump_note(sol, jump_ep, jump_m, g.obs) + ": taken out of the pseudoranges, the "
+                            "clock state runs on continuously")
+    notes += health_notes
     week = int(np.floor(obs.time[0] / WEEK_S))
     if log:
         log(f"RINEX: {len(obs.time)} epochs, {len(table.time)} usable ranges; single-point solved "
             f"{int(solved.sum())} epochs")
         for n_ in notes:
             log(f"RINEX: {n_}")
-    return RawGnss(obs, nav, sol, table, week, week * WEEK_S, notes=tuple(notes),
+    return RawGnss(obs, nav, sol, table, week, week * WEEK_S, notes=tuple(notes), warnings=tuple(health_notes),
                    clock_jumps=tuple((int(e), float(j)) for e, j in zip(jump_ep, jump_m)))
 
 
@@ -1352,7 +1366,7 @@ def summary(res: NavigateResult) -> dict:
     out["health"] = health(fw, res.gaps or (), res.rate_changes or ())
     out["health"]["warnings"] += gnss_coverage_warnings(res.gnss.time, res.imu.time)
     if res.raw is not None:
-        out["health"]["warnings"] += list(res.raw.notes)
+        out["health"]["warnings"] += list(res.raw.warnings)
     out["health"]["warnings"] += aiding_warnings(res.aiding, fw.counts, res.imu.time, res.settings.scheme)
     if res.truth is not None:  # what the truth could not score, said (not silently left out)
         from .. import analysis
