@@ -173,3 +173,14 @@ def test_a_receiver_clock_reset_is_named(tmp_path):
     s = run_spp(tmp_path / "o.obs", DATA / "gnss_1730.nav", systems="G")
     assert s["epochs_solved"] == 40
     assert any("clock jumps 1 time (-1.000 ms" in n and "o.obs" in n for n in s["notes"]), s["notes"]
+
+
+def test_satellites_without_ephemeris_are_a_health_warning():
+    """The walk excerpt's navigation file lacks every Galileo satellite and
+    five GPS ones it observes: said in the notes, the summary and the health
+    warnings (it was said nowhere)."""
+    s = run_spp(DATA / "gnss_1730_first40.obs", DATA / "gnss_1730.nav")
+    lost = s["satellites_without_ephemeris"]
+    assert {"E07", "E26", "G18"} <= set(lost) and not {"G10", "G23", "G27", "G32"} & set(lost)
+    assert any("without a usable ephemeris" in w and "E07" in w for w in s["health"]["warnings"])
+    assert any("no record in the navigation file" in n for n in s["notes"])

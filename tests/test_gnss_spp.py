@@ -557,3 +557,35 @@ def test_an_unsolvable_file_names_the_cause():
                                              r"its records \(toe\) span 2025-08-28 18:00:00, the observations "
                                              r"2015-01-08 00:00:00 \.\. 2015-01-08 0[12]:"):
             spp(obs, other_day)
+
+
+def test_satellites_without_a_usable_ephemeris_are_named_by_cause():
+    """Observed satellites whose ranges go unused for want of a broadcast
+    record were dropped without a word (the walk: 8 Galileo and 5 GPS
+    satellites, 4905 of its ranges); now one note names them, by cause."""
+    import dataclasses
+
+    from inskit.gnss.rinex import read_nav, read_obs
+    from inskit.gnss.spp import spp
+
+    from inskit.errors import InputError
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        obs = read_obs(EXCERPTS / "gnss_1730_first40.obs")
+        nav = read_nav(EXCERPTS / "gnss_1730.nav")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        sol = spp(obs, nav)
+    note = [n for n in sol.notes if "without a usable ephemeris" in n]
+    assert len(note) == 1 and any(note[0] == str(w.message) for w in caught)
+    assert "no record in the navigation file: E07 (40)" in note[0] and "G18 (" in note[0]
+    assert note[0].startswith(str(EXCERPTS / "gnss_1730.nav"))
+    # G10's only record unhealthy: three satellites left, no fix, and the refusal says why
+    health = nav.params["health"].copy()
+    health[nav.sats == "G10"] = 1.0
+    nav = dataclasses.replace(nav, params={**nav.params, "health": health})
+    with pytest.raises(InputError, match=r"no epoch could be solved.*unhealthy records only: G10 \(40\)"):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            spp(obs, nav)

@@ -115,6 +115,10 @@ class RangeTable:
     dropped : dict
         Rows dropped, by reason: ``'system'``, ``'no_ephemeris'``,
         ``'below_mask'``, ``'no_second_code'``.
+    no_ephemeris : dict
+        Satellite -> rows dropped for want of a usable broadcast record
+        (none of that satellite, none healthy, or none within the maximum
+        age of :func:`~inskit.gnss.ephemeris.select_records`).
     settings : dict
         code, doppler, iono, tropo, mask_deg, systems, iono coefficients
         and their source ('argument', 'header' or 'default').
@@ -141,6 +145,7 @@ class RangeTable:
     rx_e: np.ndarray
     dropped: dict = field(default_factory=dict)
     settings: dict = field(default_factory=dict)
+    no_ephemeris: dict = field(default_factory=dict)
 
     def __len__(self) -> int:
         return len(self.time)
@@ -313,6 +318,8 @@ def range_table(obs: ObsData, nav: NavData, *, rx_e=None, mask_deg=10.0, code="C
     rec = select_records(nav, sat, t_rx)
     noeph = rec < 0
     dropped["no_ephemeris"] = int((noeph & keep).sum())
+    names, counts = np.unique(sat[noeph & keep], return_counts=True)
+    no_eph = {str(n): int(c) for n, c in zip(names, counts)}
     keep &= ~noeph
     idx = np.flatnonzero(keep)
     ep, col, sat, sysr, pr, t_rx, band_f, rec = (a[idx] for a in (ep, col, sat, sysr, pr, t_rx, band_f, rec))
@@ -376,5 +383,5 @@ def range_table(obs: ObsData, nav: NavData, *, rx_e=None, mask_deg=10.0, code="C
         time=t_rx, epoch=ep.astype(np.int64), sat=sat, sat_pos_e=pos, sat_vel_e=vel, travel_s=travel,
         pseudorange_m=corrected, sigma_pr_m=sigma_pr, range_rate_m_s=rr, sigma_rr_m_s=sigma_rr,
         elevation_rad=el, azimuth_rad=az, iono_m=iono_m, tropo_m=tropo_m, system=sysr, clock_s=clk,
-        drift_s_s=drift, group_delay_s=gd_used, rx_e=rx, dropped=dropped, settings=settings,
+        drift_s_s=drift, group_delay_s=gd_used, rx_e=rx, dropped=dropped, settings=settings, no_ephemeris=no_eph,
     )

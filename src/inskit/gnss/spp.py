@@ -818,7 +818,9 @@ def spp(obs, nav, *, mask_deg=10.0, iono="klobuchar", tropo="saastamoinen", raim
         See :func:`solve_epochs`.
     timing : dict, optional
         If given, filled with ``ranges_s`` and ``solve_s`` (wall time) and
-        ``dropped`` (the final range table's dropped-row counts by reason).
+        ``dropped`` (the final range table's dropped-row counts by reason)
+        and ``no_ephemeris`` (satellite -> ranges unused for want of an
+        ephemeris).
 
     Returns
     -------
@@ -869,7 +871,7 @@ def spp(obs, nav, *, mask_deg=10.0, iono="klobuchar", tropo="saastamoinen", raim
     if not np.isfinite(rx).any():
         raise InputError(f"{getattr(obs, 'path', 'observations')}: no epoch could be solved ({n_ep} epochs, "
                          f"{len(tab.pseudorange_m)} usable {code} ranges without elevation mask; "
-                         f"{_unsolvable_hint(obs, nav, tab)}")
+                         f"{_unsolvable_hint(obs, nav, tab)}{_with(ephemeris_note(obs, nav, tab))}")
     if header_note is not None:
         far = float(np.median(np.linalg.norm(rx[np.isfinite(rx).all(axis=1)] - header_note, axis=1)))
         header_note = None if far < _HEADER_FAR_M else (
@@ -886,14 +888,50 @@ def spp(obs, nav, *, mask_deg=10.0, iono="klobuchar", tropo="saastamoinen", raim
     t_rng += t3 - t2
     t_sol += t4 - t3
     if timing is not None:
-        timing.update(ranges_s=t_rng, solve_s=t_sol, dropped=dict(getattr(tab, "dropped", {}) or {}))
+        timing.update(ranges_s=t_rng, solve_s=t_sol, dropped=dict(getattr(tab, "dropped", {}) or {}),
+                      no_ephemeris=dict(getattr(tab, "no_ephemeris", {}) or {}))
     if not (sol.status > 0).any():
         raise InputError(f"{getattr(obs, 'path', 'observations')}: no epoch could be solved ({n_ep} epochs, "
                          f"{len(tab.pseudorange_m)} usable {code} ranges above the {mask_deg:g} deg elevation mask; "
-                         f"{_unsolvable_hint(obs, nav, tab, mask_deg)}")
-    if header_note is not None:
-        sol = dataclasses.replace(sol, notes=(header_note,) + tuple(sol.notes))
+                         f"{_unsolvable_hint(obs, nav, tab, mask_deg)}{_with(ephemeris_note(obs, nav, tab))}")
+    eph_note = ephemeris_note(obs, nav, tab)
+    if eph_note:
+        warnings.warn(eph_note, stacklevel=2)
+    extra = tuple(n_ for n_ in (header_note, eph_note) if n_)
+    if extra:
+        sol = dataclasses.replace(sol, notes=extra + tuple(sol.notes))
     return sol
+
+
+def _with(note):
+    return f"; {note}" if note else ""
+
+
+def ephemeris_note(obs, nav, tab):
+    """One sentence naming the observed satellites whose ranges went unused
+    for want of a broadcast record (``tab.no_ephemeris``), by cause: no
+    record of that satellite in the navigation file, only unhealthy ones, or
+    none within the maximum age of the epochs; empty string when none."""
+    from .ephemeris import _healthy
+
+    lost = dict(getattr(tab, "no_ephemeris", {}) or {})
+    if not lost:
+        return ""
+    sats = np.asarray(nav.sats)
+    healthy = _healthy(nav) if len(sats) else np.zeros(0, bool)
+    groups = {"no record in the navigation file": [], "unhealthy records only": [],
+              "no record within the maximum age of some epochs": []}
+    for name in sorted(lost):
+        has = sats == name
+        key = ("no record in the navigation file" if not has.any() else
+               "unhealthy records only" if not healthy[has].any() else
+               "no record within the maximum age of some epochs")
+        groups[key].append(f"{name} ({lost[name]})")
+    parts = [f"{k}: {', '.join(v)}" for k, v in groups.items() if v]
+    n_rows = sum(lost.values())
+    return (f"{getattr(nav, 'path', 'navigation file')}: {len(lost)} observed satellite{'s' if len(lost) != 1 else ''} "
+            f"without a usable ephemeris, {n_rows} range{'s' if n_rows != 1 else ''} unused (ranges per satellite): "
+            + "; ".join(parts))
 
 
 def clock_drift_from_bias(sol, epoch, system=None, span_s=60.0):
@@ -1087,6 +1125,7 @@ __all__ = [
     "SppSolution",
     "chi2_limits",
     "clock_jump_note",
+    "ephemeris_note",
     "clock_drift_from_bias",
     "receiver_clock_jumps",
     "remove_clock_jumps",

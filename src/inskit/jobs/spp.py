@@ -127,7 +127,8 @@ def spp_health(s: dict) -> dict:
     ("healthy" or "unhealthy"), ``reasons`` (each a sentence) and
     ``warnings``.  Unhealthy when more than
     :data:`UNHEALTHY_EPOCH_FRACTION` of the epochs are unsolved or flagged;
-    warned of any unsolved, flagged or excluded epoch, a median residual
+    warned of any unsolved, flagged or excluded epoch, observed satellites
+    without a usable ephemeris, a median residual
     above :data:`RESIDUAL_WARN_M` and a median HDOP above :data:`HDOP_WARN`."""
     n = max(int(s["epochs_total"]), 1)
     reasons, warns = [], []
@@ -142,6 +143,12 @@ def spp_health(s: dict) -> dict:
     res = s.get("rms_residual_median_m")
     if res is not None and res > RESIDUAL_WARN_M:
         warns.append(f"median RMS code residual {res:.1f} m (about 1 m is usual): models or data are off")
+    lost = s.get("satellites_without_ephemeris") or {}
+    if lost:
+        names = sorted(lost)
+        shown = ", ".join(names[:8]) + (f" and {len(names) - 8} more" if len(names) > 8 else "")
+        warns.append(f"{len(names)} observed satellite{'s' if len(names) != 1 else ''} without a usable ephemeris "
+                     f"in the navigation file ({shown}): {sum(lost.values())} ranges unused")
     hd = s.get("hdop_median")
     if hd is not None and hd > HDOP_WARN:
         warns.append(f"median HDOP {hd:.1f}: the geometry, not the ranges, sets the errors")
@@ -237,6 +244,7 @@ def run_spp(obs_path, nav_path, *, reference=None, mask_deg=10.0, iono="klobucha
         "hdop_median": _median(sol.hdop[solved]), "n_sats_median": _median(sol.n_sats[solved]),
         "rms_residual_median_m": _median(sol.rms_residual_m[solved]),
         "ranges_dropped": timing.get("dropped", {}),
+        "satellites_without_ephemeris": timing.get("no_ephemeris", {}),
         "seconds": t2 - t0, "read_s": t1 - t0, "solve_s": t2 - t1,
         "reference_e": None if ref is None else ref.tolist(),
         "notes": notes,
