@@ -374,3 +374,30 @@ def test_nav_errors(tmp_path):
         read_nav(glo)
     with pytest.raises(ConfigError, match="not supported"):
         read_nav(ABPO_NAV, systems=("G", "R"))
+
+
+def test_observed_satellites_of_other_systems_are_counted_in_one_warning(tmp_path):
+    """A mixed file's GLONASS, BeiDou or QZSS satellites were left out without
+    a word (spp said '3 satellites in m_mixed.obs' of a file with six); they
+    are now counted as read_nav counts its skipped records."""
+    lines = WALK_OBS.read_text().split("\n")
+    swap = {"G18": "R18", "G27": "C27", "G32": "J02"}
+    out = []
+    for line in lines:
+        out.append(swap.get(line[:3], line[:3]) + line[3:] if line[:3] in swap else line)
+        if line[:1] == "G" and line[60:].strip() == "SYS / # / OBS TYPES":
+            out += [s + line[1:] for s in "RCJ"]
+    p = tmp_path / "mixed.obs"
+    p.write_text("\n".join(out))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        obs = read_obs(p, systems=("G", "E"))
+    said = [str(w.message) for w in caught if "skipped" in str(w.message)]
+    assert len(said) == 1, said
+    assert said[0].startswith(f"{p}: skipped ") and "1 BeiDou" in said[0] and "1 QZSS" in said[0]
+    assert "1 GLONASS" in said[0] and "SBAS" in said[0] and "systems used: GPS, Galileo" in said[0]
+    assert not {"R18", "C27", "J02"} & set(obs.sats)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        read_obs(WALK_OBS, systems=("G", "E", "S"))
+    assert not [w for w in caught if "skipped" in str(w.message)]

@@ -394,7 +394,8 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
     path : str or Path
         Plain, gzip, ``.Z`` or Hatanaka-compressed RINEX observation file.
     systems : sequence of str
-        System letters to keep (``'G'`` GPS, ``'E'`` Galileo, ``'S'`` SBAS ...).
+        System letters to keep (``'G'`` GPS, ``'E'`` Galileo, ``'S'`` SBAS ...);
+        satellites of the others are skipped and counted in one warning.
     codes : sequence of str or None
         RINEX 3 codes to keep (after mapping RINEX 2 types); None keeps all.
 
@@ -571,6 +572,12 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
     sats = tuple(sorted(set(names[keep].tolist())))
     # every system the file holds, kept or not: a consumer that finds none of its systems can say what is there
     in_file = {s: len(set(names[sysch == s].tolist())) for s in sorted(set(sysch.tolist()))}
+    left = {s: n for s, n in in_file.items() if s not in keep_sys}
+    if left:  # said as read_nav says it: a mixed file's GLONASS or BeiDou satellites went unmentioned
+        text = ", ".join(f"{n} {_SYSTEM_NAMES.get(s, s)}" for s, n in left.items())
+        kept = ", ".join(_SYSTEM_NAMES.get(s, s) for s in dict.fromkeys(systems)) or "none"
+        warnings.warn(f"{path}: skipped {sum(left.values())} observed satellite{'s' if sum(left.values()) != 1 else ''}"
+                      f" of other systems ({text}; systems used: {kept})", stacklevel=2)
     sat_arr = np.array(sats, dtype="<U3")
     col = np.searchsorted(sat_arr, names) if sats else np.zeros(len(names), np.int64)
 
