@@ -223,3 +223,31 @@ def test_a_system_absent_from_the_file_is_refused_naming_the_present_ones(abpo):
     obs = read_obs(ABPO_OBS, systems=("E",))
     with pytest.raises(InputError, match=r"Galileo \(E\).*holds GPS \(G\): \d+ satellites; use the system\(s\) G"):
         range_table(obs, abpo[1], systems=("E",))
+
+
+def test_a_file_without_c1c_takes_the_codes_of_its_band():
+    """A RINEX 2 file with P1 and P2 but no C1 (read as C1W and C2W) was
+    refused ("no code 'C1C' in the observations (have C1W, C2W, ...)") and
+    spp has no option to choose another: P1 now serves where C/A is absent,
+    counted in ``settings['codes_used']`` and named in spp's notes."""
+    from inskit.gnss.spp import spp
+
+    dat = Path(__file__).resolve().parent / "data" / "gnss"
+    full = read_obs(dat / "abpo0080_0000-0200.15o")
+    p1_only = read_obs(dat / "abpo0080_0000-0200.15o", codes=("C1W", "C2W", "L1C", "L2W"))
+    nav = read_nav(dat / "abpo0080.15n")
+    a = range_table(full, nav)
+    b = range_table(p1_only, nav)
+    assert a.settings["codes_used"] == {"C1C": int(np.isfinite(full.obs["C1C"]).sum())}
+    assert set(b.settings["codes_used"]) == {"C1W"} and len(b) == len(a)
+    assert np.median(np.abs(b.pseudorange_m - a.pseudorange_m)) < 2.0   # P1 - C1: a few dm
+    with pytest.raises(ConfigError, match="no code 'C1C'"):
+        range_table(p1_only, nav, code_fallback=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        sol = spp(p1_only, nav)
+    assert sol.solved.all()
+    assert any("code C1C absent on" in n and "C1W on" in n for n in sol.notes)
+    l2_only = read_obs(dat / "abpo0080_0000-0200.15o", codes=("C2W", "L2W"))
+    with pytest.raises(ConfigError, match=r"nor any code of its band .*C1W.*\(codes in the file: C2W\)"):
+        range_table(l2_only, nav)

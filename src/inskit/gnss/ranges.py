@@ -60,12 +60,19 @@ from .constants import C, FREQ_L1, frequency
 from .ephemeris import sagnac_rotate, select_records, transmit_time
 from .rinex import NavData, ObsData
 
-__all__ = ["RangeTable", "range_table", "require_systems", "SECOND_CODES", "SIGMA_FACTOR"]
+__all__ = ["RangeTable", "range_table", "require_systems", "CODE_FALLBACK", "SECOND_CODES", "SIGMA_FACTOR"]
 
 #: Second-frequency codes tried, in order, for ionosphere-free rows.
 SECOND_CODES = {
     "G": ("C2W", "C2L", "C2S", "C2X", "C5Q", "C5X", "C5I"),
     "E": ("C7Q", "C7X", "C7I", "C5Q", "C5X", "C5I"),
+}
+#: Codes of the same band taken, in order, where the requested code is absent on a satellite at an epoch
+#: (RTKLIB's per-band priority, the same idea): a RINEX 2 file with P1 and P2 but no C1 (read as C1W and
+#: C2W), or a receiver that logs L1 P(Y) or L1C beside C/A on some satellites only.  The inter-code biases
+#: (P1-C1 a few dm) are not modelled, as the C1-P1 bias of iono-free rows is not.
+CODE_FALLBACK = {
+    "C1C": {"G": ("C1W", "C1P", "C1X", "C1L", "C1S"), "E": ("C1X", "C1B"), "J": ("C1X", "C1L", "C1S")},
 }
 #: Per-system factor on the code and Doppler sigma.
 SIGMA_FACTOR = {"G": 1.0, "E": 1.0, "S": 3.0, "J": 1.0}
@@ -227,8 +234,38 @@ def _code(obs: ObsData, code, what):
     return arr
 
 
+def _code_with_fallback(obs: ObsData, code, sat_sys):
+    """(n_epoch, n_sat) pseudoranges of ``code``, each gap filled from the
+    :data:`CODE_FALLBACK` codes of the satellite's system in order, and the
+    number of values taken from each code."""
+    fall = CODE_FALLBACK.get(code, {})
+    tried = [code] + [c for c in dict.fromkeys(c for v in fall.values() for c in v)]
+    if not any(c in obs.obs for c in tried):
+        have = ", ".join(c for c in sorted(obs.obs) if c[0] == "C") or "none"
+        raise ConfigError(f"{obs.path}: no code {code!r} in the observations"
+                          + (f", nor any code of its band taken in its place ({', '.join(tried[1:])})"
+                             if len(tried) > 1 else "")
+                          + f" (codes in the file: {have})")
+    n_ep, n_sat = len(obs.time), len(sat_sys)
+    out = np.array(obs.obs[code], dtype=float, copy=True) if code in obs.obs else np.full((n_ep, n_sat), np.nan)
+    used = {code: int(np.isfinite(out).sum())}
+    for s in sorted(set(sat_sys.tolist())):
+        cols = np.flatnonzero(sat_sys == s)
+        for c in fall.get(s, ()):
+            if c not in obs.obs:
+                continue
+            sub = out[:, cols]
+            gap = np.isnan(sub) & np.isfinite(obs.obs[c][:, cols])
+            if gap.any():
+                sub[gap] = obs.obs[c][:, cols][gap]
+                out[:, cols] = sub
+                used[c] = used.get(c, 0) + int(gap.sum())
+    return out, {k: v for k, v in used.items() if v}
+
+
 def range_table(obs: ObsData, nav: NavData, *, rx_e=None, mask_deg=10.0, code="C1C", doppler="D1C",
-                iono="klobuchar", tropo="saastamoinen", systems=("G", "E"), alpha=None, beta=None) -> RangeTable:
+                iono="klobuchar", tropo="saastamoinen", systems=("G", "E"), alpha=None, beta=None,
+                code_fallback=True) -> RangeTable:
     """Corrected pseudoranges and range rates with satellite states, per (epoch, satellite).
 
     Parameters
@@ -242,6 +279,9 @@ def range_table(obs: ObsData, nav: NavData, *, rx_e=None, mask_deg=10.0, code="C
         Elevation mask [deg] (from ``rx_e``).
     code : str
         RINEX 3 code to use (``'C1C'``; ``'C1W'`` for P1 ...).
+    code_fallback : bool
+        Where ``code`` is absent, take the :data:`CODE_FALLBACK` codes of the
+        same band (``settings['codes_used']`` counts the values of each).
     doppler : str or None
         Doppler code (``'D1C'``); None or absent gives NaN range rates.
     iono : {'klobuchar', 'iono-free', 'none'}
@@ -283,9 +323,13 @@ def range_table(obs: ObsData, nav: NavData, *, rx_e=None, mask_deg=10.0, code="C
     rx_ep = _receiver_positions(obs, rx_e)
     sats = np.array(obs.sats, dtype="<U3")
     sat_sys = np.array([s[0] for s in obs.sats], dtype="<U1")
-    p1 = _code(obs, code, "code")
-    present = np.isfinite(p1)
     in_sys = np.isin(sat_sys, list(systems))
+    if code_fallback:
+        p1, codes_used = _code_with_fallback(obs, code, np.where(in_sys, sat_sys, ""))
+    else:
+        p1 = _code(obs, code, "code")
+        codes_used = {code: int(np.isfinite(p1).sum())}
+    present = np.isfinite(p1)
     dropped = {"system": int(present[:, ~in_sys].sum()), "no_ephemeris": 0, "below_mask": 0, "no_second_code": 0}
     present &= in_sys[None, :]
     ep, col = np.nonzero(present)
@@ -375,7 +419,7 @@ def range_table(obs: ObsData, nav: NavData, *, rx_e=None, mask_deg=10.0, code="C
     sigma_rr = fac * np.sqrt(_DOPPLER_A_M_S**2 + _DOPPLER_B_M_S**2 / sin_el**2)
     sigma_rr = np.where(np.isfinite(rr), sigma_rr, np.nan)
 
-    settings = dict(code=code, doppler=doppler, iono=iono, tropo=tropo, mask_deg=float(mask_deg),
+    settings = dict(code=code, codes_used=codes_used, doppler=doppler, iono=iono, tropo=tropo, mask_deg=float(mask_deg),
                     systems=tuple(systems), alpha=np.asarray(alpha), beta=np.asarray(beta), iono_source=iono_src)
     if not np.all(np.isfinite(corrected)):  # pragma: no cover - every term is finite by construction
         raise InputError(f"{obs.path}: non-finite corrected pseudorange (a bug: please report)")

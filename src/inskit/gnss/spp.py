@@ -895,12 +895,29 @@ def spp(obs, nav, *, mask_deg=10.0, iono="klobuchar", tropo="saastamoinen", raim
                          f"{len(tab.pseudorange_m)} usable {code} ranges above the {mask_deg:g} deg elevation mask; "
                          f"{_unsolvable_hint(obs, nav, tab, mask_deg)}{_with(ephemeris_note(obs, nav, tab))}")
     eph_note = ephemeris_note(obs, nav, tab)
-    if eph_note:
-        warnings.warn(eph_note, stacklevel=2)
-    extra = tuple(n_ for n_ in (header_note, eph_note) if n_)
+    code_note = codes_note(obs, tab)
+    for n_ in (code_note, eph_note):
+        if n_:
+            warnings.warn(n_, stacklevel=2)
+    extra = tuple(n_ for n_ in (header_note, code_note, eph_note) if n_)
     if extra:
         sol = dataclasses.replace(sol, notes=extra + tuple(sol.notes))
     return sol
+
+
+def codes_note(obs, tab):
+    """One sentence naming the codes taken where the requested one is absent
+    (``tab.settings['codes_used']``, :data:`inskit.gnss.ranges.CODE_FALLBACK`);
+    empty string when the requested code served every range."""
+    settings = getattr(tab, "settings", {}) or {}
+    code, used = settings.get("code"), dict(settings.get("codes_used") or {})
+    others = {c: n for c, n in used.items() if c != code}
+    if not others:
+        return ""
+    total = sum(used.values())
+    parts = ", ".join(f"{c} on {n}" for c, n in others.items())
+    return (f"{getattr(obs, 'path', 'observations')}: code {code} absent on {sum(others.values())} of {total} "
+            f"ranges: {parts} taken in its place (same band; the inter-code bias, a few dm, is not modelled)")
 
 
 def _with(note):
@@ -1125,6 +1142,7 @@ __all__ = [
     "SppSolution",
     "chi2_limits",
     "clock_jump_note",
+    "codes_note",
     "ephemeris_note",
     "clock_drift_from_bias",
     "receiver_clock_jumps",
