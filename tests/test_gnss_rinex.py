@@ -401,3 +401,22 @@ def test_observed_satellites_of_other_systems_are_counted_in_one_warning(tmp_pat
         warnings.simplefilter("always")
         read_obs(WALK_OBS, systems=("G", "E", "S"))
     assert not [w for w in caught if "skipped" in str(w.message)]
+
+
+@pytest.mark.parametrize("how", ["back", "repeat"])
+def test_epochs_that_go_back_or_repeat_are_refused_naming_both_lines(tmp_path, how):
+    """Epochs out of order or repeated (files spliced out of order or
+    overlapping) were read as they came: spp solved them without a word and a
+    tightly coupled run used a repeated epoch's ranges twice; now the reader
+    names the line, both epochs and what was expected."""
+    lines = WALK_OBS.read_text().split("\n")
+    ep = [i for i, line in enumerate(lines) if line.startswith(">")]
+    a, b, c = ep[5], ep[6], ep[7]
+    body = lines[b:c] + lines[a:b] if how == "back" else lines[a:b] + lines[a:b]
+    p = tmp_path / "o.obs"
+    p.write_text("\n".join(lines[:a] + body + lines[c:]))
+    verb = "goes back from" if how == "back" else "repeats"
+    with pytest.raises(InputError, match=rf"o.obs: line {a + 1 + (c - b) if how == 'back' else b + 1}: epoch "
+                                         rf"2025-08-28 17:30:4\d\.\d+ {verb} the epoch at line {a + 1} "
+                                         r"\(2025-08-28 17:30:4\d\.\d+\); expected epochs in increasing time order"):
+        read_obs(p)

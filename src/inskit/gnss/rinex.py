@@ -407,8 +407,9 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
     ------
     InputError
         Not a RINEX observation file, an unsupported time system, a
-        malformed epoch line or number, or a file that ends inside an epoch;
-        the message names the file and the line.
+        malformed epoch line or number, epochs that repeat or go back in
+        time, or a file that ends inside an epoch; the message names the
+        file and the line.
 
     Notes
     -----
@@ -535,6 +536,18 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
                           dtype=float).reshape(-1) + t_offset
     else:
         time = np.zeros(0)
+    back = np.flatnonzero(np.diff(time) <= 0)
+    if back.size:  # a spliced or concatenated file: each epoch of a filter run must come after the last
+        from .time import to_datetime64
+
+        k = int(back[0])
+        la, lb = ep_clock[k][0] + 1, ep_clock[k + 1][0] + 1
+        ta, tb = (str(to_datetime64(time[j] - t_offset).astype("datetime64[ms]")).replace("T", " ")
+                  for j in (k, k + 1))
+        how = "repeats" if time[k + 1] == time[k] else "goes back from"
+        raise InputError(f"{path}: line {lb}: epoch {tb} {how} the epoch at line {la} ({ta}); expected epochs in "
+                         "increasing time order (files spliced out of order or overlapping? sort the epochs and "
+                         "drop the repeated ones, e.g. with RTKLIB convbin or gfzrnx)")
     clock = np.full(n_epoch, np.nan)
     for k, (ln, col, c) in enumerate(ep_clock):
         if c.strip():
