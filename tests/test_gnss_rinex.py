@@ -420,3 +420,20 @@ def test_epochs_that_go_back_or_repeat_are_refused_naming_both_lines(tmp_path, h
                                          rf"2025-08-28 17:30:4\d\.\d+ {verb} the epoch at line {a + 1} "
                                          r"\(2025-08-28 17:30:4\d\.\d+\); expected epochs in increasing time order"):
         read_obs(p)
+
+
+@pytest.mark.parametrize("count", [7, 9])
+def test_rinex2_epoch_count_against_its_satellite_list(tmp_path, count):
+    """An epoch line whose satellite count disagrees with its list of 8 was
+    reported lines further on, where the shifted records put a data line in
+    place of an epoch line ("line 128: expected an epoch line ..., got
+    '  -2473608.99647 ...'"); now the epoch line itself is named."""
+    lines = ABPO_OBS.read_text().split("\n")
+    k = next(i for i, line in enumerate(lines) if "END OF HEADER" in line) + 1 + 17 * 5   # the 6th epoch
+    assert lines[k][29:32] == "  8"
+    lines[k] = lines[k][:29] + f"{count:3d}" + lines[k][32:]
+    p = tmp_path / "c.15o"
+    p.write_text("\n".join(lines))
+    with pytest.raises(InputError, match=rf"c.15o: line {k + 1}: the epoch announces {count} satellites \(columns "
+                                         r"30-32\) but its satellite list \(columns 33-68\) holds 8"):
+        read_obs(p)

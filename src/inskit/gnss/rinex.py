@@ -469,6 +469,17 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
             if i + n_sat_lines > n_lines:
                 raise InputError(f"{path}: line {i + 1}: the file ends inside the satellite list of this epoch")
             sat_text = "".join(lines[i + k][32:68].ljust(36) for k in range(n_sat_lines))
+            # the count against the list: a wrong count shifted every later record and was reported lines
+            # further on, as a data line where an epoch line was expected
+            listed = sum(1 for k in range(len(sat_text) // 3) if sat_text[3 * k:3 * k + 3].strip())
+            cont_ok = all(not lines[i + k][:32].strip() for k in range(1, n_sat_lines))
+            if nsat > 0 and (listed != nsat or not cont_ok or sat_text[3 * nsat:].strip()):
+                raise InputError(
+                    f"{path}: line {i + 1}: the epoch announces {nsat} satellites (columns 30-32) but its "
+                    f"satellite list (columns 33-68{', continued on the next line' if n_sat_lines > 1 else ''}) "
+                    f"{'is not followed by a continuation line' if not cont_ok else f'holds {listed}'}: "
+                    "expected as many satellite names as the count"
+                )
             e = len(ep_fields)
             ep_fields.append(fields)
             ep_flag.append(flag)
