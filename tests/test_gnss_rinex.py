@@ -437,3 +437,27 @@ def test_rinex2_epoch_count_against_its_satellite_list(tmp_path, count):
     with pytest.raises(InputError, match=rf"c.15o: line {k + 1}: the epoch announces {count} satellites \(columns "
                                          r"30-32\) but its satellite list \(columns 33-68\) holds 8"):
         read_obs(p)
+
+
+def test_a_number_cut_short_is_refused_not_misread(tmp_path):
+    """RINEX numbers are right-justified: a line cut inside a field was read
+    as the digits left ('-1.164153218269D-0', a TGD of -1.16 s for -1.16e-8 s;
+    a Doppler of -492 for -492.180) without a word; now the line, the columns
+    and the field are named."""
+    lines = ABPO_NAV.read_text().split("\n")
+    body = next(i for i, line in enumerate(lines) if "END OF HEADER" in line) + 1
+    k = body + 6                                   # broadcast orbit 6 of the first record: svacc health tgd iodc
+    lines[k] = lines[k][:59]
+    p = tmp_path / "cut.15n"
+    p.write_text("\n".join(lines))
+    with pytest.raises(InputError, match=rf"cut.15n: line {k + 1}: columns 42-60: the number '-?[\d.]+D-0' \(tgd \(GPS\) "
+                                         r"/ bgd_e5a_e1 \(Galileo\), broadcast orbit 6 field 3\) does not end at column 60: the line is cut"):
+        read_nav(p)
+    lines = WALK_OBS.read_text().split("\n")
+    k = next(i for i, line in enumerate(lines) if line.startswith(">")) + 1
+    lines[k] = lines[k][:45]
+    p = tmp_path / "cut.obs"
+    p.write_text("\n".join(lines))
+    with pytest.raises(InputError, match=rf"cut.obs: line {k + 1}: columns 36-49: .* \(observation D1C\) does not "
+                                         "end at column 49"):
+        read_obs(p)

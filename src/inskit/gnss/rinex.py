@@ -205,6 +205,16 @@ def _parse_fields(buf, rows, col, width, path, what, d_exponent=False):
                     f"({what}), got {v.decode('latin-1').strip()!r}"
                 ) from None
         raise  # pragma: no cover - numpy and float() disagree
+    # RINEX numbers are right-justified (F14.3, D19.12): one whose field ends in a blank was cut short, by a
+    # truncated line ('3.115625000000D+0' read as 3.1 for 31.2) or shifted columns, and would be read wrong
+    short = np.flatnonzero(~blank & (f[:, -1] == 32))
+    if short.size:
+        j = int(short[0])
+        text = bytes(buf[int(rows[j]), col:col + width]).decode("latin-1").strip()
+        raise InputError(f"{path}: line {int(rows[j]) + 1}: columns {col + 1}-{col + width}: the number "
+                         f"{text!r} ({what}) does not end at column {col + width}: the line "
+                         "is cut short or its columns are shifted (RINEX numbers are right-justified in fixed "
+                         "columns)")
     bad = np.flatnonzero(~np.isfinite(out) & ~blank)  # 'nan', 'inf', '1E999': no field of RINEX is infinite
     if bad.size:
         j = int(bad[0])
@@ -842,7 +852,12 @@ def read_nav(path, *, systems=("G", "E")) -> NavData:
     for ln in range(1, 8):
         for k in range(4):
             slot = 3 + 4 * (ln - 1) + k
-            values[:, slot] = _parse_fields(buf, lineno + ln, orbit_col + 19 * k, 19, path, _NAV_SLOTS[slot], True)
+            name = _NAV_SLOTS[slot]
+            if name.startswith("slot"):
+                name = " / ".join(f"{m[name]} ({_SYSTEM_NAMES[sy]})" for sy, m in _NAV_SPECIFIC.items()
+                                  if name in m) or "a spare field"
+            values[:, slot] = _parse_fields(buf, lineno + ln, orbit_col + 19 * k, 19, path,
+                                            f"{name}, broadcast orbit {ln} field {k + 1}", True)
     # epoch fields (a Python loop over records is cheap: a few hundred a day)
     sats, ymdhms = [], []
     for r, ln in zip(rec, lineno):
