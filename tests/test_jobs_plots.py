@@ -92,3 +92,95 @@ def test_errors_plot_draws_no_line_across_a_gap_of_the_fixes(run, tmp_path, monk
             x, y = ln.get_data()
             inside = (x > 61.0) & (x < 89.0)
             assert inside.any() and np.isnan(y[inside]).all()
+
+
+def _drawn(monkeypatch, f, res, tmp_path):
+    """The matplotlib figure plot function ``f`` draws of ``res``, drawn (not saved)."""
+    figs = []
+    monkeypatch.setattr(PL, "save_figure", lambda fig, path, dpi=110: figs.append(fig))
+    f(PL._Context(res), tmp_path / "x.png", PL._plt())
+    figs[0].canvas.draw()
+    return figs[0]
+
+
+def _with_outlier(run):
+    """The run with one used fix moved 1 km north and its update refused by the gate
+    (its normalised innovation -1000 in north), as a run with a 1 km outlier makes."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from inskit.types import GnssData
+
+    g = run.gnss
+    lla = g.lla.copy()
+    k = int(np.flatnonzero(run.used)[400])
+    lla[k, 0] += 1000.0 / 6.37e6
+    inn = {n: dict(v) for n, v in run.forward.innovations.items()}
+    p = inn["gnss_pos"]
+    j = int(np.argmin(np.abs(p["t"] - g.time[k])))
+    p["accepted"] = np.asarray(p["accepted"], bool).copy()
+    p["accepted"][j] = False
+    p["nu"] = p["nu"].copy()
+    p["nu"][j] = (-1000.0 * p["sigma"][j, 0], 0.0, 0.0)
+    fwd = SimpleNamespace(solution=run.forward.solution, innovations=inn)
+    res = SimpleNamespace(**{a: getattr(run, a) for a in ("smoothed", "config", "windows", "used", "settings")},
+                          forward=fwd, gnss=GnssData(g.time, lla, g.sigma_ned))
+    return res, g.time[k] - g.time[0]
+
+
+def _tick_labels_apart(ax):
+    """No two y tick labels of ``ax`` overlap on the drawn figure."""
+    boxes = sorted((t.get_window_extent() for t in ax.get_yticklabels() if t.get_text()), key=lambda b: b.y0)
+    return all(b.y0 >= a.y1 - 0.5 for a, b in zip(boxes, boxes[1:]))
+
+
+def test_errors_plot_shows_a_1_km_outlier_whole_the_rest_readable_and_marks_it_rejected(run, tmp_path, monkeypatch):
+    """errors.png of a run with one fix 1 km off: the north axis held +-1080 m
+    linearly, so the metre-level errors and sigmas of every other fix were a
+    flat line at zero, and nothing said the fix was refused; now the axis is
+    symmetric-log (linear within the typical errors), its extremes inside the
+    frame, the rejected fix a red x named in the legend, with the 3-sigma
+    envelope and the outage shading."""
+    import numpy as np
+
+    res, t_out = _with_outlier(run)
+    fig = _drawn(monkeypatch, PL._errors, res, tmp_path)
+    north = fig.axes[0]
+    assert north.get_yscale() == "symlog"
+    lo, hi = north.get_ylim()
+    assert lo < -1000.0 and hi > 1000.0
+    assert north.yaxis.get_transform().linthresh <= 20.0  # the rest stays linear and readable
+    assert _tick_labels_apart(north)
+    labels = [t.get_text() for t in north.get_legend().get_texts()]
+    assert any(s.startswith("fix rejected by the gate (1)") for s in labels), labels
+    assert {"forward - GNSS", "forward ±3σ", "GNSS outage (fixes withheld)"} <= set(labels), labels
+    marks = [ln for ln in north.get_lines() if ln.get_marker() == "x"]
+    assert len(marks) == 1 and np.allclose(marks[0].get_xdata(), [t_out])
+    for ax in fig.axes[1:]:  # the other axes: linear as before, the worst error whole
+        assert ax.get_yscale() == "linear"
+    assert north.get_legend().get_window_extent().y0 >= north.get_window_extent().y1 - 1  # above, hiding nothing
+
+
+def test_errors_plot_of_an_ordinary_run_stays_linear(run, tmp_path, monkeypatch):
+    fig = _drawn(monkeypatch, PL._errors, run, tmp_path)
+    assert [ax.get_yscale() for ax in fig.axes] == ["linear"] * 3
+
+
+def test_innovations_plot_marks_rejected_updates_names_components_and_keeps_the_extreme_inside(
+        run, tmp_path, monkeypatch):
+    """innovations.png: a refused update was drawn like an accepted one, the
+    rows were 'component 0/1/2', and on the symlog axis of a -1000 sigma
+    innovation the point sat on the frame, the tick labels 10^0, 0 and -10^0
+    on top of each other; now the refused update is a red x in the legend,
+    the rows are named, the extreme lies inside and the ticks are apart."""
+    res, _ = _with_outlier(run)
+    fig = _drawn(monkeypatch, PL._innovations, res, tmp_path)
+    ax = fig.axes[0]  # gnss_pos
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert {"north", "east", "down", "rejected (1 update)", "±3", "GNSS outage (fixes withheld)"} <= set(labels)
+    assert ax.get_yscale() == "symlog" and ax.get_ylim()[0] < -1000.0 * 1.2
+    assert _tick_labels_apart(ax)
+    assert ax.get_legend().get_window_extent().x0 >= ax.get_window_extent().x1  # beside, hiding no point
+    nhc = fig.axes[[a.get_ylabel().split("\n")[0] for a in fig.axes].index("nhc")]
+    assert {"lateral (body y)", "vertical (body z)"} <= {t.get_text() for t in nhc.get_legend().get_texts()}

@@ -80,40 +80,129 @@ def _track(c, path, plt):
     return save_figure(fig, path)
 
 
+#: a time axis spans this many more than its typical error before it turns logarithmic (symlog)
+LOG_SPAN = 10.0
+
+
+def _rejected_times(res, names):
+    """Times of the updates of measurements ``names`` that the gate refused."""
+    out = []
+    for k in names:
+        v = (res.forward.innovations or {}).get(k)
+        if v is not None and len(v["t"]):
+            out.append(np.asarray(v["t"])[~np.asarray(v["accepted"], bool)])
+    return np.concatenate(out) if out else np.empty(0)
+
+
+def _nice_ceil(x):
+    """The smallest of 1, 2, 5 times a power of ten at or above ``x`` > 0
+    (a tick value a reader takes in at a glance)."""
+    e = 10.0 ** np.floor(np.log10(x))
+    return float(next(m * e for m in (1.0, 2.0, 5.0, 10.0) if m * e >= x * (1 - 1e-12)))
+
+
+def _symmetric_limits(ax, values, floor, margin=1.08):
+    """y limits of ``ax`` holding every finite value of ``values`` whole, at
+    least ``+-floor``.  When the worst value exceeds :data:`LOG_SPAN` times
+    the 99th percentile of the magnitudes (one outlier, a divergence), a
+    linear axis would flatten the rest to a line at zero: the axis is then
+    symmetric-logarithmic, linear within the typical magnitude.  Returns
+    ``(limit, linthresh or None)``."""
+    a = np.abs(np.asarray(values, float))
+    a = a[np.isfinite(a)]
+    worst = float(a.max()) if a.size else 0.0
+    typical = float(np.percentile(a, 99)) if a.size else 0.0
+    lin = _nice_ceil(max(floor, 1.0, typical))
+    if worst > LOG_SPAN * lin:
+        lim = 10 ** (np.log10(worst) + 0.15)  # the worst point inside, not on the frame
+        ax.set_yscale("symlog", linthresh=lin, linscale=1.0)
+        ax.set_ylim(-lim, lim)
+        _symlog_ticks(ax, lim, lin)
+        return lim, lin
+    lim = max(floor, margin * worst)
+    ax.set_ylim(-lim, lim)
+    return lim, None
+
+
+def _outage_patch(windows):
+    """A legend entry for the grey outage shading (none without outages)."""
+    from matplotlib.patches import Patch
+
+    return [Patch(color="0.85", label="GNSS outage (fixes withheld)")] if len(windows) else []
+
+
 def _errors(c, path, plt):
+    from matplotlib.lines import Line2D
+
     res, fwd, g, t0, lever, inside = c.res, c.fwd, c.g, c.t0, c.lever, c.inside
     # errors against every GNSS fix, with the filter's 3-sigma envelope
     tg = g.time[inside]
     fig, axes = plt.subplots(3, 1, figsize=(10, 8), sharex=True)
-    worst = np.zeros(3)  # per axis: the largest error, which the axis must show whole
+    errs = [[] for _ in range(3)]  # per axis: every error, which the axis must show whole
+    rejected = _rejected_times(res, ("gnss_pos",))
+    rej = np.isin(tg, rejected) if len(rejected) else np.zeros(len(tg), bool)
+    handles = []
     for s, label, color in ((fwd, "forward", "tab:blue"),) + (
             ((res.smoothed.solution, "smoothed", "tab:green"),) if res.smoothed is not None else ()):
         ant = antenna_positions(s, tg, lever)
         d = earth.lla_to_ned(ant, g.lla[inside])
         si = s.interpolate(tg)
+        has_sigma = False
         for j, name in enumerate(("north", "east", "down")):
             ax = axes[j]
             # no line across a gap of the fixes: nothing was measured there
-            ax.plot(*line_breaks(tg - t0, d[:, j]), lw=0.7, color=color, label=f"{label} - GNSS")
-            if len(d):
-                worst[j] = max(worst[j], float(np.nanmax(np.abs(d[:, j]))))
+            ax.plot(*line_breaks(tg - t0, d[:, j]), lw=0.7, color=color)
+            errs[j].append(d[:, j])
             sig = si.extra.get(("sigma_n_m", "sigma_e_m", "sigma_d_m")[j])
             if sig is not None:  # the uncoupled scheme has no covariance: no envelope
+                has_sigma = True
                 ax.plot(*line_breaks(tg - t0, 3 * sig), lw=0.5, ls="--", color=color)
                 ax.plot(*line_breaks(tg - t0, -3 * sig), lw=0.5, ls="--", color=color)
+            if rej.any() and label == "forward":
+                ax.plot(tg[rej] - t0, d[rej, j], "x", ms=5, mew=1.2, color="tab:red", zorder=5)
             ax.set_ylabel(f"{name} [m]")
+        handles.append(Line2D([], [], lw=0.7, color=color, label=f"{label} - GNSS"))
+        if has_sigma:
+            handles.append(Line2D([], [], lw=0.5, ls="--", color=color, label=f"{label} ±3σ"))
+    if rej.any():
+        handles.append(Line2D([], [], ls="none", marker="x", mew=1.2, color="tab:red",
+                              label=f"fix rejected by the gate ({int(rej.sum())})"))
+    handles += _outage_patch(res.windows)
+    logs = []
     for j, ax in enumerate(axes):
         _shade(ax, res.windows, t0)
         ax.grid(alpha=0.3)
-        lim = max(6.0, 1.08 * worst[j])  # the worst error whole; the sigma envelope may leave the axis
-        ax.set_ylim(-lim, lim)
-    axes[0].legend(fontsize=8, loc="upper left")
+        # the worst error whole; the sigma envelope may leave the axis
+        _, lin = _symmetric_limits(ax, np.concatenate(errs[j]) if errs[j] else [], 6.0)
+        if lin is not None:
+            logs.append(f"{('north', 'east', 'down')[j]}: log beyond ±{lin:.3g} m")
+    # above the frame: inside it, the legend hid the errors and envelopes of the first outages
+    axes[0].legend(handles=handles, fontsize=8, loc="lower left", bbox_to_anchor=(0.0, 1.0), ncol=len(handles),
+                   frameon=False, borderaxespad=0.2)
     envelope = "sigma_n_m" in fwd.extra
-    axes[0].set_title("antenna position minus GNSS fix (grey: outages; " + (
-        "dashed: +-3 sigma, may leave the axis)" if envelope else "no sigma: no filter in this run)"))
+    fig.suptitle("antenna position minus GNSS fix (" + (
+        "dashed: ±3σ, may leave the axis" if envelope else "no sigma: no filter in this run")
+        + ("; " + ", ".join(logs) if logs else "") + ")", fontsize=11)
     axes[-1].set_xlabel("time after first GNSS fix [s]")
     fig.tight_layout()
     return save_figure(fig, path)
+
+
+#: what each row of a measurement's innovation is (its legend), where the rows are fixed
+COMPONENTS = {"gnss_pos": ("north", "east", "down"), "gnss_vel": ("north", "east", "down"),
+              "zupt": ("v north", "v east", "v down"), "nhc": ("lateral (body y)", "vertical (body z)")}
+
+
+def _symlog_ticks(ax, lim, lin):
+    """Readable ticks of a symlog axis: 0, +-lin and the decades beyond
+    (matplotlib's own crowd +-1, 0 and +-10^0 into the linear band)."""
+    from matplotlib.ticker import FixedLocator, FuncFormatter, NullLocator
+
+    dec = [10.0 ** k for k in range(int(np.ceil(np.log10(lin * 2.5))), int(np.floor(np.log10(lim))) + 1)]
+    ticks = sorted({0.0, lin, -lin, *dec, *(-x for x in dec)})
+    ax.yaxis.set_major_locator(FixedLocator(ticks))
+    ax.yaxis.set_minor_locator(NullLocator())
+    ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
 
 
 def _innovations(c, path, plt):
@@ -127,31 +216,49 @@ def _innovations(c, path, plt):
                 f"({res.settings.scheme} scheme)", ha="center", va="center", transform=ax.transAxes)
         ax.set_axis_off()
         return save_figure(fig, path)
-    fig, axes = plt.subplots(len(names), 1, figsize=(10, 2.6 * len(names)), sharex=True, squeeze=False)
+    fig, axes = plt.subplots(len(names), 1, figsize=(11, 2.6 * len(names)), sharex=True, squeeze=False)
     for ax, k in zip(axes[:, 0], names):
         v = inn[k]
         nu, sg = v["nu"], v["sigma"]
+        acc = np.asarray(v["accepted"], bool)
         if nu.dtype == object:  # one row per satellite in view: all rows of an update at its time
             tt = np.repeat(v["t"], v["dof"])
             z = np.concatenate(list(nu)) / np.concatenate(list(sg)) if len(nu) else np.empty(0)
-            ax.plot(tt - t0, z, ".", ms=1.5, label="each row (satellite)")
-            zmax = float(np.abs(z).max()) if len(z) else 0.0
+            ok = np.repeat(acc, v["dof"])
+            ax.plot(tt[ok] - t0, z[ok], ".", ms=1.5, label="each row (satellite)")
+            bad = [(tt[~ok], z[~ok])]
         else:
             z = nu / sg
+            names_j = COMPONENTS.get(k, ())
             for j in range(nu.shape[1]):
-                ax.plot(v["t"] - t0, z[:, j], ".", ms=1.5, label=f"component {j}")
-            zmax = float(np.abs(z).max()) if z.size else 0.0
-        ax.axhline(3, color="k", lw=0.5, ls="--")
+                ax.plot(v["t"][acc] - t0, z[acc, j], ".", ms=1.5,
+                        label=names_j[j] if j < len(names_j) else f"component {j}")
+            bad = [(v["t"][~acc], z[~acc, j]) for j in range(nu.shape[1])]
+        n_bad = int((~acc).sum())
+        if n_bad:
+            tb = np.concatenate([b[0] for b in bad])
+            zb = np.concatenate([b[1] for b in bad])
+            ax.plot(tb - t0, zb, "x", ms=4, mew=1.0, color="tab:red", label=f"rejected ({n_bad} update{'s' if n_bad > 1 else ''})")
+        ax.axhline(3, color="k", lw=0.5, ls="--", label="±3")
         ax.axhline(-3, color="k", lw=0.5, ls="--")
         ax.set_ylabel(f"{k}\nnu / sigma")
-        lim = max(8.0, 1.05 * zmax)  # the whole range, the worst case included
-        ax.set_ylim(-lim, lim)
-        if lim > 30:
-            ax.set_yscale("symlog", linthresh=3.0)
-        ax.legend(fontsize=7, loc="upper right")
+        zf = np.abs(z[np.isfinite(z)]) if z.size else np.empty(0)
+        zmax = float(zf.max()) if zf.size else 0.0
+        if zmax > 30:  # decades: a symlog axis, linear within the gate's +-3
+            lim = 10 ** (np.log10(zmax) + 0.15)  # the worst point inside, not on the frame
+            ax.set_yscale("symlog", linthresh=3.0, linscale=1.0)
+            ax.set_ylim(-lim, lim)
+            _symlog_ticks(ax, lim, 3.0)
+        else:
+            lim = max(8.0, 1.05 * zmax)  # the whole range, the worst case included
+            ax.set_ylim(-lim, lim)
+        h, lab = ax.get_legend_handles_labels()
+        patch = _outage_patch(res.windows)  # beside the frame: inside it, it hid points
+        ax.legend(h + patch, lab + [p.get_label() for p in patch], fontsize=7, loc="upper left",
+                  bbox_to_anchor=(1.005, 1.0), frameon=False)
         ax.grid(alpha=0.3)
         _shade(ax, res.windows, t0)
-    axes[0, 0].set_title("normalised innovations (dashed: +-3)")
+    axes[0, 0].set_title("normalised innovations (dashed: ±3; x: refused by the gate)")
     axes[-1, 0].set_xlabel("time after first GNSS fix [s]")
     fig.tight_layout()
     return save_figure(fig, path)
