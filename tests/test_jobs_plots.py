@@ -184,3 +184,19 @@ def test_innovations_plot_marks_rejected_updates_names_components_and_keeps_the_
     assert ax.get_legend().get_window_extent().x0 >= ax.get_window_extent().x1  # beside, hiding no point
     nhc = fig.axes[[a.get_ylabel().split("\n")[0] for a in fig.axes].index("nhc")]
     assert {"lateral (body y)", "vertical (body z)"} <= {t.get_text() for t in nhc.get_legend().get_texts()}
+
+
+def test_biases_plot_in_datasheet_units(run, tmp_path, monkeypatch):
+    """biases.png was in deg/s and m/s^2 while the report shows deg/h and mg,
+    its legend inside the frame over a bias line and the outage shading unnamed."""
+    import numpy as np
+
+    from inskit.units import DEG_PER_HOUR
+
+    fig = _drawn(monkeypatch, PL._biases, run, tmp_path)
+    assert [ax.get_ylabel() for ax in fig.axes] == ["gyro bias [deg/h]", "accel bias [mg]"]
+    y = fig.axes[0].get_lines()[0].get_ydata()
+    assert np.isclose(y[-1], run.forward.solution.extra["bg_x_rad_s"][-1] / DEG_PER_HOUR)
+    for ax in fig.axes:
+        assert ax.get_legend().get_window_extent().x0 >= ax.get_window_extent().x1
+        assert [t.get_text() for t in ax.get_legend().get_texts()] == ["x", "y", "z", "GNSS outage (fixes withheld)"]

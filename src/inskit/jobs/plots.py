@@ -15,7 +15,7 @@ import numpy as np
 from .. import earth
 from ..analysis import line_breaks
 from ..files import save_figure
-from ..units import DEG
+from ..units import DEG_PER_HOUR, MILLI_G
 from .outages import antenna_positions
 
 
@@ -266,18 +266,21 @@ def _innovations(c, path, plt):
 
 def _biases(c, path, plt):
     res, fwd, t0 = c.res, c.fwd, c.t0
-    # sensor-error estimates
-    fig, axes = plt.subplots(2, 1, figsize=(10, 6), sharex=True)
+    # sensor-error estimates, in the datasheet units of the report (deg/h, mg)
+    fig, axes = plt.subplots(2, 1, figsize=(11, 6), sharex=True)
     k = _every(len(fwd.time))
     tt = fwd.time[k] - t0
     for a in "xyz":
-        axes[0].plot(tt, fwd.extra[f"bg_{a}_rad_s"][k] / DEG, lw=0.8, label=a)
-        axes[1].plot(tt, fwd.extra[f"ba_{a}_m_s2"][k], lw=0.8, label=a)
-    axes[0].set_ylabel("gyro bias [deg/s]")
-    axes[1].set_ylabel("accel bias [m/s^2]")
+        axes[0].plot(tt, fwd.extra[f"bg_{a}_rad_s"][k] / DEG_PER_HOUR, lw=0.8, label=a)
+        axes[1].plot(tt, fwd.extra[f"ba_{a}_m_s2"][k] / MILLI_G, lw=0.8, label=a)
+    axes[0].set_ylabel("gyro bias [deg/h]")
+    axes[1].set_ylabel("accel bias [mg]")
     for ax in axes:
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=8)
+        h, lab = ax.get_legend_handles_labels()
+        patch = _outage_patch(res.windows)
+        ax.legend(h + patch, lab + [p.get_label() for p in patch], fontsize=8, loc="upper left",
+                  bbox_to_anchor=(1.005, 1.0), frameon=False)  # beside the frame: inside it, it hid a line
         _shade(ax, res.windows, t0)
     axes[-1].set_xlabel("time after first GNSS fix [s]")
     axes[0].set_title("sensor bias estimates (forward filter)")
