@@ -200,3 +200,26 @@ def test_biases_plot_in_datasheet_units(run, tmp_path, monkeypatch):
     for ax in fig.axes:
         assert ax.get_legend().get_window_extent().x0 >= ax.get_window_extent().x1
         assert [t.get_text() for t in ax.get_legend().get_texts()] == ["x", "y", "z", "GNSS outage (fixes withheld)"]
+
+
+def test_track_legend_hides_no_part_of_the_track_and_tick_labels_do_not_collide(run, tmp_path, monkeypatch):
+    """track.png: the legend sat inside the frame over the end of a long
+    north-south track, and the frame of such a track, narrowed to keep the
+    scales equal, ran its east tick labels into each other."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from inskit.types import GnssData
+
+    g = run.gnss
+    lla = g.lla.copy()
+    lla[:, 0] += np.linspace(0, 10000.0 / 6.37e6, len(lla))  # a 10 km stretch north
+    res = SimpleNamespace(**{a: getattr(run, a) for a in ("forward", "smoothed", "config", "windows", "used")},
+                          gnss=GnssData(g.time, lla, g.sigma_ned))
+    fig = _drawn(monkeypatch, PL._track, res, tmp_path)
+    ax = fig.axes[0]
+    frame = ax.get_window_extent()
+    assert ax.get_legend().get_window_extent().y1 <= frame.y0  # below the frame
+    boxes = sorted((t.get_window_extent() for t in ax.get_xticklabels() if t.get_text()), key=lambda b: b.x0)
+    assert all(b.x0 >= a.x1 for a, b in zip(boxes, boxes[1:]))

@@ -72,9 +72,12 @@ def _track(c, path, plt):
         ax.plot(ps[:, 1], ps[:, 0], lw=0.8, color="tab:green", label="RTS smoother")
     ax.set_xlabel("east [m]")
     ax.set_ylabel("north [m]")
-    ax.set_aspect("equal")
+    # equal scales by widening the data limits, not by shrinking the axes: a long, narrow track keeps
+    # a full-width frame (its tick labels had no room and ran into each other)
+    ax.set_aspect("equal", adjustable="datalim")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    # below the frame: inside it, the legend hid whichever end of the track lay under it
+    ax.legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.09), ncol=4, frameon=False)
     ax.set_title(f"{res.config.name}: track")
     fig.tight_layout()
     return save_figure(fig, path)
