@@ -115,10 +115,10 @@ def test_a_plain_solution_csv_is_read_by_the_lean_path_like_the_pandas_one(tmp_p
     df.to_csv(p, index=False, float_format="%.17g")
     calls = []
     lean = C._read_solution_lean
-    monkeypatch.setattr(C, "_read_solution_lean", lambda path: calls.append(path) or lean(path))
+    monkeypatch.setattr(C, "_read_solution_lean", lambda path, ranges=True: calls.append(path) or lean(path, ranges))
     fast = C.read_solution(p)
     assert calls and fast is not None and list(fast.extra) == ["sigma_n_m"]
-    monkeypatch.setattr(C, "_read_solution_lean", lambda path: None)
+    monkeypatch.setattr(C, "_read_solution_lean", lambda path, ranges=True: None)
     slow = C.read_solution(p)
     assert np.array_equal(fast.time, slow.time) and np.allclose(fast.lla, slow.lla, rtol=1e-15, atol=0)
     assert np.allclose(fast.q_nb, slow.q_nb, rtol=0, atol=1e-15)
@@ -447,7 +447,7 @@ def test_a_solution_height_speed_or_angle_beyond_reason_is_refused(tmp_path, mon
     df.loc[7, column] = value
     if kind == "pandas":
         df["note"] = "x"  # a text column: not the lean path
-        monkeypatch.setattr(C, "_read_solution_lean", lambda path: None)
+        monkeypatch.setattr(C, "_read_solution_lean", lambda path, ranges=True: None)
     p = tmp_path / ("sol.parquet" if kind == "parquet" else "sol.csv")
     df.to_parquet(p) if kind == "parquet" else df.to_csv(p, index=False)
     where = "row 7" if kind == "parquet" else "line 9"
@@ -464,3 +464,30 @@ def test_a_solution_height_speed_or_angle_beyond_reason_is_refused(tmp_path, mon
     p.unlink()
     df.to_parquet(p) if kind == "parquet" else df.to_csv(p, index=False)
     assert len(C.read_solution(p).time) == n
+
+
+def test_read_solution_ranges_false_reads_a_diverged_solution_but_not_a_malformed_one(tmp_path):
+    """``ranges=False`` (the report of inskit's own run) skips only the
+    height, velocity and attitude limits, in every reader (CSV, Parquet,
+    the head of a file)."""
+    import numpy as np
+    import pytest
+
+    from inskit import io
+    from inskit.errors import InputError
+    from inskit.types import NavSolution
+
+    n = 5
+    lla = np.column_stack([np.full(n, 0.7), np.full(n, 0.2), np.linspace(0.0, 3.0e5, n)])
+    sol = NavSolution(np.arange(n, dtype=float), lla, np.zeros((n, 3)), np.tile([1.0, 0, 0, 0], (n, 1)))
+    for name in ("s.csv", "s.parquet"):
+        p = tmp_path / name
+        io.write_solution(p, sol)
+        with pytest.raises(InputError, match="beyond"):
+            io.read_solution(p)
+        assert io.read_solution(p, ranges=False).lla[-1, 2] == pytest.approx(3.0e5)
+        assert io.read_solution(p, until_s=1.5, ranges=False).lla[-1, 2] == pytest.approx(1.5e5)
+    bad = tmp_path / "bad.csv"
+    bad.write_text((tmp_path / "s.csv").read_text().replace("\n1,", "\n0,", 1))
+    with pytest.raises(InputError, match="duplicate timestamp"):  # the form is still checked
+        io.read_solution(bad, ranges=False)

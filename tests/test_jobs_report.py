@@ -227,3 +227,28 @@ def test_an_unreadable_fix_file_is_said_so_not_missing(run_dir, tmp_path):
     text = Path(build_report(d, tmp_path / "r.html")["report"]).read_text()
     assert "the fix file named in the configuration could not be read (" in text and str(bad) in text
     assert "was not found from the run folder" not in text
+
+
+def test_a_run_that_diverged_beyond_100_km_is_still_reported(run_dir, tmp_path):
+    """A filter lost after every fix was refused wrote heights of 106 km;
+    `inskit report` of that folder failed with 'height_m=106765.26 is beyond
+    +-100 km of the ellipsoid ...; another unit or column?' (the check of a
+    user's file) and no page; now the page shows the diverged run, while
+    read_solution keeps refusing such a file by default."""
+    import pandas as pd
+
+    from inskit import io
+
+    d = tmp_path / "lost"
+    d.mkdir()
+    for f in ("summary.json", "config_used.json", "innovations.csv"):
+        shutil.copy(run_dir / f, d / f)
+    sol = pd.read_csv(run_dir / "solution_forward.csv")
+    n = len(sol)
+    sol.loc[n // 2:, "height_m"] += np.linspace(0.0, 2.0e5, n - n // 2)
+    sol.loc[n // 2:, "vd_m_s"] = -2.0e4  # beyond the escape speed
+    sol.to_csv(d / "solution_forward.csv", index=False)
+    with pytest.raises(InputError, match="beyond"):
+        io.read_solution(d / "solution_forward.csv")
+    r = build_report(d, tmp_path / "lost.html")
+    assert r["plots"] == ["track", "sigmas", "innovations", "estimates"]

@@ -974,7 +974,7 @@ def write_gnss(path, gnss: GnssData, *, overwrite=False):
     return write_csv(path, cols, "%.15g")
 
 
-def read_solution(path, *, until_s=None) -> NavSolution:
+def read_solution(path, *, until_s=None, ranges=True) -> NavSolution:
     """Read a navigation solution or truth file: CSV (``.csv``, gzip-compressed
     ``.csv.gz``) or Parquet (``.parquet``, as ``inskit navigate`` writes at
     full rate), told apart by content (Parquet's ``PAR1`` magic), not name.
@@ -990,19 +990,25 @@ def read_solution(path, *, until_s=None) -> NavSolution:
     messages are those of a whole read): the initial state of a run
     (``mechanize --init-from``) needs the rows around its start, not an
     hour of truth.
+
+    ``ranges=False`` skips the plausibility limits of height, velocity and
+    attitude (:func:`_check_height_attitude`), not the checks of the file's
+    form, time or latitude: for a solution inskit wrote itself, whose
+    filter may have diverged beyond them (the report of such a run must
+    still show it), never for a file whose units are in doubt.
     """
     from .parquet import is_parquet
 
     p = check_path_argument(path)
     if until_s is not None:
-        head = _read_solution_head(p, float(until_s))
+        head = _read_solution_head(p, float(until_s), ranges)
         if head is not None:
             return head
     if is_parquet(p):
-        return _read_solution_parquet(p)
+        return _read_solution_parquet(p, ranges)
     if p.suffix == ".parquet" and p.is_file():
         raise InputError(f"{p}: named .parquet but not a Parquet file (no PAR1 magic at its start)")
-    lean = _read_solution_lean(p)
+    lean = _read_solution_lean(p, ranges)
     if lean is not None:
         return lean
     path, df = read_table(path)
@@ -1010,7 +1016,8 @@ def read_solution(path, *, until_s=None) -> NavSolution:
     a = numeric_columns(path, df, SOLUTION_COLUMNS)
     check_time_column(path, a[:, 0])
     _check_latlon(path, a[:, 1], a[:, 2])
-    _check_height_attitude(path, dict(zip(SOLUTION_COLUMNS, a.T)))
+    if ranges:
+        _check_height_attitude(path, dict(zip(SOLUTION_COLUMNS, a.T)))
     extra = {}
     for c in df.columns:
         if c not in SOLUTION_COLUMNS:
@@ -1020,7 +1027,7 @@ def read_solution(path, *, until_s=None) -> NavSolution:
     return NavSolution(a[:, 0], lla, a[:, 4:7], rot.quat_from_euler(rpy), extra)
 
 
-def _read_solution_lean(path) -> NavSolution | None:
+def _read_solution_lean(path, ranges=True) -> NavSolution | None:
     """:func:`read_solution` of a plain, well-formed CSV (every cell a
     finite number) by :func:`lean_columns`, the columns parsed by pyarrow on
     every core straight into one array; None for anything else, which the
@@ -1035,11 +1042,12 @@ def _read_solution_lean(path) -> NavSolution | None:
     cols = {c: a[:, j] for j, c in enumerate(names)}
     check_time_column(path, cols["time_s"])
     _check_latlon(path, cols["lat_deg"], cols["lon_deg"])
-    _check_height_attitude(path, cols)
+    if ranges:
+        _check_height_attitude(path, cols)
     return _solution_of_columns({c: np.ascontiguousarray(v) for c, v in cols.items()})
 
 
-def _read_solution_head(path, until_s) -> NavSolution | None:
+def _read_solution_head(path, until_s, ranges=True) -> NavSolution | None:
     """The rows of a solution file up to the first after ``until_s`` (two at
     least) (:func:`read_solution`), by pyarrow's streaming readers; None
     when the head is not plain finite numbers with the solution columns, or
@@ -1097,7 +1105,8 @@ def _read_solution_head(path, until_s) -> NavSolution | None:
     cols = {c: np.ascontiguousarray(v[:stop]) for c, v in cols.items()}
     check_time_column(path, cols["time_s"])
     _check_latlon(path, cols["lat_deg"], cols["lon_deg"])
-    _check_height_attitude(path, cols)
+    if ranges:
+        _check_height_attitude(path, cols)
     return _solution_of_columns(cols)
 
 
@@ -1111,7 +1120,7 @@ def _solution_of_columns(cols) -> NavSolution:
     return NavSolution(cols["time_s"], lla, v_n, rot.quat_from_euler(rpy), extra)
 
 
-def _read_solution_parquet(path) -> NavSolution:
+def _read_solution_parquet(path, ranges=True) -> NavSolution:
     """:func:`read_solution` of a Parquet file (the same checks, by row)."""
     from .parquet import read_parquet_columns
 
@@ -1140,7 +1149,8 @@ def _read_solution_parquet(path) -> NavSolution:
             i = int(np.argmax(bad))
             raise InputError(f"{path}: row {i}: {c}={float(cols[c][i])!r} is outside [{lim[0]:g}, {lim[1]:g}] "
                              "degrees")
-    _check_height_attitude(path, cols)
+    if ranges:
+        _check_height_attitude(path, cols)
     return _solution_of_columns(cols)
 
 

@@ -274,7 +274,9 @@ class _Run:
         def solution(stem):  # the full-rate Parquet when there is one, else the CSV
             for ext in (".parquet", ".csv"):
                 if (d / f"{stem}{ext}").exists():
-                    return io.read_solution(d / f"{stem}{ext}")
+                    # navigate's own file: a filter that diverged beyond 100 km of height or the escape
+                    # speed wrote it so, and the report is where that is to be seen (the form is checked)
+                    return io.read_solution(d / f"{stem}{ext}", ranges=False)
             return None
 
         self.forward = solution("solution_forward")
