@@ -252,3 +252,34 @@ def test_a_run_that_diverged_beyond_100_km_is_still_reported(run_dir, tmp_path):
         io.read_solution(d / "solution_forward.csv")
     r = build_report(d, tmp_path / "lost.html")
     assert r["plots"] == ["track", "sigmas", "innovations", "estimates"]
+
+
+def _figure(run_dir, which):
+    import plotly.graph_objects as go
+    from plotly.subplots import make_subplots
+
+    from inskit.jobs import report as R
+
+    run = R._Run(run_dir)
+    f = getattr(R, f"_fig_{which}")
+    return (f(run, go) if which == "track" else f(run, go, make_subplots))[0], run
+
+
+def test_estimates_named_and_tabled_in_the_units_they_are_drawn_in(run_dir):
+    """The sensor-error figure drew the gyro biases in deg/h under legend
+    entries named bg_x_rad_s, and the final-estimates table gave
+    0.000506388 rad_s beside it; now the legend says 'gyro bias x' and the
+    table deg/h, mg, %, deg."""
+    import re
+
+    from inskit.jobs.report import _estimates_table
+
+    fig, run = _figure(run_dir, "estimates")
+    shown = [t.name for t in fig.data if t.showlegend is not False]
+    assert shown[:3] == ["gyro bias x", "gyro bias y", "gyro bias z"]
+    assert not [n for n in shown if re.search(r"_(rad_s|m_s2)$|^(bg|ba|sg|sa)_", n)], shown
+    s = json.loads((run_dir / "summary.json").read_text())
+    table = _estimates_table(s)
+    bg = s["final_estimates"]["bg"]["values"][0]
+    assert f"<td class=l>gyro bias x</td><td class=l>bg[0]</td><td>{bg / np.pi * 180 * 3600:.4g}</td>" in table
+    assert "rad_s" not in table and "m_s2" not in table and ">mg<" in table

@@ -484,7 +484,9 @@ def _fig_estimates(run, go, make_subplots):
     dec = False
     for r, (key, title, k, unit, cols, sig) in enumerate(series, start=1):
         for j, c in enumerate(cols):
-            tr, d = _line(go, t, run.forward.extra[c] * k, c, colours[j % 3], showlegend=True)
+            # named as shown (the file's column, e.g. bg_x_rad_s, named the unit it is not drawn in)
+            name = f"{title} {c[len(key) + 1]}" if len(cols) > 1 else title
+            tr, d = _line(go, t, run.forward.extra[c] * k, name, colours[j % 3], showlegend=True)
             dec |= d
             fig.add_trace(tr, row=r, col=1)
             if sig is not None and j < len(sig) and sig[j] is not None:
@@ -492,8 +494,8 @@ def _fig_estimates(run, go, make_subplots):
                                          marker=dict(color=colours[j % 3], size=7, symbol="diamond"),
                                          error_y=dict(type="data", array=[float(sig[j]) * k], thickness=2,
                                                       width=6),
-                                         name=f"{c} final ±1σ", showlegend=False,
-                                         hovertemplate=f"final {c}: %{{y:.4g}} ± {float(sig[j]) * k:.3g} {unit}"),
+                                         name=f"{name} final ±1σ", showlegend=False,
+                                         hovertemplate=f"final {name}: %{{y:.4g}} ± {float(sig[j]) * k:.3g} {unit}"),
                               row=r, col=1)
         fig.update_yaxes(title_text=unit, row=r, col=1)
     _shade(fig, run, len(series))
@@ -659,19 +661,33 @@ def _outage_table(s, solution):
             + body + "</table>")
 
 
+#: final estimates shown in datasheet units: key -> (name, factor from the file's unit, shown unit, row names)
+_TABLE_UNITS = {"bg": ("gyro bias", 1 / DEG * 3600, "deg/h", "xyz"), "ba": ("accel bias", 1e3 / 9.80665, "mg", "xyz"),
+                "sg": ("gyro scale factor", 1e2, "%", "xyz"), "sa": ("accel scale factor", 1e2, "%", "xyz"),
+                "mounting": ("mounting", 1 / DEG, "deg", ("pitch", "yaw")), "gnss_err": ("GNSS error", 1.0, "m", "NED"),
+                "clock": ("receiver clock", 1.0, ("m", "m/s"), ("bias", "drift"))}
+
+
 def _estimates_table(s):
+    """The final estimates in the units of the plots and of a datasheet
+    (deg/h, mg, %, deg): they were in the file's rad/s, m/s^2 and bare
+    fractions, 0.000506388 rad_s beside a plot of 104 deg/h."""
     fin = s.get("final_estimates") or {}
     if not fin:
         return ""
     rows = []
     for key, v in fin.items():
         vals, sig = v.get("values") or [], v.get("sigma") or []
+        file_unit = v.get("unit", "")
+        title, k, unit, names = _TABLE_UNITS.get(key, (key, 1.0, file_unit, None))
         for j, x in enumerate(vals):
             sj = sig[j] if j < len(sig) else None
-            rows.append(f"<tr><td class=l>{_e(key)}[{j}]</td><td>{_num(x, '.6g')}</td><td>{_num(sj, '.3g')}</td>"
-                        f"<td class=l>{_e(v.get('unit', ''))}</td></tr>")
-    return ("<table><tr><th class=l>state</th><th>final value</th><th>1σ</th><th class=l>unit (file)</th></tr>"
-            + "".join(rows) + "</table>")
+            u = unit[j] if isinstance(unit, tuple) and j < len(unit) else unit if not isinstance(unit, tuple) else ""
+            label = f"{title} {names[j]}" if names and j < len(names) else f"{title} [{j}]"
+            rows.append(f"<tr><td class=l>{_e(label)}</td><td class=l>{_e(key)}[{j}]</td><td>{_num(x, '.4g', k)}</td>"
+                        f"<td>{_num(sj, '.3g', k)}</td><td class=l>{_e(u)}</td></tr>")
+    return ("<table><tr><th class=l>state</th><th class=l>in summary.json</th><th>final value</th><th>1σ</th>"
+            "<th class=l>unit</th></tr>" + "".join(rows) + "</table>")
 
 
 def _config_section(run):
