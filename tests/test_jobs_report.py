@@ -283,3 +283,14 @@ def test_estimates_named_and_tabled_in_the_units_they_are_drawn_in(run_dir):
     bg = s["final_estimates"]["bg"]["values"][0]
     assert f"<td class=l>gyro bias x</td><td class=l>bg[0]</td><td>{bg / np.pi * 180 * 3600:.4g}</td>" in table
     assert "rad_s" not in table and "m_s2" not in table and ">mg<" in table
+
+
+def test_sigmas_span_decades_on_a_log_axis_and_the_gate_lines_have_room(run_dir):
+    """Sigmas from 1 cm (aided) to 5 m (an outage's end) on a linear axis
+    left the aided ones a line on zero; the innovation panels ended at the
+    data, the +-3 gate line on the frame under the next panel's title."""
+    fig, _ = _figure(run_dir, "sigmas")
+    assert fig.layout.yaxis.type == "log" and "(log)" in fig.layout.yaxis.title.text  # position
+    fig, _ = _figure(run_dir, "innovations")
+    for ax in (fig.layout.yaxis, fig.layout.yaxis2):
+        assert list(ax.autorangeoptions.include) == [-4.5, 4.5]

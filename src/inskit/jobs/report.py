@@ -51,6 +51,9 @@ TIME_SERIES_BINS = 600
 TRACK_POINTS = 3000
 INNOVATION_POINTS = 2000
 
+#: a sigma panel spanning more than this ratio (largest / smallest) has a log axis
+SIGMA_LOG_SPAN = 100.0
+
 #: measurement names that carry GNSS (their update times mark the fixes)
 GNSS_MEASUREMENTS = ("gnss_pos", "gnss_vel", "pseudorange", "pseudorange_rate")
 
@@ -410,7 +413,14 @@ def _fig_sigmas(run, go, make_subplots):
                               legendgroup=f"{label}{axis}", showlegend=r == 1)
                 dec |= d
                 fig.add_trace(tr, row=r, col=1)
-        fig.update_yaxes(title_text=f"{what} 1σ [{unit}]", rangemode="tozero", row=r, col=1)
+        v = np.concatenate([sol.extra[c] for sol in (run.forward, run.smoothed) if sol is not None for c in cols]) * k
+        v = v[np.isfinite(v) & (v > 0)]
+        if len(v) and v.max() > SIGMA_LOG_SPAN * v.min():
+            # decades (centimetres aided, metres at an outage's end): a linear axis showed the aided
+            # sigmas as a line on zero, the figure a filter is judged by
+            fig.update_yaxes(title_text=f"{what} 1σ [{unit}] (log)", type="log", row=r, col=1)
+        else:
+            fig.update_yaxes(title_text=f"{what} 1σ [{unit}]", rangemode="tozero", row=r, col=1)
     _shade(fig, run, len(blocks))
     _layout(fig, 250 * len(blocks) + 80, "Filter sigmas (1σ, N/E/D; grey: GNSS outages)")
     fig.update_xaxes(title_text=f"time after {run.t0_how.split(' (')[0]} [s]", row=len(blocks), col=1)
@@ -421,7 +431,7 @@ def _fig_innovations(run, go, make_subplots):
     if not run.innov:
         return None, False
     names = list(run.innov)
-    fig = make_subplots(rows=len(names), cols=1, shared_xaxes=True, vertical_spacing=0.06 / max(1, len(names) - 1)
+    fig = make_subplots(rows=len(names), cols=1, shared_xaxes=True, vertical_spacing=0.2 / max(1, len(names) - 1)
                         if len(names) > 1 else 0.0, subplot_titles=names)
     dec = False
     for r, name in enumerate(names, start=1):
@@ -443,7 +453,9 @@ def _fig_innovations(run, go, make_subplots):
                           row=r, col=1)
         for g in (-3, 3):
             fig.add_hline(y=g, line=dict(color="#555", width=1, dash="dash"), row=r, col=1)
-        fig.update_yaxes(title_text="ν/σ", row=r, col=1)
+        # the gate lines inside the frame with room above: on the frame's edge, the next panel's
+        # title was written over the dashed line
+        fig.update_yaxes(title_text="ν/σ", autorangeoptions=dict(include=[-4.5, 4.5]), row=r, col=1)
     _shade(fig, run, len(names))
     _layout(fig, 200 * len(names) + 100, "Innovations normalised by their sigma (dashed: ±3 gate)")
     fig.update_xaxes(title_text=f"time after {run.t0_how.split(' (')[0]} [s]", row=len(names), col=1)
