@@ -101,6 +101,20 @@ def decimate(n, ys, max_points=MAX_POINTS):
     return idx[idx < n]
 
 
+def decimate_scatter(n, y, max_points=MAX_POINTS):
+    """Indices of at most ``max_points`` of ``n`` scattered samples ``y``
+    that show both their extremes and their bulk: half the points are the
+    minimum and maximum of each bin (:func:`decimate`), the rest an even
+    stride over all samples.  The extremes alone draw a cloud of
+    innovations as two bands at its edges, none near zero where most lie
+    (the 8 h drive's 26 000 fixes looked bimodal at +-2 sigma)."""
+    if n <= max_points:
+        return np.arange(n)
+    ext = decimate(n, [y], max_points // 2)
+    rest = np.linspace(0, n - 1, max(0, max_points - len(ext))).astype(np.int64)
+    return np.unique(np.concatenate([ext, rest]))
+
+
 def envelope(t, y, nbins):
     """Min/max envelope of ``y(t)`` on ``nbins`` equal time bins: two values a
     bin (its minimum, then its maximum), drawn at the quarter and three-quarter
@@ -443,7 +457,7 @@ def _fig_innovations(run, go, make_subplots):
             k = np.flatnonzero(m & np.isfinite(z))
             if not len(k):
                 continue
-            kk = k[decimate(len(k), [z[k]], INNOVATION_POINTS)]
+            kk = k[decimate_scatter(len(k), z[k], INNOVATION_POINTS)]
             dec |= len(kk) < len(k)
             fig.add_trace(go.Scatter(x=_round(v["t"][kk] - run.t0, 6), y=_round(z[kk], 3), mode="markers",
                                      name=label, legendgroup=label, showlegend=r == 1,
