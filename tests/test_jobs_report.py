@@ -309,3 +309,19 @@ def test_innovations_thinned_keep_their_bulk_as_well_as_their_extremes():
     assert z.argmax() in k and z.argmin() in k
     inner = np.mean(np.abs(z[k]) < 1.0)
     assert inner > 0.3, inner  # 68 % of the samples; the extremes alone give about 0
+
+
+def test_track_draws_the_fixes_under_the_solution(run_dir):
+    """The fixes' markers were added after the lines, so on a long drive
+    the grey and orange dots covered the forward line and its red outage
+    stretches; now every line is drawn after (over) every marker, and the
+    legend still lists the lines first."""
+    fig, _ = _figure(run_dir, "track")
+    modes = [t.mode for t in fig.data]
+    assert "markers" in modes and "lines" in modes
+    assert modes.index("lines") > max(i for i, m in enumerate(modes) if m == "markers")
+    names = [t.name for t in fig.data]
+    if "RTS smoother" in names:  # under the forward filter and its outage stretches
+        assert names.index("RTS smoother") < names.index("forward filter") < names.index("forward, in GNSS outage")
+    ranked = sorted(fig.data, key=lambda t: t.legendrank)
+    assert [t.name for t in ranked][:2] == ["forward filter", "forward, in GNSS outage"]

@@ -402,6 +402,14 @@ def _fig_track(run, go):
                     fig.add_trace(go.Scatter(x=_round(ned[k, 1]), y=_round(ned[k, 0]), mode="markers", name=label,
                                              marker=dict(size=3, color=colour)))
             break
+    # the fixes under the solution's lines (drawn first), the lines first in the legend: drawn after
+    # them, the grey and orange dots of a long drive covered the forward line and its red outage stretches
+    # (the smoother, close to the fixes, under the forward filter and its outage stretches, which it hid)
+    lines = [t for t in fig.data if t.mode == "lines"]
+    marks = [t for t in fig.data if t.mode != "lines"]
+    for i, t in enumerate(lines + marks):
+        t.legendrank = 1000 + i
+    fig.data = tuple(marks + sorted(lines, key=lambda t: t.name != "RTS smoother"))
     _layout(fig, 640, "Track: east/north from the first point [m]")
     fig.update_xaxes(title_text="east [m]")
     fig.update_yaxes(title_text="north [m]", scaleanchor="x", scaleratio=1)
