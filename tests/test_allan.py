@@ -180,3 +180,21 @@ def test_fit_allan_refuses_a_zero_curve():
     tau = np.logspace(-2, 2, 30)
     with pytest.raises(InputError, match="a constant signal has none: its deviation is zero"):
         fit_allan(tau, np.zeros_like(tau))
+
+
+def test_plot_names_the_fitted_terms_in_both_panels(monkeypatch, tmp_path):
+    """allan.png drew the white-noise, Gauss-Markov and rate-random-walk fits
+    as dotted, dashed and dash-dot lines that only the gyro panel's title
+    named (the accelerometer panel's three styles unexplained); now each
+    panel's legend names them beside the axes' colours."""
+    from inskit.analysis import allan as A
+
+    figs = []
+    monkeypatch.setattr(A, "save_figure", lambda fig, path, dpi=110: figs.append(fig))
+    A.plot_allan(allan_imu(_static_log()), tmp_path / "a.png", title="log")
+    for ax in figs[0].axes:
+        labels = [t.get_text() for t in ax.get_legend().get_texts()]
+        assert {"x", "y", "z", "measured", "white-noise fit", "Gauss-Markov fit"} <= set(labels), labels
+        styles = {ln.get_linestyle() for ln in ax.get_lines() if len(ln.get_xdata())}
+        named = {"-": "measured", ":": "white-noise fit", "--": "Gauss-Markov fit", "-.": "rate-random-walk fit"}
+        assert {named[s] for s in styles} <= set(labels)  # every style drawn is named

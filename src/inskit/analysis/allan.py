@@ -285,6 +285,7 @@ def plot_allan(res, path, title="Allan deviation"):
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
 
     from ..units import DEG_PER_HOUR, MICRO_G
 
@@ -306,8 +307,17 @@ def plot_allan(res, path, title="Allan deviation"):
         ax.set_xlabel("cluster time tau [s]")
         ax.set_ylabel(f"Allan deviation [{unit}]")
         ax.grid(True, which="both", alpha=0.3)
-        ax.legend(fontsize=8)
-    axes[0].set_title(f"{title}: gyros (dotted: white, dashed: Gauss-Markov, dash-dot: RRW)")
+        # the fitted terms named in each panel's legend (the gyro title alone named them, the
+        # accelerometers' not at all), in black: the colour is the axis
+        styles = [("-", 1.0, "measured"), (":", 0.8, "white-noise fit"), ("--", 0.6, "Gauss-Markov fit")]
+        if any(f is not None and f.rate_random_walk for f in fits):
+            styles.append(("-.", 0.8, "rate-random-walk fit"))
+        h, lab = ax.get_legend_handles_labels()
+        for ls, lw, name in styles:
+            h.append(Line2D([], [], ls=ls, lw=lw, color="k"))
+            lab.append(name)
+        ax.legend(h, lab, fontsize=8, ncol=2, loc="best")
+    axes[0].set_title(f"{title}: gyros")
     axes[1].set_title("accelerometers")
     fig.tight_layout()
     save_figure(fig, path, dpi=110)
