@@ -325,3 +325,21 @@ def test_track_draws_the_fixes_under_the_solution(run_dir):
         assert names.index("RTS smoother") < names.index("forward filter") < names.index("forward, in GNSS outage")
     ranked = sorted(fig.data, key=lambda t: t.legendrank)
     assert [t.name for t in ranked][:2] == ["forward filter", "forward, in GNSS outage"]
+
+
+def test_dozens_of_reasons_are_folded_below_the_first_twelve(run_dir, tmp_path):
+    """A lost filter's verdict held 46 reasons (a recovery each), listed one
+    a line: the page's first screen and a half were the list, the figures
+    below; now the first 12 are listed and the rest fold under 'N more
+    reasons and warnings', every one still on the page."""
+    from inskit.jobs.report import HEADER_ITEMS, _Run, _header
+
+    run = _Run(run_dir)
+    run.summary = dict(run.summary, health={"verdict": "unhealthy",
+                                            "reasons": [f"nhc: recovered at t = {k}.0 s" for k in range(46)],
+                                            "warnings": ["zupt: mean NIS 0.5"]})
+    text = _header(run)
+    head, _, folded = text.partition("<details>")
+    assert head.count("<li>") == HEADER_ITEMS + 1  # the twelve and the fold's own line
+    assert f"{47 - HEADER_ITEMS} more reasons and warnings" in folded
+    assert all(f"recovered at t = {k}.0 s" in text for k in range(46)) and "zupt: mean NIS 0.5" in folded

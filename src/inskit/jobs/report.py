@@ -51,6 +51,9 @@ TIME_SERIES_BINS = 600
 TRACK_POINTS = 3000
 INNOVATION_POINTS = 2000
 
+#: reasons and warnings listed open at the top of the page; the rest folded under one line
+HEADER_ITEMS = 12
+
 #: a sigma panel spanning more than this ratio (largest / smallest) has a log axis
 SIGMA_LOG_SPAN = 100.0
 
@@ -740,8 +743,12 @@ def _header(run):
     h = s.get("health") or {}
     verdict = str(h.get("verdict", "unknown"))
     fg, bg = _VERDICT_COLOURS.get(verdict, ("#333", "#eee"))
-    items = "".join(f"<li><b>reason:</b> {_e(r)}</li>" for r in h.get("reasons") or [])
-    items += "".join(f"<li>warning: {_e(w)}</li>" for w in h.get("warnings") or [])
+    lines = [f"<li><b>reason:</b> {_e(r)}</li>" for r in h.get("reasons") or []]
+    lines += [f"<li>warning: {_e(w)}</li>" for w in h.get("warnings") or []]
+    items = "".join(lines[:HEADER_ITEMS])
+    if len(lines) > HEADER_ITEMS:  # a lost filter's dozens of recoveries: folded, the figures still in view
+        items += (f"<li><details><summary>{len(lines) - HEADER_ITEMS} more reasons and warnings</summary><ul>"
+                  + "".join(lines[HEADER_ITEMS:]) + "</ul></details></li>")
     meta = (f"{_e(s.get('coupling', ''))} coupling, {_e(s.get('scheme', ''))} scheme, "
             f"{_e(s.get('solution', 'forward'))} solution scored; run folder {_e(run.dir.resolve())}")
     return (f"<header><h1>inskit run report: {_e(run.name)}</h1><p class=meta>{meta}</p>"
