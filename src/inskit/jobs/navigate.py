@@ -1437,9 +1437,11 @@ def health(out, gaps=(), rate_changes=()) -> dict:
       measurement gated row by row, such as one row per satellite);
     * 4 or more consecutive updates of a measurement rejected (a burst of
       bad input: the filter survived it, the data are still suspect);
-    * a measurement's mean NIS above 3 times its degrees of freedom (the
-      filter is overconfident by more than sqrt(3) in sigma; a consistent
-      filter averages 1 per degree of freedom);
+    * a measurement's mean NIS over its accepted updates above 3 times its
+      degrees of freedom (the filter is overconfident by more than sqrt(3)
+      in sigma; a consistent filter averages 1 per degree of freedom; the
+      rejected updates are judged by the two figures above, so that one
+      refused outlier does not make the filter look overconfident);
     * a sensor-bias estimate (gyro, accelerometer) more than 5 prior sigmas
       from its initial value, the prior being its initial sigma and the
       in-run process noise accumulated over the run
@@ -1475,7 +1477,13 @@ def health(out, gaps=(), rate_changes=()) -> dict:
             dof = int(dof)
         frac = c["rejected"] / n_upd if n_upd else 0.0
         mean_nis = float(nis.mean()) if len(nis) else None
-        per[name] = {"updates": n_upd, "rejected_fraction": frac, "mean_nis": mean_nis, "dof": dof}
+        # the consistency of what the filter used: a rejected update's NIS is judged by the rejection figures
+        # below (one refused fix 1 km off made the mean NIS 765 for 3 dof and the run 'overconfident')
+        ok = np.asarray(inn.get("accepted", []), bool)
+        used_nis = nis[ok] if len(ok) == len(nis) else nis
+        mean_used = float(used_nis.mean()) if len(used_nis) else None
+        per[name] = {"updates": n_upd, "rejected_fraction": frac, "mean_nis": mean_nis, "mean_nis_accepted": mean_used,
+                     "dof": dof}
         if c.get("rows"):  # gated row by row (one satellite each): judge the rows
             frac = c["rows_rejected"] / c["rows"]
             per[name].update(rows=c["rows"], rows_rejected=c["rows_rejected"], rejected_row_fraction=frac)
@@ -1494,12 +1502,13 @@ def health(out, gaps=(), rate_changes=()) -> dict:
                 if run >= HEALTH_MAX_REJECTION_RUN:
                     reasons.append(f"{name}: {run} consecutive updates rejected from t = "
                                    f"{float(np.asarray(inn['t'])[starts[j]]):.2f} s (a burst of bad input)")
-        if mean_nis is not None and dof:
-            if mean_nis > HEALTH_MAX_MEAN_NIS_PER_DOF * dof:
-                reasons.append(f"{name}: mean NIS {mean_nis:.2f} for {dof:.3g} degrees of freedom (filter "
+        if mean_used is not None and dof:
+            of = "" if len(used_nis) == len(nis) else f" of the {len(used_nis)} accepted updates"
+            if mean_used > HEALTH_MAX_MEAN_NIS_PER_DOF * dof:
+                reasons.append(f"{name}: mean NIS{of} {mean_used:.2f} for {dof:.3g} degrees of freedom (filter "
                                "overconfident)")
-            elif mean_nis < dof / 3.0:
-                warnings.append(f"{name}: mean NIS {mean_nis:.2f} for {dof:.3g} degrees of freedom (noise set "
+            elif mean_used < dof / 3.0:
+                warnings.append(f"{name}: mean NIS{of} {mean_used:.2f} for {dof:.3g} degrees of freedom (noise set "
                                 "conservatively)")
     lay = out.layout
     for b in lay.blocks:
