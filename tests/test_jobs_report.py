@@ -343,3 +343,13 @@ def test_dozens_of_reasons_are_folded_below_the_first_twelve(run_dir, tmp_path):
     assert head.count("<li>") == HEADER_ITEMS + 1  # the twelve and the fold's own line
     assert f"{47 - HEADER_ITEMS} more reasons and warnings" in folded
     assert all(f"recovered at t = {k}.0 s" in text for k in range(46)) and "zupt: mean NIS 0.5" in folded
+
+
+def test_a_fit_to_the_fixes_is_in_cm_below_a_metre_and_in_m_above():
+    """A lost filter's fit to the used fixes, 632 km, was shown as '63240570.38 cm' (a helper found it)."""
+    from inskit.jobs.report import _fit_rows
+
+    rows = {r[0].split(",")[1].strip(): r[1:] for r in _fit_rows({"gnss_on_horizontal_rms_m": 0.0047,
+                                                                    "gnss_on_vertical_rms_m": 632405.7038})[:2]}
+    assert rows["horizontal RMS (not an accuracy)"] == ("0.47", "cm")
+    assert rows["vertical RMS (not an accuracy)"] == ("632405.704", "m")

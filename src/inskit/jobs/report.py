@@ -613,15 +613,21 @@ def _num(x, fmt=".3f", scale=1.0):
     return "n/a" if x is None else format(float(x) * scale, fmt)
 
 
+def _length(x):
+    """A length [m] as (text, unit): centimetres below a metre (an RTK fit), metres above (a lost filter's
+    632 km was '63240570.38 cm')."""
+    if x is None:
+        return "n/a", "m"
+    return (format(float(x) * 100, ".2f"), "cm") if abs(float(x)) < 1.0 else (format(float(x), ".3f"), "m")
+
+
 def _fit_rows(s):
     """The GNSS-on rows of the summary table: the fit to the fixes the filter
     was fed (not an accuracy), or, when the fixes were only a reference
     (tight coupling), the accuracy against them."""
     if s.get("fixes_fused", True):
-        return [("fit to the used fixes, horizontal RMS (not an accuracy)",
-                 _num(s.get("gnss_on_horizontal_rms_m"), ".2f", 100), "cm"),
-                ("fit to the used fixes, vertical RMS (not an accuracy)",
-                 _num(s.get("gnss_on_vertical_rms_m"), ".2f", 100), "cm"),
+        return [("fit to the used fixes, horizontal RMS (not an accuracy)", *_length(s.get("gnss_on_horizontal_rms_m"))),
+                ("fit to the used fixes, vertical RMS (not an accuracy)", *_length(s.get("gnss_on_vertical_rms_m"))),
                 ("used fixes in the fit", _e(s.get("gnss_on_fixes", "n/a")), "")]
     return [("GNSS on, horizontal RMS against the reference fixes (never fused)",
              _num(s.get("gnss_on_h_vs_reference_fixes_rms_m")), "m"),
