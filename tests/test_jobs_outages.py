@@ -276,6 +276,16 @@ def test_navigate_warns_of_gnss_gaps_and_of_fixes_outside_the_imu_log(drive):
     assert len(w) == 1 and "after the last fix; not an outage of the protocol" in w[0] and "free-inertial" in w[0]
     w = gnss_coverage_warnings(t, res.imu.time[res.imu.time <= t[0] + 40.0])
     assert len(w) == 1 and "fixes lie outside the IMU log's span" in w[0]
+    # tight coupling: a stretch without reference fixes where the filter fused pseudoranges is not free-inertial
+    # (the blockage drive said it was, through blockages that kept 3, 2 and 1 satellites; a helper found it)
+    gap = (t > t[0] + 50.0) & (t < t[0] + 80.0)
+    ranges = np.arange(t[0], t[-1], 1.0)
+    w = gnss_coverage_warnings(t[~gap], res.imu.time, raw_update_time=ranges)
+    assert len(w) == 1 and "no reference fix over" in w[0] and "between two fixes" in w[0], w
+    assert 28 <= int(w[0].split("pseudoranges at ")[1].split()[0]) <= 31, w
+    assert "free-inertial" not in w[0]
+    w = gnss_coverage_warnings(t[~gap], res.imu.time, raw_update_time=ranges[(ranges < t[0] + 50) | (ranges > t[0] + 80)])
+    assert len(w) == 1 and "no pseudorange update either: the solution there is free-inertial" in w[0], w
 
 
 def test_the_start_up_looks_only_at_fixes_inside_the_imu_log(drive, tmp_path):

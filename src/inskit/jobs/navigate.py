@@ -1195,20 +1195,32 @@ def check_time_offset(cfg: NavigateConfig, s: dict, log=None) -> dict | None:
 OUTSIDE_IMU_WARN_S = 10.0
 
 
-def gnss_coverage_warnings(fix_time, imu_time) -> list[str]:
+def gnss_coverage_warnings(fix_time, imu_time, raw_update_time=None) -> list[str]:
     """The stretches of the IMU's span without GNSS fixes that no outage
     protocol asked for (:func:`.outages.gnss_data_gaps`: the solution is
     free-inertial there) and the fixes outside the IMU's span (not used) when
     they reach more than :data:`OUTSIDE_IMU_WARN_S` beyond it, in words;
-    empty when the logs cover each other."""
+    empty when the logs cover each other.
+
+    ``raw_update_time``: tight coupling, the times of the pseudorange
+    updates the filter accepted; the fixes are then only its reference, and
+    a stretch without them is free-inertial only where no such update
+    falls (a blockage that keeps one satellite is aided, not coasting)."""
     from .outages import gnss_data_gaps
 
     t0, t1 = float(imu_time[0]), float(imu_time[-1])
     out = []
+    raw = None if raw_update_time is None else np.unique(np.asarray(raw_update_time, float))
     for a, b in gnss_data_gaps(fix_time, t0, t1):
         where = ("before the first fix" if a == t0 else "after the last fix" if b == t1 else "between two fixes")
-        out.append(f"GNSS: no fix over {a:.3f}..{b:.3f} s ({b - a:.1f} s, {where}; not an outage of the protocol): "
-                   "the solution there is free-inertial")
+        if raw is None:
+            out.append(f"GNSS: no fix over {a:.3f}..{b:.3f} s ({b - a:.1f} s, {where}; not an outage of the "
+                       "protocol): the solution there is free-inertial")
+            continue
+        n = int(((raw > a) & (raw < b)).sum())
+        out.append(f"GNSS: no reference fix over {a:.3f}..{b:.3f} s ({b - a:.1f} s, {where}): not scored there; "
+                   + (f"the filter fused pseudoranges at {n} epochs in it" if n else
+                      "no pseudorange update either: the solution there is free-inertial"))
     ft = np.asarray(fix_time, float)
     outside = int(((ft < t0 - 1e-6) | (ft > t1 + 1e-6)).sum())
     beyond = max(0.0, t0 - float(ft[0])) + max(0.0, float(ft[-1]) - t1) if len(ft) else 0.0
@@ -1364,7 +1376,12 @@ def summary(res: NavigateResult) -> dict:
                              else "(given to navigate() in Python)")
         out["truth_errors"] = truth_errors(res, res.truth)
     out["health"] = health(fw, res.gaps or (), res.rate_changes or ())
-    out["health"]["warnings"] += gnss_coverage_warnings(res.gnss.time, res.imu.time)
+    raw_t = None
+    if res.raw is not None:  # tight coupling: the fixes are the reference; the ranges aid
+        inn = fw.innovations.get("pseudorange", {})
+        t_pr, ok = np.asarray(inn.get("t", []), float), np.asarray(inn.get("accepted", []), bool)
+        raw_t = t_pr[ok] if len(ok) == len(t_pr) else t_pr
+    out["health"]["warnings"] += gnss_coverage_warnings(res.gnss.time, res.imu.time, raw_t)
     if res.raw is not None:
         out["health"]["warnings"] += list(res.raw.warnings)
     out["health"]["warnings"] += aiding_warnings(res.aiding, fw.counts, res.imu.time, res.settings.scheme)
