@@ -508,3 +508,12 @@ def test_angles_up_to_a_full_turn_either_way_are_taken_and_documented():
     init = {r["key"]: r for r in config_doc.rows(InitSection)}
     assert init["rpy_deg"]["allowed"] == init["yaw_deg"]["allowed"] == ">= -360.0, <= 360.0"
     assert init["lon_deg"]["allowed"] == ">= -180.0, <= 360.0"
+
+
+def test_a_section_that_is_no_table_is_said_beside_an_override():
+    """config_from_dict({'imu': 3}, overrides={'imu': {...}}) was Python's "TypeError: 'int' object is not a
+    mapping" (a helper found it); a config that is no dict at all likewise."""
+    with pytest.raises(ConfigError, match=r"config: section 'imu' is int 3; expected a table of keys"):
+        config_from_dict({"imu": 3}, overrides={"imu": {"file": "a.csv"}})
+    with pytest.raises(ConfigError, match=r"config: a configuration is a dict of sections .*got list"):
+        config_from_dict([("imu", {})])

@@ -872,10 +872,17 @@ def _message(source, exc: ValidationError):
 
 def config_from_dict(data, *, base_dir=Path("."), source="config", overrides=None) -> NavigateConfig:
     """Validate a config given as a nested dict (``overrides`` merged per section)."""
+    if not isinstance(data, dict):
+        raise ConfigError(f"{source}: a configuration is a dict of sections (or a TOML file), got "
+                          f"{type(data).__name__}")
     data = dict(data)
     for sect, vals in (overrides or {}).items():
         if isinstance(vals, dict):
-            data[sect] = {**data.get(sect, {}), **vals}
+            have = data.get(sect, {})
+            if not isinstance(have, dict):  # '{"imu": 3}' beside an override of [imu]: said of the section
+                raise ConfigError(f"{source}: section '{sect}' is {type(have).__name__} {have!r}; expected a table "
+                                  "of keys (a dict)")
+            data[sect] = {**have, **vals}
         else:
             data[sect] = vals
     data["base_dir"] = base_dir
