@@ -880,6 +880,9 @@ def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None
            "files": {k: str(v) for k, v in files.items()}}
     files["json"] = out / "summary.json"
     res["files"]["json"] = str(files["json"])
+    # and what the study wrote before its results: its fingerprint (the resume's key) and the run parts
+    res["files"]["study"] = str(meta_path)
+    res["files"]["run_parts"] = sorted(str(p) for p in (out / "runs").glob("part-*.parquet"))
     # the four result files whole or none, as a set: a plot that failed (or Ctrl-C) left runs.parquet and
     # summary.parquet of this run beside no summary.json, or beside the one of an earlier run
     with staged_files(out) as stage:
@@ -920,5 +923,7 @@ def ranking_table(res) -> str:
                          f"{e['band_95_per_epoch'][1]:.2f}]")
     lines += [f"grade {r['name']!r}: {_fit_line(r)}" for r in res.get("grades", []) if r["source"] == "allan"]
     lines.append(f"runs: {res['runs_total']} ({res['runs_computed']} computed, {res['runs_reused']} reused); "
-                 f"{res['execution']['seconds']:.1f} s; files: {', '.join(res['files'].values())}")
+                 f"{res['execution']['seconds']:.1f} s; files: "
+                 f"{', '.join(v for k, v in res['files'].items() if k != 'run_parts')} and "
+                 f"{len(res['files'].get('run_parts', []))} run parts")
     return "\n".join(lines)
