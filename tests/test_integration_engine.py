@@ -348,3 +348,23 @@ def test_a_streamed_smoother_store_holds_the_nodes_of_the_whole_run(tmp_path):
     assert np.array_equal(got.nav.lla, ref.nav.lla) and np.array_equal(got.sigma, ref.sigma)
     store.remove()
     assert not (tmp_path / "st").exists()
+
+
+def test_lost_note_names_a_lost_filter_and_the_constraint_that_broke_it():
+    """A divergence's message says which measurements had been refused
+    before it (a ship's 8 h log with the default non-holonomic constraint was
+    lost after 6 s and stopped at 2616 s naming only the pole it reached)."""
+    from inskit.integration.engine import lost_note
+
+    names = ["gnss_pos", "nhc"]
+    rec_m = np.array([0] * 10 + [1] * 100)
+    rec_t = np.concatenate([np.arange(10.0), np.arange(100) * 0.1])
+    acc = np.zeros(110, bool)
+    acc[:2] = True  # two fixes used, then refused
+    acc[10:13] = True  # three constraint updates used
+    note = lost_note(names, rec_m, rec_t, acc)
+    assert "gnss_pos 2 of 10 updates used (80 % refused, the last at t = 1.0 s)" in note
+    assert "nhc 3 of 100 updates used (97 % refused" in note
+    assert "[constraints] nhc = false" in note
+    # a healthy record adds nothing
+    assert lost_note(names, rec_m, rec_t, np.ones(110, bool)) == ""

@@ -688,43 +688,59 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         lidx = U.layout_index(lay)
         C = np.empty((3, 3))
         chunk = max(N // 50, 1) if progress is not None else N + 1
-        reported = int(ctl[U.C_KDONE])
-        while True:
-            i = int(ctl[U.C_I])
-            ctl[U.C_KSTOP] = min((k_list[i] if i < n_items else N) + chunk, N + 1, segment_stop(int(ctl[U.C_KDONE])))
-            code = U.run_nodes(imu_arrays, nav, filt, model, outs, flags, items, meas, lidx,
-                               (gpar, thr), rstate, recs, recov, counts, store, nodes, dyn, fb, w_raw, C, ctl)
-            if progress is not None and ctl[U.C_KDONE] > reported:
-                progress(int(ctl[U.C_KDONE]) - reported)
-                reported = int(ctl[U.C_KDONE])
-            if code == U.DONE:
-                break
-            if code == U.CHUNK:
-                # a segment is handed on once full (its boundary node done), not at every progress chunk: a
-                # writer's cost is per segment (a short log cut into fifty pieces paid it fifty times)
-                if stream and int(ctl[U.C_KDONE]) >= segment_stop(max(int(obase[0]), 1)):
-                    flush(int(ctl[U.C_KDONE]))
-                continue
-            i = int(ctl[U.C_I])
-            if code == U.HANDBACK:
-                k_cur = int(ctl[U.C_KCUR])
-                C_nb = np.empty((3, 3))
-                K.dcm_into(q_nb, C_nb)
-                while i < n_items and k_list[i] == k_cur and (m_list[i] < 0 or not compiled_m[m_list[i]]):
-                    if m_list[i] >= 0:
-                        C_nb = python_item(i, k_cur, C_nb)
-                    i += 1
-                ctl[U.C_I] = i
-                continue
-            if code == U.BAD_INNOVATION:
-                raise FilterDivergence("the innovation is not finite: the filter diverged")
-            if code == U.NOT_PD:
-                raise FilterDivergence("innovation covariance is not positive definite: the filter diverged")
-            if code == U.BAD_ROWS:
-                raise FilterDivergence("the innovation or its variance is not finite and positive: the filter "
-                                       "diverged")
-            check_covariance(P, f"at t = {t_imu[int(ctl[U.C_KCUR])]:.3f} s")
-            raise FilterDivergence(f"covariance lost positiveness at t = {t_imu[int(ctl[U.C_KCUR])]:.3f} s")
+
+        def loop():
+            """Run the compiled loop to the end of the log; raise on a divergence."""
+            reported = int(ctl[U.C_KDONE])
+            while True:
+                i = int(ctl[U.C_I])
+                ctl[U.C_KSTOP] = min((k_list[i] if i < n_items else N) + chunk, N + 1,
+                                     segment_stop(int(ctl[U.C_KDONE])))
+                code = U.run_nodes(imu_arrays, nav, filt, model, outs, flags, items, meas, lidx,
+                                   (gpar, thr), rstate, recs, recov, counts, store, nodes, dyn, fb, w_raw, C, ctl)
+                if progress is not None and ctl[U.C_KDONE] > reported:
+                    progress(int(ctl[U.C_KDONE]) - reported)
+                    reported = int(ctl[U.C_KDONE])
+                if code == U.DONE:
+                    break
+                if code == U.CHUNK:
+                    # a segment is handed on once full (its boundary node done), not at every progress chunk: a
+                    # writer's cost is per segment (a short log cut into fifty pieces paid it fifty times)
+                    if stream and int(ctl[U.C_KDONE]) >= segment_stop(max(int(obase[0]), 1)):
+                        flush(int(ctl[U.C_KDONE]))
+                    continue
+                i = int(ctl[U.C_I])
+                if code == U.HANDBACK:
+                    k_cur = int(ctl[U.C_KCUR])
+                    C_nb = np.empty((3, 3))
+                    K.dcm_into(q_nb, C_nb)
+                    while i < n_items and k_list[i] == k_cur and (m_list[i] < 0 or not compiled_m[m_list[i]]):
+                        if m_list[i] >= 0:
+                            C_nb = python_item(i, k_cur, C_nb)
+                        i += 1
+                    ctl[U.C_I] = i
+                    continue
+                if code == U.BAD_INNOVATION:
+                    raise FilterDivergence("the innovation is not finite: the filter diverged")
+                if code == U.NOT_PD:
+                    raise FilterDivergence("innovation covariance is not positive definite: the filter diverged")
+                if code == U.BAD_ROWS:
+                    raise FilterDivergence("the innovation or its variance is not finite and positive: the filter "
+                                           "diverged")
+                check_covariance(P, f"at t = {t_imu[int(ctl[U.C_KCUR])]:.3f} s")
+                raise FilterDivergence(f"covariance lost positiveness at t = {t_imu[int(ctl[U.C_KCUR])]:.3f} s")
+
+        try:
+            loop()
+        except (FilterDivergence, InputError) as e:
+            # the failure is where a lost filter met a numerical wall, often long after it was lost: say how
+            # its measurements had fared (a ship's 8 h log with a land vehicle's constraint, lost after 6 s,
+            # stopped at 2616 s 'within 0.1 deg of a pole' and said nothing more)
+            nr = int(ctl[U.C_NREC])
+            note = lost_note([m.name for m in measurements], recs[0][:nr], recs[2][:nr], recs[4][:nr])
+            if not note:
+                raise
+            raise type(e)(f"{e}; {note}") from e
         nr = int(ctl[U.C_NREC])
         rec_m, rec_i, rec_t, rec_nis, rec_acc, rec_k, rec_off = (a[:nr] for a in recs[:7])
         rec_nu, rec_sig = recs[7], recs[8]
@@ -855,6 +871,63 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
     out.n_rows = N
     out.recoveries = recoveries
     return out
+
+
+#: a measurement refused in more than this fraction of its updates is named in a divergence's message
+LOST_FRACTION = 0.5
+
+
+def lost_note(names, rec_m, rec_t, rec_acc):
+    """What a divergence's message adds: the measurements refused in more
+    than :data:`LOST_FRACTION` of their updates before it, each with its
+    counts and its last accepted update, or ``""`` when none was.
+
+    A filter lost early (its fixes refused from the first seconds on) can run
+    for hours before its covariance or its latitude meets a numerical limit;
+    the limit's own words ("covariance lost positiveness at t = ...") then
+    point at the wrong time and the wrong cause.  A non-holonomic constraint
+    refused in most of its updates is named as the likely cause: it is a land
+    vehicle's, and a vessel's heave (0.8 m/s for 1 m at 8 s), an aircraft or a
+    handheld device breaks it; the filter then takes the body's vertical
+    velocity for a pitch error (heave rate / speed, 5.6 deg at 8 m/s), which
+    leaks gravity into the horizontal channels and drives the fixes out of the
+    gate.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The measurements' names, by index.
+    rec_m : (r,) int array
+        Measurement index of each update record so far.
+    rec_t : (r,) float array
+        Time of each record [s].
+    rec_acc : (r,) bool array
+        Whether each update was accepted.
+
+    Returns
+    -------
+    str
+    """
+    parts, nhc = [], False
+    for mi, name in enumerate(names):
+        sel = rec_m == mi
+        n = int(sel.sum())
+        if not n:
+            continue
+        acc = rec_acc[sel]
+        used = int(acc.sum())
+        if n - used <= LOST_FRACTION * n:
+            continue
+        last = (f"the last at t = {float(rec_t[sel][acc][-1]):.1f} s" if used else "none accepted")
+        parts.append(f"{name} {used} of {n} updates used ({100.0 * (n - used) / n:.0f} % refused, {last})")
+        nhc = nhc or name == "nhc"
+    if not parts:
+        return ""
+    note = "before it the filter was lost: " + "; ".join(parts)
+    if nhc:
+        note += (" (the non-holonomic constraint, a land vehicle's, does not hold for this vehicle: a vessel's "
+                 "heave, an aircraft or a handheld device breaks it; set [constraints] nhc = false)")
+    return note
 
 
 def _check_rows(t, a, lla, v, q):
