@@ -877,3 +877,25 @@ def test_tight_coupling_says_what_the_readers_and_the_single_point_solution_foun
     assert skipped and skipped[0].startswith(str(data / "gnss_1730.nav"))
     assert any(skipped[0] in m for m in logged)
     assert not raw.warnings  # a note, not a health warning: nothing is wrong with the run
+
+
+def test_a_constraint_refused_in_most_updates_is_named_as_not_holding():
+    """The 8 h ship with the default non-holonomic constraint (a land vehicle's) was lost from its first seconds:
+    its verdict said only 'nhc: 25395 of 26099 updates rejected (97%)'.  Now the reason says the constraint does
+    not hold for the vehicle and how to turn it off; a few refusals keep the plain wording."""
+    from types import SimpleNamespace
+
+    from inskit.jobs.navigate import health
+
+    def out(used, rejected):
+        acc = np.r_[np.ones(used, bool), np.zeros(rejected, bool)]
+        inn = {"t": np.arange(len(acc), dtype=float), "nis": np.ones(len(acc)), "accepted": acc,
+               "dof": np.full(len(acc), 2.0)}
+        return SimpleNamespace(counts={"nhc": {"used": used, "rejected": rejected, "skipped": 0}},
+                               innovations={"nhc": inn}, layout=SimpleNamespace(blocks=[]), recoveries=[])
+
+    r = health(out(705, 25395))["reasons"]
+    assert any(x.startswith("nhc: 25395 of 26100 updates rejected (97%): the non-holonomic constraint, a land "
+                            "vehicle's, does not hold") and "nhc = false" in x for x in r), r
+    r = health(out(90, 10))["reasons"]
+    assert "nhc: 10 of 100 updates rejected (10%)" in r, r

@@ -1445,6 +1445,10 @@ HEALTH_BIAS_BLOCKS = ("bg", "ba")
 HEALTH_MAX_REJECTION_RUN = 4
 
 
+#: the non-holonomic constraint refused in more than this fraction of its updates is named as not holding
+NHC_BROKEN_FRACTION = 0.5
+
+
 def health(out, gaps=(), rate_changes=()) -> dict:
     """The verdict on a filter run: is the result to be trusted?
 
@@ -1507,7 +1511,12 @@ def health(out, gaps=(), rate_changes=()) -> dict:
             if frac > HEALTH_MAX_REJECTED_FRACTION:
                 reasons.append(f"{name}: {c['rows_rejected']} of {c['rows']} rows rejected ({frac:.0%})")
         elif frac > HEALTH_MAX_REJECTED_FRACTION:
-            reasons.append(f"{name}: {c['rejected']} of {n_upd} updates rejected ({frac:.0%})")
+            hint = ""
+            if name == "nhc" and frac > NHC_BROKEN_FRACTION:  # the constraint itself is wrong for this vehicle
+                hint = (": the non-holonomic constraint, a land vehicle's, does not hold for this vehicle (a "
+                        "vessel's heave, an aircraft, a handheld device) or its mounting; set [constraints] nhc "
+                        "= false")
+            reasons.append(f"{name}: {c['rejected']} of {n_upd} updates rejected ({frac:.0%}){hint}")
         acc = np.asarray(inn.get("accepted", []), bool)
         if len(acc):  # the longest run of consecutive rejections: a burst of bad input, even when survived
             edges = np.diff(np.r_[0, (~acc).astype(np.int8), 0])
