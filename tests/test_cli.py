@@ -508,21 +508,26 @@ def test_simulate_force_never_deletes_a_folder_of_an_output_name(capsys, tmp_pat
     assert sorted(p.name for p in out.iterdir()) == ["scenario.png"]
 
 
+def _static_log(path, seed):
+    """130 s of a static IMU at 10 Hz with white noise, as increments."""
+    from inskit.types import ImuData
+
+    rng = np.random.default_rng(seed)
+    n = 1300
+    t = np.arange(n) * 0.1
+    dth = rng.normal(0.0, 1e-5, (n, 3))
+    dv = rng.normal(0.0, 1e-4, (n, 3)) + [0.0, 0.0, -0.981]
+    dth[0] = dv[0] = 0.0
+    io.write_imu(path, ImuData(t, dth, dv))
+
+
 def test_allan_writes_its_plot_and_toml_as_a_set(tmp_path, capsys, monkeypatch):
     """--plot and --toml were written one after the other: a TOML that could not be written (disk full) left
     the new plot in place of the old one, beside a failed command.  Now both land or neither; the earlier
     files stay as they were and no temporary file is left in either folder."""
     import inskit.files as F
 
-    rng = np.random.default_rng(5)
-    n = 1300
-    t = np.arange(n) * 0.1
-    dth = rng.normal(0.0, 1e-5, (n, 3))
-    dv = rng.normal(0.0, 1e-4, (n, 3)) + [0.0, 0.0, -0.981]
-    dth[0] = dv[0] = 0.0
-    from inskit.types import ImuData
-
-    io.write_imu(tmp_path / "static.csv", ImuData(t, dth, dv))
+    _static_log(tmp_path / "static.csv", seed=5)
     (tmp_path / "p").mkdir()
     (tmp_path / "t").mkdir()
     plot, toml = tmp_path / "p" / "allan.png", tmp_path / "t" / "noise.toml"
@@ -552,15 +557,7 @@ def test_allan_makes_the_plot_folder_before_the_work(tmp_path, capsys):
     """`allan LOG --plot new/a.png` (a folder not there yet) ran the whole analysis, then failed with
     'new/.part-NNN-a.png: could not be written (No such file or directory)' (exit 2), naming a temporary
     file; the folder is now made before the work, as --toml's is (and removed again when the command fails)."""
-    rng = np.random.default_rng(6)
-    n = 1300
-    t = np.arange(n) * 0.1
-    dth = rng.normal(0.0, 1e-5, (n, 3))
-    dv = rng.normal(0.0, 1e-4, (n, 3)) + [0.0, 0.0, -0.981]
-    dth[0] = dv[0] = 0.0
-    from inskit.types import ImuData
-
-    io.write_imu(tmp_path / "static.csv", ImuData(t, dth, dv))
+    _static_log(tmp_path / "static.csv", seed=6)
     plot = tmp_path / "new" / "deeper" / "a.png"
     code, out, err = _in_process(capsys, "allan", tmp_path / "static.csv", "--plot", plot, "--json")
     assert code == 0 and json.loads(out)["plot"] == str(plot), err

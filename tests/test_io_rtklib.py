@@ -125,19 +125,6 @@ def _write_pos(path, header, rows):
     return path
 
 
-@pytest.mark.parametrize("tsys, shift_s", [("UTC", -18.0), ("JST", 9 * 3600.0 - 18.0)])
-def test_utc_and_jst_stamps_are_made_gps_time(tmp_path, tsys, shift_s):
-    """RTKLIB writes UTC or JST stamps when out-timesys says so, and names it in the column header; they
-    were read as GPS time, 18 s (JST: 9 h) off, and navigate blamed the IMU's time tags."""
-    header, rows = _pos_rows()
-    ref, week = read_pos(_write_pos(tmp_path / "gpst.pos", header, rows))
-    p = _write_pos(tmp_path / f"{tsys}.pos", header.replace("GPST", tsys.ljust(4)), _shifted(rows, shift_s))
-    g, w = read_pos(p)
-    assert w == week
-    np.testing.assert_allclose(g.time, ref.time, rtol=0, atol=1e-9)
-    np.testing.assert_array_equal(g.lla, ref.lla)
-
-
 def test_utc_stamps_take_the_leap_seconds_of_their_date(tmp_path):
     """GPS - UTC was 17 s before 2017-01-01, 18 s from then on: a UTC file across that midnight."""
     header, rows = _pos_rows(2)
@@ -165,13 +152,18 @@ def _week_tow(rows):
     return out
 
 
-@pytest.mark.parametrize("tsys, shift_s", [("GPST", 0.0), ("UTC", -18.0)])
-def test_week_and_seconds_of_week_stamps_are_read(tmp_path, tsys, shift_s):
-    """RTKLIB's out-timeform = tow writes '2374   243258.499' for the date and time; such a file was refused
-    ('line with time '2374 243258.499': expected YYYY/MM/DD HH:MM:SS.sss')."""
+@pytest.mark.parametrize("tsys, shift_s, form", [("UTC", -18.0, "calendar"), ("JST", 9 * 3600.0 - 18.0, "calendar"),
+                                                 ("GPST", 0.0, "tow"), ("UTC", -18.0, "tow")])
+def test_time_systems_and_forms_are_read_as_gps_time(tmp_path, tsys, shift_s, form):
+    """RTKLIB writes UTC or JST stamps when out-timesys says so, and names it in the column header; they
+    were read as GPS time, 18 s (JST: 9 h) off, and navigate blamed the IMU's time tags.  Its out-timeform =
+    tow writes '2374   243258.499' for the date and time; such a file was refused ('line with time '2374
+    243258.499': expected YYYY/MM/DD HH:MM:SS.sss')."""
     header, rows = _pos_rows()
-    ref, week = read_pos(_write_pos(tmp_path / "calendar.pos", header, rows))
-    p = _write_pos(tmp_path / "tow.pos", header.replace("GPST", tsys.ljust(4)), _week_tow(_shifted(rows, shift_s)))
+    ref, week = read_pos(_write_pos(tmp_path / "gpst.pos", header, rows))
+    rows = _shifted(rows, shift_s)
+    p = _write_pos(tmp_path / f"{tsys}.pos", header.replace("GPST", tsys.ljust(4)),
+                   _week_tow(rows) if form == "tow" else rows)
     g, w = read_pos(p)
     assert w == week
     np.testing.assert_allclose(g.time, ref.time, rtol=0, atol=1e-9)

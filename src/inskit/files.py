@@ -74,19 +74,29 @@ def staged_files(folder):
     shutil.rmtree(tmp, ignore_errors=True)
 
 
-def _commit(staged, previous):
-    """Move each staged file to its final name; should any move fail (or be
-    interrupted), undo the ones made: the files they replaced come back from
-    ``previous``, the new ones go, and the error is raised."""
-    previous.mkdir()
-    moved = []  # (final, the file it replaced or None)
+def _move_set(pairs, aside):
+    """Move each staged file to its final name, ``pairs`` of ``(part,
+    final)`` in order (a part that was never written is passed over), the
+    file a final name held moved to ``aside(k, final)`` first and the
+    folders a final name needs made; should any move fail (or be
+    interrupted), undo the ones made: the files they replaced come back,
+    the new ones and the folders made for them go, and the error is raised.
+    Returns ``(final, the file it replaced or None)`` of each move, for the
+    caller to drop the replaced files once the set is in place.  The one
+    commit of :func:`staged_files`, :func:`staged_paths` and
+    :func:`staged_tree`."""
+    moved, made = [], []
     try:
-        for final, part in staged.items():
+        for k, (part, final) in enumerate(pairs):
             if not part.exists():
                 continue
+            for d in reversed(final.parents):
+                if not d.exists():
+                    d.mkdir()
+                    made.append(d)
             old = None
             if final.exists():
-                old = previous / final.name
+                old = aside(k, final)
                 os.replace(final, old)
             moved.append((final, old))
             os.replace(part, final)
@@ -99,7 +109,21 @@ def _commit(staged, previous):
                     final.unlink(missing_ok=True)
             except OSError:
                 pass
+        for d in reversed(made):
+            try:
+                d.rmdir()
+            except OSError:
+                pass
         raise
+    return moved
+
+
+def _commit(staged, previous):
+    """Move each staged file (``{final: part}``) to its final name, the
+    files they replace into the folder ``previous`` (:func:`_move_set`:
+    undone should a move fail)."""
+    previous.mkdir()
+    _move_set([(part, final) for final, part in staged.items()], lambda k, final: previous / final.name)
 
 
 @contextmanager
@@ -141,31 +165,23 @@ def staged_paths():
     except BaseException:
         drop_parts()
         raise
-    moved = []  # (final, its earlier file moved aside or None)
-    current = None
-    try:
+    current = []  # the final name being moved, for the message
+
+    def aside(k, final):
+        return final.with_name(f".previous-{os.getpid()}-{final.name}")
+
+    def pairs():
         for final, part in staged.items():
-            current = final
-            if not part.exists():
-                continue
-            old = None
-            if final.exists():
-                old = final.with_name(f".previous-{os.getpid()}-{final.name}")
-                os.replace(final, old)
-            moved.append((final, old))
-            os.replace(part, final)
+            current[:] = [final]
+            yield part, final
+
+    try:
+        moved = _move_set(pairs(), aside)
     except BaseException as exc:
-        for final, old in reversed(moved):
-            try:
-                if old is not None:
-                    os.replace(old, final)
-                else:
-                    final.unlink(missing_ok=True)
-            except OSError:
-                pass
         drop_parts()
         if isinstance(exc, OSError):
-            raise InputError(f"{current}: could not be written ({exc.strerror or exc})") from None
+            raise InputError(f"{current[0] if current else 'an output'}: could not be written "
+                             f"({exc.strerror or exc})") from None
         raise
     for _, old in moved:
         if old is not None:
@@ -210,34 +226,7 @@ def staged_tree(folder, last=()):
         finals = [folder / p.relative_to(tmp) for p in parts]
         check_outputs(finals, (), overwrite=True)  # a folder of the user's in a file's place is not replaced
         previous = Path(tempfile.mkdtemp(prefix=".previous-", dir=folder))
-        moved, made = [], []  # (final, the file it replaced or None); folders made for them
-        try:
-            for k, (part, final) in enumerate(zip(parts, finals)):
-                for d in reversed(final.parents):
-                    if not d.exists():
-                        d.mkdir()
-                        made.append(d)
-                old = None
-                if final.exists():
-                    old = previous / str(k)
-                    os.replace(final, old)
-                moved.append((final, old))
-                os.replace(part, final)
-        except BaseException:
-            for final, old in reversed(moved):
-                try:
-                    if old is not None:
-                        os.replace(old, final)
-                    else:
-                        final.unlink(missing_ok=True)
-                except OSError:
-                    pass
-            for d in reversed(made):
-                try:
-                    d.rmdir()
-                except OSError:
-                    pass
-            raise
+        _move_set(list(zip(parts, finals)), lambda k, final: previous / str(k))
     except OSError as exc:
         raise InputError(f"{folder}: the results could not be written ({exc.strerror or exc})") from None
     except InputError as exc:  # a writer's message names the file as it will be, not in the staging folder
