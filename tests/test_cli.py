@@ -198,6 +198,7 @@ def test_simulate_navigate_evaluate_pipeline(tmp_path):
     assert s["horizontal_m"]["rms"] < 1.0  # 0.5 m white GNSS noise, filtered
     assert abs(s["roll_arcmin"]["final"]) < 30 and abs(s["pitch_arcmin"]["final"]) < 30
     assert not [w for w in nav["health"]["warnings"] if "radians" in w]
+    assert "constraint_check" not in nav  # a car: the default non-holonomic constraint holds and stays
     # a truth whose attitude columns hold radians under their _deg headers is said by navigate --truth too
     import pandas as pd
 

@@ -198,7 +198,7 @@ def navigate(config, *, smooth=False, truth=None, out_dir=None, overwrite=False,
     if truth is not None and not isinstance(truth, NavSolution):
         truth = io.read_solution(truth)
     cfg, extra = N.calibrated_config(cfg, log=log)  # [imu] time_offset_search = "calibrate"
-    res = N.navigate(cfg, smooth=smooth, progress=progress, log=log, truth=truth)
+    res = N.run(cfg, smooth=smooth, progress=progress, log=log, truth=truth)
     s = N.summary(res)  # truth_errors and the outages scored against the truth, as with --truth
     s.update(extra)
     N.check_time_offset(cfg, s, log=log)  # unhealthy GNSS updates: is it the IMU's time tags?

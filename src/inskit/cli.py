@@ -388,7 +388,7 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
     check_folder_writable(target)  # before the computation, not after it
     cfg, extra = N.calibrated_config(cfg, log=_log)
     with _progress(None, "navigate") as bar:
-        res = N.navigate(cfg, smooth=smooth, progress=bar.update, log=_log, stream_dir=target)
+        res = N.run(cfg, smooth=smooth, progress=bar.update, log=_log, stream_dir=target)
     try:
         s = N.summary(res)
         s.update(extra)

@@ -478,7 +478,9 @@ class ConstraintsSection(_Strict):
     zupt: bool = Field(True, description="zero-velocity updates while the GNSS fixes show the vehicle at rest")
     zupt_sigma_m_s: float = Field(0.02, gt=0, description="sigma of a zero-velocity update per axis")
     nhc: bool = Field(True, description="non-holonomic constraint: no lateral or vertical velocity in body axes "
-                      "(a land vehicle; off for a handheld device)")
+                      "(a land vehicle; off for a handheld device, a vessel, an aircraft). Left at its default, a "
+                      "constraint refused in more than half its updates is dropped and the run made again "
+                      "without it (the summary's constraint_check says so); set true or false, it is kept as set")
     nhc_sigma_m_s: float = Field(0.1, gt=0, description="sigma of the lateral and vertical body velocity")
     nhc_lever_arm_b_m: tuple[float, float, float] = Field(
         (0.0, 0.0, 0.0), description="IMU to the point where the non-holonomic constraint holds (the centre "

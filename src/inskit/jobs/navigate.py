@@ -52,6 +52,7 @@ class NavigateResult:
     truth_parts: dict = None  #: a streamed run's truth errors, segment by segment (``analysis.ErrorSummary``)
     imu_notes: dict = None  #: what the IMU reader found (repeated rows), when navigate read the files
     aiding: list = None  #: the aiding logs fused: ``(what, file, measurement)`` (:func:`aiding_warnings`)
+    constraint_check: dict = None  #: the default NHC found not to hold and the run made without it (:func:`run`)
 
 
 def finish_streams(res: NavigateResult) -> None:
@@ -673,6 +674,56 @@ def _uncoupled_track(imu, initial, gnss, used, lever, settings):
                         {"gnss_pos": {"used": int(used.sum()), "rejected": 0, "skipped": 0}},
                         {"gnss_pos": {"t": np.empty(0), "nu": np.empty((0, 3)), "sigma": np.empty((0, 3)),
                                       "nis": np.empty(0), "accepted": np.empty(0, bool)}}, settings, None)
+
+
+def nhc_broken(res: NavigateResult) -> str | None:
+    """Why the non-holonomic constraint does not hold in this run (refused
+    in more than :data:`NHC_BROKEN_FRACTION` of its updates), or None."""
+    c = res.forward.counts.get("nhc")
+    if not c:
+        return None
+    n = c["used"] + c["rejected"]
+    if n and c["rejected"] > NHC_BROKEN_FRACTION * n:
+        return f"{c['rejected']} of {n} of its updates refused ({c['rejected'] / n:.0%})"
+    return None
+
+
+def run(cfg: NavigateConfig, *, log=None, stream_dir=None, **kw) -> NavigateResult:
+    """:func:`navigate`, and again without the non-holonomic constraint when
+    it was on by default (not set by the user) and does not hold.
+
+    The constraint (no lateral or vertical body velocity) is a land
+    vehicle's; a vessel's heave, an aircraft's angle of attack or a
+    handheld device breaks it, and the filter then takes the body's
+    vertical velocity for a pitch error whose gravity leak drives the fixes
+    out of the gate (an 8 h ship was lost from its sixth second and stopped
+    hours later 'within 0.1 deg of a pole').  A run whose constraint was
+    refused in most of its updates (:func:`nhc_broken`), or that failed
+    naming it, is made again with ``[constraints] nhc = false``; the
+    result's ``constraint_check`` (the summary's) says so.  A constraint the
+    user set is kept as set: the health verdict names it when it fails.
+    """
+    from ..filters.kalman import FilterDivergence
+
+    default = cfg.constraints.nhc and "nhc" not in cfg.constraints.model_fields_set
+    try:
+        res = navigate(cfg, log=log, stream_dir=stream_dir, **kw)
+    except (FilterDivergence, InputError) as exc:
+        if not (default and "non-holonomic constraint" in str(exc)):
+            raise
+        why = f"the run failed ({str(exc).split(';')[0]}) with the constraint refused before it"
+    else:
+        why = nhc_broken(res) if default else None
+        if why is None:
+            return res
+        abort_streams(res)
+    if log:
+        log(f"warning: the non-holonomic constraint (on by default: a land vehicle's) does not hold for this "
+            f"vehicle ({why}); navigating again without it ([constraints] nhc = false; set nhc = true to keep it)")
+    off = cfg.model_copy(update={"constraints": cfg.constraints.model_copy(update={"nhc": False})})
+    res = navigate(off, log=log, stream_dir=stream_dir, **kw)
+    res.constraint_check = {"nhc": "dropped", "why": why}
+    return res
 
 
 def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=None, log=None,
@@ -1376,6 +1427,11 @@ def summary(res: NavigateResult) -> dict:
                              else "(given to navigate() in Python)")
         out["truth_errors"] = truth_errors(res, res.truth)
     out["health"] = health(fw, res.gaps or (), res.rate_changes or ())
+    if res.constraint_check:  # the default constraint did not hold: the run was made again without it
+        out["constraint_check"] = dict(res.constraint_check)
+        out["health"]["warnings"].append(
+            f"the non-holonomic constraint (on by default) did not hold for this vehicle ({res.constraint_check['why']}): "
+            "these results are of a run without it ([constraints] nhc = false)")
     raw_t = None
     if res.raw is not None:  # tight coupling: the fixes are the reference; the ranges aid
         inn = fw.innovations.get("pseudorange", {})
