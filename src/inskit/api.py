@@ -201,7 +201,7 @@ def navigate(config, *, smooth=False, truth=None, out_dir=None, overwrite=False,
     res = N.run(cfg, smooth=smooth, progress=progress, log=log, truth=truth)
     s = N.summary(res)  # truth_errors and the outages scored against the truth, as with --truth
     s.update(extra)
-    N.check_time_offset(cfg, s, log=log)  # unhealthy GNSS updates: is it the IMU's time tags?
+    N.check_time_offset(res.config, s, log=log)  # unhealthy GNSS updates: is it the IMU's time tags?
     files = []
     if target is not None:
         files = N.write_outputs(res, target, s, replace_previous=overwrite)

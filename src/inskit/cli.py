@@ -392,7 +392,7 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
     try:
         s = N.summary(res)
         s.update(extra)
-        N.check_time_offset(cfg, s, log=_log)
+        N.check_time_offset(res.config, s, log=_log)  # the run's own (its constraint check may have changed it)
         text_extra = N.truth_errors_text(s["truth_errors"]) if "truth_errors" in s else ""
         if not as_json:  # the result first: the files and plots (a second or two) follow
             _emit(s, False, N.outage_table_text(s) + text_extra)
