@@ -461,3 +461,31 @@ def test_a_number_cut_short_is_refused_not_misread(tmp_path):
     with pytest.raises(InputError, match=rf"cut.obs: line {k + 1}: columns 36-49: .* \(observation D1C\) does not "
                                          "end at column 49"):
         read_obs(p)
+
+
+@pytest.mark.parametrize("src", [WALK_OBS, ABPO_OBS], ids=["rinex3", "rinex2"])
+def test_lower_case_system_letters_read_as_upper_case(tmp_path, src):
+    """Satellite names with a lower-case system letter ('g05', 'e11', as some
+    converters write) were taken for a system 'g' of their own (spp: the file
+    holds 'g (g): 6 satellites') and a file written wholly in lower case was
+    'not a RINEX file'; both now read as the upper-case file does."""
+    lines = src.read_text().split("\n")
+    body = next(i for i, line in enumerate(lines) if "END OF HEADER" in line) + 1
+    if src == WALK_OBS:
+        low = [line[:1].lower() + line[1:] if line[:1] in "GES" else line for line in lines[body:]]
+    else:
+        low = [line[:32] + line[32:].lower() if line[:1] == " " and line[3:4] == " " else line
+               for line in lines[body:]]
+    assert low != lines[body:]
+    names = tmp_path / "names.obs"
+    names.write_text("\n".join(lines[:body] + low))
+    whole = tmp_path / "whole.obs"
+    whole.write_text(src.read_text().lower())
+    ref = read_obs(src, systems=("G", "E", "S"))
+    for p in (names, whole):
+        obs = read_obs(p, systems=("G", "E", "S"))
+        assert obs.sats == ref.sats and obs.header["satellites_by_system"] == ref.header["satellites_by_system"]
+        assert set(obs.obs) == set(ref.obs)
+        np.testing.assert_array_equal(obs.time, ref.time)
+        for code in ref.obs:
+            np.testing.assert_array_equal(obs.obs[code], ref.obs[code], err_msg=f"{p.name} {code}")

@@ -139,10 +139,18 @@ def _read_lines(path):
     return lines
 
 
-def _parse_header(lines, path):
+def _parse_header(lines, path, fold_case=False):
     """(index of the first body line, {label: [content (columns 1-60), ...]},
-    {label: [line numbers]})."""
-    if not lines or lines[0][60:80].strip() != "RINEX VERSION / TYPE":
+    {label: [line numbers]}).
+
+    ``fold_case`` reads labels written in lower case ('end of header', as some
+    converters write a whole file) as their upper-case RINEX labels.
+    """
+    def label_of(line):
+        label = line[60:80].strip()
+        return label.upper() if fold_case else label
+
+    if not lines or label_of(lines[0]) != "RINEX VERSION / TYPE":
         first = lines[0][:60] if lines else ""
         raise InputError(
             f"{path}: line 1: not a RINEX file: expected the label 'RINEX VERSION / TYPE' in "
@@ -151,7 +159,7 @@ def _parse_header(lines, path):
     header: dict[str, list[str]] = {}
     where: dict[str, list[int]] = {}
     for i, line in enumerate(lines):
-        label = line[60:80].strip()
+        label = label_of(line)
         if label == "END OF HEADER":
             return i + 1, header, where
         header.setdefault(label, []).append(line[:60])
@@ -224,13 +232,18 @@ def _parse_fields(buf, rows, col, width, path, what, d_exponent=False):
 
 
 def _sat_names(raw, default_system):
-    """Normalise 3-character satellite fields ('G 5', ' 5', 'G05') to 'G05'."""
+    """Normalise 3-character satellite fields ('G 5', ' 5', 'G05', 'g05') to 'G05'.
+
+    A lower-case system letter ('g05', 'e11', as some converters write) is
+    read as its upper-case system: RINEX writes upper case, and no system
+    letter has a lower-case meaning of its own.
+    """
     out = []
     cache: dict[str, str] = {}
     for r in raw:
         name = cache.get(r)
         if name is None:
-            sys = r[0] if r[0] != " " else default_system
+            sys = r[0].upper() if r[0] != " " else default_system
             num = r[1:3].strip()
             name = f"{sys}{int(num):02d}" if num.isdigit() else ""
             cache[r] = name
@@ -334,7 +347,7 @@ def _obs_header(header, where, path, version, system_char):
             raise InputError(f"{path}: line {ln}: expected the number of observation types in columns 1-6") from None
         codes = []
         for text in lines:
-            codes.extend(text[6:60].split())
+            codes.extend(text[6:60].upper().split())
         if len(codes) < n:
             raise InputError(f"{path}: line {ln}: header announces {n} observation types, lists {len(codes)}")
         types["*"] = codes[:n]
@@ -345,7 +358,7 @@ def _obs_header(header, where, path, version, system_char):
         sys = None
         for text, ln in zip(lines, where["SYS / # / OBS TYPES"]):
             if text[0] != " ":
-                sys = text[0]
+                sys = text[0].upper()
                 try:
                     n = int(text[3:6])
                 except ValueError:
@@ -354,7 +367,7 @@ def _obs_header(header, where, path, version, system_char):
                 info.setdefault("_counts", {})[sys] = (n, ln)
             elif sys is None:
                 raise InputError(f"{path}: line {ln}: continuation line before any system letter")
-            types[sys].extend(text[7:60].split())
+            types[sys].extend(text[7:60].upper().split())
         for sys, (n, ln) in info.pop("_counts").items():
             if len(types[sys]) != n:
                 raise InputError(f"{path}: line {ln}: system {sys} announces {n} observation types, "
@@ -362,10 +375,10 @@ def _obs_header(header, where, path, version, system_char):
     scale: dict[tuple[str, str], float] = {}
     for text, ln in zip(header.get("SYS / SCALE FACTOR", []), where.get("SYS / SCALE FACTOR", [])):
         try:
-            sys, factor, n = text[0], int(text[2:6]), int(text[8:10] or 0)
+            sys, factor, n = text[0].upper(), int(text[2:6]), int(text[8:10] or 0)
         except ValueError:
             raise InputError(f"{path}: line {ln}: cannot read the SYS / SCALE FACTOR line") from None
-        for code in (text[10:60].split() if n else types.get(sys, [])):
+        for code in (text[10:60].upper().split() if n else types.get(sys, [])):
             scale[(sys, code)] = float(factor)
     approx = None
     if "APPROX POSITION XYZ" in header:
@@ -385,7 +398,7 @@ def _obs_header(header, where, path, version, system_char):
     info["receiver"] = header.get("REC # / TYPE / VERS", [""])[0][20:40].strip()
     info["antenna"] = header.get("ANT # / TYPE", [""])[0][20:40].strip()
     info["marker"] = header.get("MARKER NAME", [""])[0].strip()
-    tsys = header.get("TIME OF FIRST OBS", [""])[0][48:51].strip()
+    tsys = header.get("TIME OF FIRST OBS", [""])[0][48:51].strip().upper()
     if not tsys:
         tsys = {"G": "GPS", " ": "GPS", "M": "GPS", "R": "GLO", "E": "GAL", "C": "BDT", "J": "QZS"}.get(
             system_char, "GPS")
@@ -424,11 +437,15 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
     Notes
     -----
     Epoch flags 2-6 are skipped with their records (module docstring).
+    Lower case ('g05', 'c1c', 'end of header'), which RINEX does not write
+    but some converters do, is read as upper case.
     """
     path = Path(path)
     lines = _read_lines(path)
-    body, header, where = _parse_header(lines, path)
+    # lower case ('g05', 'observation data', 'end of header'), as some converters write, read as upper case
+    body, header, where = _parse_header(lines, path, fold_case=True)
     version, ftype, fsys = _version(header, path)
+    ftype, fsys = ftype.upper(), fsys.upper()
     if ftype != "O":
         raise InputError(f"{path}: line 1: RINEX file type {ftype!r} is not observation data ('O')")
     if not 2.0 <= version < 5.0:
