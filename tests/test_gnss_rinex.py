@@ -489,3 +489,27 @@ def test_lower_case_system_letters_read_as_upper_case(tmp_path, src):
         np.testing.assert_array_equal(obs.time, ref.time)
         for code in ref.obs:
             np.testing.assert_array_equal(obs.obs[code], ref.obs[code], err_msg=f"{p.name} {code}")
+
+
+def test_version_line_that_disagrees_with_the_observation_types_line_is_named(tmp_path):
+    """A RINEX 3 version line over a RINEX 2 header and body was refused with
+    "header has no 'SYS / # / OBS TYPES' line", without a line and without a
+    word that the version line and the file disagree; now the message names
+    both (and the reverse case, a RINEX 2 version line over a RINEX 3 file)."""
+    p = tmp_path / "v3.15o"
+    p.write_text(ABPO_OBS.read_text().replace("     2.11           OBSERVATION", "     3.04           OBSERVATION", 1))
+    with pytest.raises(InputError, match=r"v3\.15o: line 13: the version line \(line 1\) says RINEX 3\.04 but the header "
+                                         r"holds the RINEX 2 observation types line '# / TYPES OF OBSERV' here, and no "
+                                         r"RINEX 3 'SYS / # / OBS TYPES' line; the first epoch line \(line 28\) is "
+                                         r"written as RINEX 2 .*: the version line and the file's layout disagree"):
+        read_obs(p)
+    p = tmp_path / "v2.obs"
+    p.write_text(WALK_OBS.read_text().replace("     3.04           OBSERVATION", "     2.11           OBSERVATION", 1))
+    with pytest.raises(InputError, match=r"v2\.obs: line 13: the version line \(line 1\) says RINEX 2\.11 but the header "
+                                         r"holds the RINEX 3 observation types line 'SYS / # / OBS TYPES' here.*line 25\) "
+                                         r"is written as RINEX 3 \('>' in column 1\)"):
+        read_obs(p)
+    p = tmp_path / "none.15o"
+    p.write_text("\n".join(line for line in ABPO_OBS.read_text().split("\n") if "TYPES OF OBSERV" not in line))
+    with pytest.raises(InputError, match=r"none\.15o: lines 1-26: the header has no '# / TYPES OF OBSERV' line"):
+        read_obs(p)

@@ -333,13 +333,39 @@ class ObsData:
         return len(self.time)
 
 
-def _obs_header(header, where, path, version, system_char):
+def _missing_types_line(header, where, path, version, first_epoch=None):
+    """The message for a header without the observation types line of its
+    version: one holding the other version's line has a version line that
+    disagrees with the file's layout, and is named so, with the layout of
+    the first epoch line ``(line number, text)`` when one is given."""
+    want, other = ("# / TYPES OF OBSERV", "SYS / # / OBS TYPES") if version < 3 else \
+        ("SYS / # / OBS TYPES", "# / TYPES OF OBSERV")
+    n_header = max(ln for lns in where.values() for ln in lns) + 1  # the END OF HEADER line
+    if other in header:
+        ln = where[other][0]
+        this, that = ("RINEX 2", "RINEX 3") if version < 3 else ("RINEX 3", "RINEX 2")
+        body = ""
+        if first_epoch is not None:
+            eln, text = first_epoch
+            layout = "RINEX 3 ('>' in column 1)" if text[:1] == ">" else "RINEX 2 (no '>' in column 1)"
+            body = f"; the first epoch line (line {eln}) is written as {layout}"
+        return InputError(
+            f"{path}: line {ln}: the version line (line 1) says RINEX {header['RINEX VERSION / TYPE'][0][0:9].strip()} "
+            f"but the header holds the {that} observation types line '{other}' here, and no {this} '{want}' "
+            f"line{body}: the version line and the file's layout disagree (a version edited by hand, or set by a "
+            "converter that did not rewrite the file?); correct the version (columns 1-9 of line 1) to the layout "
+            "the file is written in, or convert the file (e.g. with RTKLIB convbin or gfzrnx)")
+    return InputError(f"{path}: lines 1-{n_header}: the header has no '{want}' line (RINEX {version:g} "
+                      "observation files list their observation types there)")
+
+
+def _obs_header(header, where, path, version, system_char, first_epoch=None):
     info: dict = {}
     types: dict[str, list[str]] = {}
     if version < 3:
         lines = header.get("# / TYPES OF OBSERV")
         if not lines:
-            raise InputError(f"{path}: header has no '# / TYPES OF OBSERV' line")
+            raise _missing_types_line(header, where, path, version, first_epoch)
         ln = where["# / TYPES OF OBSERV"][0]
         try:
             n = int(lines[0][0:6])
@@ -354,7 +380,7 @@ def _obs_header(header, where, path, version, system_char):
     else:
         lines = header.get("SYS / # / OBS TYPES")
         if not lines:
-            raise InputError(f"{path}: header has no 'SYS / # / OBS TYPES' line")
+            raise _missing_types_line(header, where, path, version, first_epoch)
         sys = None
         for text, ln in zip(lines, where["SYS / # / OBS TYPES"]):
             if text[0] != " ":
@@ -450,7 +476,8 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
         raise InputError(f"{path}: line 1: RINEX file type {ftype!r} is not observation data ('O')")
     if not 2.0 <= version < 5.0:
         raise InputError(f"{path}: line 1: RINEX version {version} is not supported (2.xx, 3.xx, 4.xx obs)")
-    types, scale, approx, interval, info, t_offset = _obs_header(header, where, path, version, fsys)
+    first_epoch = next(((k + 1, lines[k]) for k in range(body, len(lines)) if lines[k].strip()), None)
+    types, scale, approx, interval, info, t_offset = _obs_header(header, where, path, version, fsys, first_epoch)
     default_sys = fsys if (version < 3 and fsys not in (" ", "M")) else "G"
     keep_sys = set(systems)
     keep_codes = None if codes is None else set(codes)
