@@ -412,14 +412,59 @@ def test_epochs_that_go_back_or_repeat_are_refused_naming_both_lines(tmp_path, h
     lines = WALK_OBS.read_text().split("\n")
     ep = [i for i, line in enumerate(lines) if line.startswith(">")]
     a, b, c = ep[5], ep[6], ep[7]
-    body = lines[b:c] + lines[a:b] if how == "back" else lines[a:b] + lines[a:b]
+    # a repeat with other content: one observation changed in its last digit (an exact copy is dropped, below)
+    changed = lines[a:b]
+    changed[-1] = changed[-1][:16] + ("1" if changed[-1][16] != "1" else "2") + changed[-1][17:]
+    body = lines[b:c] + lines[a:b] if how == "back" else lines[a:b] + changed
     p = tmp_path / "o.obs"
     p.write_text("\n".join(lines[:a] + body + lines[c:]))
     verb = "goes back from" if how == "back" else "repeats"
+    other = r" with other content \(a copy identical line for line would be dropped\)" if how == "repeat" else ""
     with pytest.raises(InputError, match=rf"o.obs: line {a + 1 + (c - b) if how == 'back' else b + 1}: epoch "
                                          rf"2025-08-28 17:30:4\d\.\d+ {verb} the epoch at line {a + 1} "
-                                         r"\(2025-08-28 17:30:4\d\.\d+\); expected epochs in increasing time order"):
+                                         rf"\(2025-08-28 17:30:4\d\.\d+\){other}; expected epochs in increasing "
+                                         "time order"):
         read_obs(p)
+
+
+@pytest.mark.parametrize("src", [WALK_OBS, ABPO_OBS], ids=["rinex3", "rinex2"])
+def test_an_exact_duplicate_epoch_is_dropped_with_a_warning(tmp_path, src):
+    """An epoch repeated line for line (files spliced with an overlap) was
+    refused ('line N: epoch ... repeats the epoch at line M'), though it
+    carries nothing new; it is now dropped, the lines named in one warning,
+    and the file reads as without the copies."""
+    lines = src.read_text().split("\n")
+    body = next(i for i, line in enumerate(lines) if "END OF HEADER" in line) + 1
+    if src == WALK_OBS:
+        ep = [i for i, line in enumerate(lines) if line.startswith(">")]
+    else:
+        ep = list(range(body, len(lines), 17))   # ABPO: 8 satellites of 2 lines after each epoch line
+    a, b = ep[5], ep[6]
+    out = lines[:b] + lines[a:b] + lines[a:b] + lines[b:]   # two copies of the 6th epoch after it
+    p = tmp_path / "dup.obs"
+    p.write_text("\n".join(out))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        obs = read_obs(p)
+    said = [str(w.message) for w in caught if "dropped" in str(w.message)]
+    ref = read_obs(src)
+    # the 6th epoch's time, from its epoch line
+    stamp, when = (("> 2025 08 28 17 30 40.9980000", "2025-08-28 17:30:40.998") if src == WALK_OBS else
+                   (" 15  1  8  0  2 30.0000000", "2015-01-08 00:02:30.000"))
+    assert lines[a].startswith(stamp)
+    assert said == [f"{p}: dropped 2 epochs that repeat the epoch before them line for line (line {b + 1} repeats "
+                    f"line {a + 1} ({when}); line {2 * b - a + 1} repeats line {a + 1} ({when})): files spliced "
+                    "with an overlap?"], said
+    np.testing.assert_array_equal(obs.time, ref.time)
+    assert obs.sats == ref.sats
+    for code in ref.obs:
+        np.testing.assert_array_equal(obs.obs[code], ref.obs[code], err_msg=code)
+        if code in (ref.lli or {}):
+            np.testing.assert_array_equal(obs.lli[code], ref.lli[code], err_msg=code)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        read_obs(src)
+    assert not [w for w in caught if "dropped" in str(w.message)]
 
 
 @pytest.mark.parametrize("count", [7, 9])

@@ -456,9 +456,10 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
     ------
     InputError
         Not a RINEX observation file, an unsupported time system, a
-        malformed epoch line or number, epochs that repeat or go back in
-        time, or a file that ends inside an epoch; the message names the
-        file and the line.
+        malformed epoch line or number, epochs that repeat with other
+        content or go back in time, or a file that ends inside an epoch; the
+        message names the file and the line.  An epoch that repeats the one
+        before it line for line is dropped, named in one warning.
 
     Notes
     -----
@@ -490,6 +491,19 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
     rec_epoch: list[int] = []
     rec_sat: list[str] = []
     skipped = 0
+    # an epoch repeated line for line (files spliced with an overlap of whole identical epochs) carries nothing
+    # new: it is dropped, named in one warning; a repeat with other content is refused below
+    last_block: list = [None, None]          # (first line, lines) of the last epoch kept
+    duplicates: list[tuple[int, int, tuple]] = []  # (line of the copy, line of the epoch kept, time fields)
+
+    def is_duplicate(start, end, fields):
+        block = [ln.rstrip() for ln in lines[start:end]]
+        if last_block[1] == block:
+            duplicates.append((start + 1, last_block[0] + 1, fields))
+            return True
+        last_block[:] = [start, block]
+        return False
+
     i = body
     if version < 3:
         n_types = len(types["*"])
@@ -534,10 +548,6 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
                     f"{'is not followed by a continuation line' if not cont_ok else f'holds {listed}'}: "
                     "expected as many satellite names as the count"
                 )
-            e = len(ep_fields)
-            ep_fields.append(fields)
-            ep_flag.append(flag)
-            ep_clock.append((i, 68, line[68:80]))
             first = i + n_sat_lines
             end = first + nsat * per_sat
             if end > n_lines:
@@ -545,6 +555,13 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
                     f"{path}: line {n_lines}: the file ends inside the epoch starting at line {i + 1} "
                     f"(expected {nsat} satellite records of {per_sat} line(s) each): truncated file?"
                 )
+            if is_duplicate(i, end, fields):
+                i = end
+                continue
+            e = len(ep_fields)
+            ep_fields.append(fields)
+            ep_flag.append(flag)
+            ep_clock.append((i, 68, line[68:80]))
             rec_line.extend(range(first, end, per_sat))
             rec_epoch.extend([e] * nsat)
             rec_sat.extend(sat_text[3 * k:3 * k + 3] for k in range(nsat))
@@ -582,6 +599,9 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
                     f"{path}: line {n_lines}: the file ends inside the epoch starting at line {i + 1} "
                     f"(expected {nsat} satellite lines): truncated file?"
                 )
+            if is_duplicate(i, end, fields):
+                i = end
+                continue
             e = len(ep_fields)
             ep_fields.append(fields)
             ep_flag.append(flag)
@@ -591,6 +611,17 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
             i = end
         width = 3 + 16 * max((len(v) for v in types.values()), default=0)
 
+    if duplicates:
+        def when(fl):
+            year = fl[0] + ((2000 if fl[0] < 80 else 1900) if version < 3 else 0)
+            return f"{year:04d}-{fl[1]:02d}-{fl[2]:02d} {fl[3]:02d}:{fl[4]:02d}:{fl[5]:06.3f}"
+
+        n = len(duplicates)
+        pairs = "; ".join(f"line {b} repeats line {a} ({when(fl)})" for b, a, fl in duplicates[:5])
+        more = f"; and {n - 5} more" if n > 5 else ""
+        warnings.warn(f"{path}: dropped {n} epoch{'s' if n != 1 else ''} that repeat{'s' if n == 1 else ''} the "
+                      f"epoch before {'it' if n == 1 else 'them'} line for line ({pairs}{more}): files spliced "
+                      "with an overlap?", stacklevel=2)
     n_epoch = len(ep_fields)
     if n_epoch:
         f = np.array(ep_fields, dtype=float)
@@ -610,7 +641,8 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
         ta, tb = (str(to_datetime64(time[j] - t_offset).astype("datetime64[ms]")).replace("T", " ")
                   for j in (k, k + 1))
         how = "repeats" if time[k + 1] == time[k] else "goes back from"
-        raise InputError(f"{path}: line {lb}: epoch {tb} {how} the epoch at line {la} ({ta}); expected epochs in "
+        other = " with other content (a copy identical line for line would be dropped)" if how == "repeats" else ""
+        raise InputError(f"{path}: line {lb}: epoch {tb} {how} the epoch at line {la} ({ta}){other}; expected epochs in "
                          "increasing time order (files spliced out of order or overlapping? sort the epochs and "
                          "drop the repeated ones, e.g. with RTKLIB convbin or gfzrnx)")
     clock = np.full(n_epoch, np.nan)
