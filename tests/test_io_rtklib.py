@@ -276,3 +276,17 @@ def test_fields_separated_by_another_character_are_read(tmp_path, sep):
     np.testing.assert_array_equal(g.time, ref.time)
     np.testing.assert_array_equal(g.lla, ref.lla)
     np.testing.assert_array_equal(g.sigma_ned, ref.sigma_ned)
+
+
+def test_geodetic_heights_are_noted(tmp_path):
+    """RTKLIB's out-height = geodetic writes heights above the geoid and says so in a header comment; the file was
+    read as ellipsoidal without a word.  read_pos notes it (info['pos_heights']) and navigate warns (below)."""
+    header, rows = _pos_rows(3)
+    plain = _write_pos(tmp_path / "e.pos", header, rows)
+    geo = tmp_path / "g.pos"
+    geo.write_text("% (lat/lon/height=WGS84/geodetic,Q=1:fix,2:float,3:sbas,4:dgps,5:single,6:ppp,ns=# of satellites)\n"
+                   + plain.read_text())
+    for p, want in ((plain, "ellipsoidal"), (geo, "geodetic")):
+        info = {}
+        g, _ = read_pos(p, info=info)
+        assert info["pos_heights"] == want and len(g.time) == 3

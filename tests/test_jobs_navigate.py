@@ -939,3 +939,22 @@ def test_the_default_constraint_is_dropped_when_it_does_not_hold(ship_files):
     assert "constraint_check" not in k and kept.config.constraints.nhc is True
     assert k["health"]["verdict"] == "unhealthy"
     assert any("the non-holonomic constraint, a land vehicle's, does not hold" in x for x in k["health"]["reasons"])
+
+
+def test_a_pos_file_of_geodetic_heights_is_said(tmp_path):
+    """A .pos whose header says its heights are geodetic (above the geoid) was fused as ellipsoidal without a word
+    (a helper noticed it): a health warning now names the file and [gnss] height_offset_m; with the offset set,
+    nothing is said."""
+    import gzip
+
+    src = Path(__file__).resolve().parents[1] / "data" / "drive_0708" / "gnss_1934_sf.pos.gz"
+    p = tmp_path / "geodetic.pos"
+    p.write_text("% (lat/lon/height=WGS84/geodetic,Q=1:fix,2:float,3:sbas,4:dgps,5:single,6:ppp)\n"
+                 + gzip.decompress(src.read_bytes()).decode())
+    over = {"output": {"plots": False}, "gnss": {"file": str(p)}, "outages": {"protocol": "none"}}
+    s = summary(navigate(load_config(EXAMPLE, over)))
+    w = [x for x in s["health"]["warnings"] if "geodetic" in x]
+    assert len(w) == 1 and "geodetic.pos" in w[0] and "height_offset_m" in w[0], s["health"]["warnings"]
+    over["gnss"]["height_offset_m"] = 0.001
+    s = summary(navigate(load_config(EXAMPLE, over)))
+    assert not [x for x in s["health"]["warnings"] if "geodetic" in x]

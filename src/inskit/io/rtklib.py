@@ -114,7 +114,7 @@ def _pos_times_ns(path, tsys, d0, d1, linenos):
     return ns
 
 
-def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
+def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0, info=None):
     """Read an RTKLIB ``.pos`` solution: latitude and longitude in degrees
     or in degrees, minutes and seconds, or ECEF x, y, z (rotated into
     latitude, longitude, height and NED sigmas and velocity).
@@ -135,6 +135,12 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
     time_offset_s : float
         Added to every time tag (the drive_0708 tags are truncated to the
         millisecond: +0.001 s).
+    info : dict, optional
+        Filled with ``pos_heights``: ``"geodetic"`` when a header comment
+        says the heights are above the geoid (RTKLIB's out-height =
+        geodetic, ``% (lat/lon/height=WGS84/geodetic, ...)``), else
+        ``"ellipsoidal"``; the heights are returned as the file holds them
+        (the caller adds the geoid separation: ``[gnss] height_offset_m``).
 
     Returns
     -------
@@ -147,10 +153,14 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0):
     path = require_file(path)
     header = sep = None
     rows = []
+    if info is not None:
+        info["pos_heights"] = "ellipsoidal"
     try:
         with open_text(path) as fh:
             for lineno, line in enumerate(fh, start=1):
                 if line.startswith("%"):
+                    if "height=" in line and "geodetic" in line.lower() and info is not None:
+                        info["pos_heights"] = "geodetic"
                     if any(c in line for c in _POS_HEADER_MARKS):
                         # RTKLIB's out-fieldsep: a separator between the fields, spaces inside the time field
                         sep = next((c for c in (",", ";", "\t") if c in line), None)

@@ -351,7 +351,8 @@ def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = N
     elif cfg.gnss.format == "rtklib-pos":
         gpath = cfg.resolve(cfg.gnss.file)
         with _format_hint("gnss", gpath, cfg.gnss.format):
-            gnss, week_pos = read_pos(gpath, quality=cfg.gnss.quality, time_offset_s=cfg.gnss.time_offset_s)
+            gnss, week_pos = read_pos(gpath, quality=cfg.gnss.quality, time_offset_s=cfg.gnss.time_offset_s,
+                                      info=notes)
         if week0 is not None and week_pos != week0:
             raise InputError(f"{gpath.name} starts in GPS week {week_pos} but {cfg.gnss.obs} in week {week0}")
         week0 = week_pos
@@ -1452,6 +1453,11 @@ def summary(res: NavigateResult) -> dict:
         out["health"]["warnings"] += [f"truth: {w}" for w in attitude_unit_warnings(
             fw.solution, res.truth, "the solution", out["truth_file"]) if w.startswith(out["truth_file"])]
     notes = res.imu_notes or {}
+    if notes.get("pos_heights") == "geodetic" and not res.config.gnss.height_offset_m:
+        out["health"]["warnings"].append(
+            f"GNSS: {res.config.gnss.file}: its header says the heights are geodetic (above the geoid), which "
+            "inskit takes as ellipsoidal: the fixes are off by the geoid separation N (tens of metres); set "
+            "[gnss] height_offset_m = N, or write the .pos with ellipsoidal heights (RTKLIB out-height)")
     if notes.get("repeated_rows"):
         out["imu_repeated_rows"] = {k: notes[k] for k in ("repeated_rows", "repeated_rows_fraction",
                                                           "repeated_rows_dropped")}
