@@ -496,6 +496,16 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
     last_block: list = [None, None]          # (first line, lines) of the last epoch kept
     duplicates: list[tuple[int, int, tuple]] = []  # (line of the copy, line of the epoch kept, time fields)
 
+    def keep_epoch(fields, flag, clock, record_lines):
+        """An epoch read: its time fields, flag, clock field ``(line, column, text)`` and the first line of each
+        satellite record (RINEX 2 and 3 alike)."""
+        e = len(ep_fields)
+        ep_fields.append(fields)
+        ep_flag.append(flag)
+        ep_clock.append(clock)
+        rec_line.extend(record_lines)
+        rec_epoch.extend([e] * len(record_lines))
+
     def is_duplicate(start, end, fields):
         block = [ln.rstrip() for ln in lines[start:end]]
         if last_block[1] == block:
@@ -558,12 +568,7 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
             if is_duplicate(i, end, fields):
                 i = end
                 continue
-            e = len(ep_fields)
-            ep_fields.append(fields)
-            ep_flag.append(flag)
-            ep_clock.append((i, 68, line[68:80]))
-            rec_line.extend(range(first, end, per_sat))
-            rec_epoch.extend([e] * nsat)
+            keep_epoch(fields, flag, (i, 68, line[68:80]), range(first, end, per_sat))
             rec_sat.extend(sat_text[3 * k:3 * k + 3] for k in range(nsat))
             i = end
         width = 80
@@ -602,12 +607,7 @@ def read_obs(path, *, systems=("G", "E"), codes=None) -> ObsData:
             if is_duplicate(i, end, fields):
                 i = end
                 continue
-            e = len(ep_fields)
-            ep_fields.append(fields)
-            ep_flag.append(flag)
-            ep_clock.append((i, 41, line[41:56]))
-            rec_line.extend(range(i + 1, end))
-            rec_epoch.extend([e] * nsat)
+            keep_epoch(fields, flag, (i, 41, line[41:56]), range(i + 1, end))
             i = end
         width = 3 + 16 * max((len(v) for v in types.values()), default=0)
 
