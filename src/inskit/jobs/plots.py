@@ -83,7 +83,7 @@ def _track(c, path, plt):
     return save_figure(fig, path)
 
 
-#: a time axis spans this many more than its typical error before it turns logarithmic (symlog)
+#: an error axis whose worst value exceeds this many times its typical one (99th percentile) turns symlog
 LOG_SPAN = 10.0
 
 
