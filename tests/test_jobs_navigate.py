@@ -503,6 +503,24 @@ def test_repeated_imu_rows_are_reported_and_warned_of_when_kept(result):
     assert any("1138 rows" in line and "kept as samples" in line for line in said)
 
 
+def test_jittery_imu_time_tags_are_reported_and_warned_of_when_kept(result):
+    """The drive's IMU time tags come from the logger's millisecond counter (8-11 ms intervals of a nominal
+    10; docs/formats.md): its config smooths them over 11 rows and the summary says how far they moved; kept
+    as logged, the health verdict warns and names the key."""
+    s = summary(result)
+    tags = s["imu_time_tags"]
+    assert tags["time_smoothing_samples"] == 11
+    assert 0.2 < tags["time_tag_jitter_fraction"] < 0.3  # 9 and 11 ms intervals: a quarter of them
+    assert 0.0079 < tags["time_tag_interval_min_s"] < 0.0081 and 0.0109 < tags["time_tag_interval_max_s"] < 0.0112
+    assert 0.5e-3 < tags["time_tags_moved_rms_s"] < 2e-3 and tags["time_tags_moved_max_s"] < 5e-3
+    assert not [w for w in s["health"]["warnings"] if "time tags jitter" in w]
+    cfg = load_config(EXAMPLE, {"output": {"plots": False}, "imu": {"time_smoothing_samples": 1}})
+    kept = summary(navigate(cfg))
+    warn = [w for w in kept["health"]["warnings"] if "time tags jitter" in w]
+    assert len(warn) == 1 and "time_smoothing_samples = 11" in warn[0] and "25%" in warn[0]
+    assert "time_tags_moved_rms_s" not in kept["imu_time_tags"]
+
+
 def test_bias_health_rule_counts_the_in_run_process_noise(drive_inputs):
     """The walk_0827_tight defect: a gyro bias fixed on a short static start
     wandered by its in-run sigma over the walk and was called unhealthy

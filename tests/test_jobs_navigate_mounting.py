@@ -191,14 +191,19 @@ def test_vehicle_axes_given_makes_a_mismatch_unhealthy_and_names_the_mount(tmp_p
 
 
 def test_drive_0708_read_without_its_mount_is_found_upside_down_and_backwards():
-    """docs/guide.md's figure: the bundled drive with [imu] mount_rpy_deg = 0
-    (it said [180, 0, -174.68] from before the direction of travel was taken
-    as the right angle it lies within 3 standard errors of)."""
+    """docs/guide.md's figure: the bundled drive with [imu] mount_rpy_deg = 0.
+    With its time tags smoothed ([imu] time_smoothing_samples = 11) the
+    direction of travel is found 174.6 +- 0.6 deg off the x axis, the
+    source's mount yaw (185.35 deg) within 0.2 deg; with the tags as logged
+    it was 177.1 +- 1.2 deg, and taken as the right angle it lay within 3
+    standard errors of ([180, 0, 179.79])."""
     cfg = load_config(ROOT / "examples" / "drive_0708.toml",
                       {"output": {"plots": False}, "imu": {"mount_rpy_deg": [0.0, 0.0, 0.0]}})
     s = summary(navigate(cfg))
     ax = s["startup"]["vehicle_axes"]
-    assert ax["rotated"] and ax["upside_down"] and ax["rotation_yaw_deg"] == 180.0
-    assert ax["mount_rpy_deg_suggested"] == pytest.approx([180.0, 0.0, 179.79], abs=0.01)
+    assert ax["rotated"] and ax["upside_down"]
+    assert ax["rotation_yaw_deg"] == pytest.approx(174.6, abs=0.1) and ax["travel_yaw_se_deg"] < 1.0
+    assert ax["mount_rpy_deg_suggested"][:2] == pytest.approx([180.0, 0.0], abs=0.01)
+    assert ax["mount_rpy_deg_suggested"][2] % 360.0 == pytest.approx(185.35, abs=0.2)
     assert s["health"]["verdict"] == "healthy"
-    assert s["forward"]["outage_end_horizontal_rms_m"] == pytest.approx(3.11, abs=0.01)
+    assert s["forward"]["outage_end_horizontal_rms_m"] == pytest.approx(2.07, abs=0.01)

@@ -528,15 +528,20 @@ def _check_repeated_mode(mode):
         raise InputError(f"repeated_rows must be one of {', '.join(map(repr, REPEATED_ROWS_MODES))}, got {mode!r}")
 
 
-def _increments_keep_repeated_rows(path, mode):
-    """Increment files take only ``repeated_rows = "keep"``."""
+def _increments_keep_repeated_rows(path, mode, time_smoothing=1):
+    """Increment files take only ``repeated_rows = "keep"`` and their time
+    tags as logged."""
     if mode != "keep":
         raise InputError(f"{path}: repeated_rows = {mode!r} applies to rate files; this one holds increments "
                          "(a repeated increment is not a re-read sample of a rate)")
+    if time_smoothing != 1:
+        raise InputError(f"{path}: time_smoothing_samples = {time_smoothing} applies to rate files, whose time tags "
+                         "set each sample's interval; this one holds increments, already integrated over the "
+                         "sensor's own intervals: use 1")
 
 
 def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", repeated="keep",
-             info=None) -> ImuData:
+             time_smoothing=1, info=None) -> ImuData:
     """Read an IMU CSV file of the inskit format (``docs/formats.md``).
 
     Columns: ``time_s`` and either rates ``gyro_{x,y,z}_{rad_s|deg_s|deg_h}``
@@ -569,8 +574,13 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", 
     repeated : {"keep", "drop"}
         Rate files only: a row repeating the previous one in all six
         channels (:func:`repeated_rows`) kept as a sample or dropped.
+    time_smoothing : int
+        Rate files only: 1, or the odd number of rows over which the time
+        tags are smoothed after the repeated rows are handled (a logger's
+        poll jitter and millisecond counter:
+        :func:`inskit.io.time_tags.smooth_time_tags`).
     info : dict, optional
-        Filled by :func:`repeated_rows` (rate files).
+        Filled by :func:`repeated_rows` and the smoothing (rate files).
 
     Returns
     -------
@@ -580,9 +590,12 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", 
     if first_row not in FIRST_ROW_MODES:
         raise InputError(f"`first_row` must be one of {', '.join(map(repr, FIRST_ROW_MODES))}, got {first_row!r}")
     _check_repeated_mode(repeated)
+    from .time_tags import check_smoothing_samples, smooth_time_tags
+
+    time_smoothing = check_smoothing_samples(time_smoothing)
     lean = _read_imu_lean(path, check_units, first_row)
     if lean is not None:
-        _increments_keep_repeated_rows(path, repeated)
+        _increments_keep_repeated_rows(path, repeated, time_smoothing)
         return lean
     path, df = read_table(path)
     require_columns(path, df, ["time_s"], f" (the inskit IMU format; {OTHER_IMU_FORMATS_HINT})")
@@ -598,6 +611,7 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", 
         keep = repeated_rows(path, t, np.hstack([w, f]), repeated, info)
         if keep is not None:
             t, w, f = t[keep], w[keep], f[keep]
+        t = smooth_time_tags(path, t, time_smoothing, info=info)
         w = w * GYRO_UNITS[gu]
         f = f * ACCEL_UNITS[au]
         if check_units:
@@ -608,7 +622,7 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", 
                              "file holds rates, which have no first increment to lose")
         return ImuData.from_rates(t, w, f, sampled=sampled)
     if du and vu:
-        _increments_keep_repeated_rows(path, repeated)
+        _increments_keep_repeated_rows(path, repeated, time_smoothing)
         tcols = [f"dtheta_{a}_{du}" for a in AXES]
         vcols = [f"dv_{a}_{vu}" for a in AXES]
         raw = numeric_columns(path, df, tcols + vcols)

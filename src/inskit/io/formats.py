@@ -132,7 +132,7 @@ def _refuse_options(path, fmt, given: dict, fixed=None):
 
 
 def read_imu(path, format=None, *, check_units=True, sampled=None, first_row=None, week0=None,
-             time_offset_s=None, mount_rpy=None, repeated="keep", info=None) -> ImuData:
+             time_offset_s=None, mount_rpy=None, repeated="keep", time_smoothing=1, info=None) -> ImuData:
     """Read an IMU log of any format inskit knows (:data:`IMU_FORMATS`).
 
     Parameters
@@ -165,8 +165,14 @@ def read_imu(path, format=None, *, check_units=True, sampled=None, first_row=Non
         Rate logs (both formats): a row repeating the previous one in all six
         channels, a sample the logger read twice
         (:func:`inskit.io.csv_formats.repeated_rows`), kept or dropped.
+    time_smoothing : int
+        Rate logs (both formats): 1 (the time tags as logged) or the odd
+        number of rows over which the tags are smoothed, taking out a
+        logger's poll jitter and millisecond counter
+        (:func:`inskit.io.time_tags.smooth_time_tags`).
     info : dict, optional
-        Filled with the count of such rows (``repeated_rows``, ...).
+        Filled with the count of such rows (``repeated_rows``, ...) and how
+        far the smoothing moved the tags (``time_tags_moved_rms_s``, ...).
 
     Returns
     -------
@@ -194,13 +200,14 @@ def read_imu(path, format=None, *, check_units=True, sampled=None, first_row=Non
                         fixed={"sampled": "average", "first_row": "initial"})
         imu, _ = read_rtklibexplorer_imu(path, week0=week0, time_offset_s=time_offset_s or 0.0,
                                          mount_rpy=(0.0, 0.0, 0.0) if mount_rpy is None else mount_rpy,
-                                         check_units=check_units, repeated=repeated, info=info)
+                                         check_units=check_units, repeated=repeated,
+                                         time_smoothing=time_smoothing, info=info)
         return imu
     from .csv_formats import read_imu as read_inskit
 
     _refuse_options(path, fmt, {"week0": week0, "time_offset_s": time_offset_s, "mount_rpy": mount_rpy})
     return read_inskit(path, check_units=check_units, sampled=sampled or "instant", first_row=first_row or "initial",
-                       repeated=repeated, info=info)
+                       repeated=repeated, time_smoothing=time_smoothing, info=info)
 
 
 def read_gnss(path, format=None, *, quality=None, week0=None, time_offset_s=None) -> GnssData:

@@ -20,6 +20,7 @@ from ..types import GnssData, ImuData, check_euler
 from ..units import DEG, G0, MAX_HEIGHT_M
 from .csv_formats import (_header_names, at_row, check_imu_time, check_imu_units, check_time_column,
                           lean_columns, numeric_columns, open_text, read_table, repeated_rows, require_columns)
+from .time_tags import smooth_time_tags
 
 GPS_EPOCH = datetime(1980, 1, 6, tzinfo=timezone.utc)
 WEEK_S = 604800.0
@@ -362,7 +363,7 @@ def mount_dcm(mount_rpy):
 
 
 def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0.0, 0.0, 0.0),
-                            check_units=True, repeated="keep", info=None):
+                            check_units=True, repeated="keep", time_smoothing=1, info=None):
     """Read the rtklibexplorer ``imu_*_gpst.csv`` log.
 
     Columns ``gps_week, gps_sow_s, acc_{x,y,z}_g, gyro_{x,y,z}_dps,
@@ -383,8 +384,13 @@ def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0
         logger read one sample twice: :func:`inskit.io.csv_formats.repeated_rows`)
         kept as a sample over its short interval, or dropped (the next sample,
         averaged over the preceding interval, then covers the whole span).
+    time_smoothing : int
+        1, or the odd number of rows over which the time tags are smoothed
+        after the repeated rows are handled (the logger's poll jitter and
+        millisecond counter: :func:`inskit.io.time_tags.smooth_time_tags`).
     info : dict, optional
-        Filled with the count of repeated rows (``repeated_rows``, ...).
+        Filled with the count of repeated rows (``repeated_rows``, ...) and
+        how far the smoothing moved the tags.
 
     Returns
     -------
@@ -414,6 +420,7 @@ def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0
     keep = repeated_rows(path, t, a[:, 2:8], repeated, info)
     if keep is not None:
         t, a = t[keep], a[keep]
+    t = smooth_time_tags(path, t, time_smoothing, info=info)
     C_bs = mount_dcm(mount_rpy)
     f = a[:, 2:5] * G0 @ C_bs.T
     w = a[:, 5:8] * DEG @ C_bs.T

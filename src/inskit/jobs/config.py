@@ -96,12 +96,25 @@ class ImuSection(_Strict):
         "one sample twice; a noisy MEMS sensor never repeats itself to the last digit): 'keep' integrates it as a "
         "sample over its short interval (the health verdict then warns when there are any), 'drop' leaves it out "
         "so that the next sample covers the whole span (docs/formats.md)")
+    time_smoothing_samples: int = Field(
+        1, ge=1, description="rate logs: 1 keeps the time tags as logged; an odd number >= 3 replaces each tag by the "
+        "moving average of that many (after repeated_rows), stretch by stretch between gaps. A logger that polls the "
+        "IMU stamps its own jittery read times (often a millisecond counter: 8-11 ms intervals of a nominal 10), and "
+        "each rate sample is integrated over its interval: the jitter misweighs samples, which a bump turns into "
+        "attitude error. The mean time is kept (time_offset_s unchanged); docs/formats.md")
     start_s: float | None = Field(None, description="ignore IMU data before this time (IMU time scale, after "
                                   "time_offset_s; default: the first GNSS epoch)")
     gap_factor: float = Field(5.0, gt=1.0, description="an interval longer than this many median intervals is a gap")
     gap_rate_sigma_deg_s: float = Field(5.0, gt=0, description="unknown rate change assumed over a bridged gap")
     gap_accel_sigma_m_s2: float = Field(1.0, gt=0, description="unknown acceleration change over a bridged gap")
     _angles = field_validator("mount_rpy_deg")(check_angles)
+
+    @field_validator("time_smoothing_samples")
+    @classmethod
+    def _odd(cls, v):
+        if v > 1 and v % 2 == 0:
+            raise ValueError(f"must be 1 (the time tags as logged) or odd (a window centred on each row), got {v}")
+        return v
 
     @model_validator(mode="after")
     def _first_row_needs_increments(self):

@@ -18,6 +18,7 @@ from ..alignment.coarse import Startup, gnss_speed, static_intervals
 from ..errors import InputError
 from ..files import write_json, write_text
 from ..io.rtklib import read_pos, read_rtklibexplorer_imu
+from ..io.time_tags import JITTER_HINT_FRACTION, JITTER_TOLERANCE
 from ..types import GnssData, ImuData, NavState
 from ..units import DEG, MILLI_G
 from ..integration import (FilterOutput, FilterSettings, GnssPosition, GnssVelocity, InitialUncertainty,
@@ -370,11 +371,12 @@ def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = N
             imu, _ = read_rtklibexplorer_imu(ipath, week0=week0, time_offset_s=imu_off,
                                              mount_rpy=np.radians(cfg.imu.mount_rpy_deg),
                                              check_units=cfg.imu.check_units, repeated=cfg.imu.repeated_rows,
-                                             info=notes)
+                                             time_smoothing=cfg.imu.time_smoothing_samples, info=notes)
     else:
         with _format_hint("imu", ipath, cfg.imu.format):
             raw_imu = io.read_imu(ipath, format="inskit", check_units=cfg.imu.check_units,
-                                  first_row=cfg.imu.first_row, repeated=cfg.imu.repeated_rows, info=notes)
+                                  first_row=cfg.imu.first_row, repeated=cfg.imu.repeated_rows,
+                                  time_smoothing=cfg.imu.time_smoothing_samples, info=notes)
         from ..io.rtklib import mount_dcm
 
         C_bs = mount_dcm(np.radians(cfg.imu.mount_rpy_deg))
@@ -755,6 +757,10 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
             log(f"IMU: {n_rep} rows ({imu_notes['repeated_rows_fraction']:.1%}) repeat the previous row in all six "
                 "channels (a sample read twice): " + ("dropped ([imu] repeated_rows = \"drop\")"
                                                       if imu_notes["repeated_rows_dropped"] else "kept as samples"))
+        if imu_notes.get("time_tags_moved_rms_s") is not None and log:
+            log(f"IMU: time tags smoothed over {imu_notes['time_smoothing_samples']} rows ([imu] "
+                f"time_smoothing_samples): moved {imu_notes['time_tags_moved_rms_s'] * 1e3:.2f} ms RMS, "
+                f"{imu_notes['time_tags_moved_max_s'] * 1e3:.2f} ms at most")
     else:
         imu, gnss = inputs[:2]
         raw = inputs[2] if len(inputs) > 2 else None
@@ -1466,6 +1472,19 @@ def summary(res: NavigateResult) -> dict:
                 f"IMU: {notes['repeated_rows']} rows ({notes['repeated_rows_fraction']:.1%}) repeat the previous row "
                 "in all six channels (the logger read one sample twice?), integrated as samples over their short "
                 "intervals; [imu] repeated_rows = \"drop\" leaves them out")
+    if "time_tag_jitter_fraction" in notes:
+        out["imu_time_tags"] = {k: notes[k] for k in (
+            "time_smoothing_samples", "time_tag_jitter_fraction", "time_tag_interval_min_s", "time_tag_interval_max_s",
+            "time_tag_interval_median_s", "time_tags_moved_rms_s", "time_tags_moved_max_s") if k in notes}
+        if notes["time_smoothing_samples"] == 1 and notes["time_tag_jitter_fraction"] > JITTER_HINT_FRACTION:
+            med = notes["time_tag_interval_median_s"]
+            out["health"]["warnings"].append(
+                f"IMU: the time tags jitter: {notes['time_tag_jitter_fraction']:.0%} of the sampling intervals "
+                f"differ from the median {med * 1e3:.3g} ms by more than {JITTER_TOLERANCE:.0%} "
+                f"({notes['time_tag_interval_min_s'] * 1e3:.3g}-{notes['time_tag_interval_max_s'] * 1e3:.3g} ms), "
+                "and each rate sample is integrated over its own interval. If the logger stamped its read times "
+                "rather than the sensor's, [imu] time_smoothing_samples = 11 takes the jitter out (choose it with "
+                "`inskit tune CONFIG --grid imu.time_smoothing_samples=1,5,11,21`)")
     from ..integration.mounting import mounting_check, mounting_summary
 
     c, odo = res.config.constraints, res.config.odometer
