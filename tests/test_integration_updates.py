@@ -224,6 +224,9 @@ def assert_same_run(a, b, REL=REL):
         assert ra.keys() == rb.keys()
         assert np.array_equal(ra["accepted"], rb["accepted"]) and np.array_equal(ra["dof"], rb["dof"]), name
         assert np.array_equal(ra["t"], rb["t"]), name
+        # what happened to each row, and which own row each update was
+        assert np.array_equal(ra["status"], rb["status"]) and len(ra["status"]) == ra["dof"].sum(), name
+        assert np.array_equal(ra["update_row"], rb["update_row"]), name
         # innovations and sigmas to REL of the sigma, the NIS to REL of its size
         sig = np.asarray(rb["sigma"], float)
         for key in ("nu", "sigma"):
@@ -314,6 +317,19 @@ def test_tight_coupling_paths_agree_with_refused_satellites_and_a_recovery(drive
     assert_same_run(a, b, REL=1e-8)
     c = a.counts["pseudorange"]
     assert c["rows_rejected"] >= 3 + 8 * 5 and c["rejected"] >= 8
+    # the record says per row what the counts say in sum: the bad satellite's rows refused alone at 20, 21
+    # and 40 s, its seven companions used (they were recorded as accepted with it)
+    from inskit.integration.engine import ROW_ACCEPTED, ROW_REFUSED_ROW
+
+    rec = a.innovations["pseudorange"]
+    st = rec["status"].reshape(len(rec["t"]), -1)
+    assert (st == ROW_REFUSED_ROW).sum() == c["rows_rejected"] and st.size == c["rows"]
+    assert int((st != ROW_ACCEPTED).any(axis=1).sum()) == c["rejected"]
+    assert int(rec["accepted"].sum()) == c["used"] and np.array_equal(rec["accepted"], (st == ROW_ACCEPTED).any(axis=1))
+    for e in (20, 21, 40):
+        k = int(np.flatnonzero(rec["update_row"] == e)[0])
+        assert st[k, 2] == ROW_REFUSED_ROW and (np.delete(st[k], 2) == ROW_ACCEPTED).all(), (e, st[k])
+    assert list(rec["label"][:8]) == Pseudorange(tab).satellites(0)
     assert [r["measurement"] for r in a.recoveries] == ["pseudorange", "pseudorange"]
     assert a.counts["pseudorange_rate"]["used"] > 140
 

@@ -976,3 +976,62 @@ def test_a_pos_file_of_geodetic_heights_is_said(tmp_path):
     over["gnss"]["height_offset_m"] = 0.001
     s = summary(navigate(load_config(EXAMPLE, over)))
     assert not [x for x in s["health"]["warnings"] if "geodetic" in x]
+
+
+def test_tight_innovation_file_says_per_satellite_row_what_the_gate_did(tmp_path):
+    """A simulated tight run with one satellite's pseudoranges 60 m off for
+    20 epochs: innovations.csv recorded the refused satellite's rows as
+    accepted (the update went on with the others); now each row says
+    ``accepted`` or ``refused_row_gate`` and names its satellite, and the
+    file's counts are the summary's."""
+    import dataclasses
+    import warnings
+
+    import pandas as pd
+
+    from inskit.jobs import reproduce_tight as RT
+    from inskit.jobs.config import config_from_dict
+    from inskit.jobs.navigate import load_inputs, load_raw_gnss, spp_fixes, write_innovations
+    from inskit.jobs.simulate import write_simulation
+    from inskit.simulation.scenario import load_scenario, simulate
+
+    sc = load_scenario(Path(__file__).resolve().parents[1] / "examples" / "tc_blockage.toml")
+    sc = sc.model_copy(update={"duration_limit_s": 140.0})  # before the first blockage
+    write_simulation(simulate(sc, 1), tmp_path, overwrite=True, plot=False)
+    base = {k: (dict(v) if isinstance(v, dict) else v) for k, v in RT.BLOCKAGE_NAVIGATE.items()}
+    base["earth"] = {"gravity": sc.earth.gravity}
+    base["gnss"] = {**base["gnss"], "coupling": "tight", "obs": "obs.rnx", "nav": "nav.rnx", "systems": ["G"]}
+    cfg = config_from_dict(base, base_dir=tmp_path, source="tight test")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        raw = load_raw_gnss(cfg)
+        imu, _ = load_inputs(cfg, None, raw)
+        tab = raw.table
+        sats = np.asarray(tab.sat).astype(str)
+        bad_sat = sats[0]
+        t_ep = np.unique(tab.time)
+        bad_t = t_ep[80:100]
+        bad = (sats == bad_sat) & np.isin(tab.time, bad_t)
+        raw = dataclasses.replace(raw, table=dataclasses.replace(tab, pseudorange_m=np.where(
+            bad, tab.pseudorange_m + 60.0, tab.pseudorange_m)))
+        res = navigate(cfg, inputs=(imu, spp_fixes(raw), raw))
+    s = summary(res)
+    df = pd.read_csv(write_innovations(res.forward.innovations, tmp_path / "innovations.csv"))
+    assert list(df.columns) == ["measurement", "t", "row", "label", "nu", "sigma", "nis", "accepted", "status"]
+    pr = df[df.measurement == "pseudorange"]
+    c = s["measurements"]["pseudorange"]
+    refused = pr[pr.status == "refused_row_gate"]
+    assert len(refused) == c["rows_rejected"] >= 15 and len(pr) == c["rows"]
+    assert (pr.accepted == (pr.status == "accepted")).all()
+    assert pr.groupby("t").accepted.min().eq(0).sum() == c["rejected"]
+    assert pr.groupby("t").accepted.max().eq(1).sum() == c["used"]
+    # the refusals are the bad satellite's, in its bad epochs (a time offset puts the IMU on the RINEX time)
+    t_raw = refused.t.to_numpy() + raw.offset_s
+    assert set(refused.label) == {bad_sat}
+    assert np.isin(np.round(t_raw, 3), np.round(bad_t, 3)).all()
+    # its companions in those epochs were used
+    both = pr[np.isin(np.round(pr.t.to_numpy() + raw.offset_s, 3), np.round(bad_t, 3))]
+    assert (both[both.label != bad_sat].status == "accepted").all()
+    assert (both[both.label == bad_sat].status == "refused_row_gate").sum() >= 15
+    assert set(pr.label) <= set(sats)
+    assert (df[df.measurement == "nhc"].label.isin(["lateral (body y)", "vertical (body z)"])).all()

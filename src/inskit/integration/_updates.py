@@ -842,10 +842,12 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
     rstate : tuple ``(streak, first, rej_t, rej_k, rej_nu, rej_rd, rej_n)``
         Per measurement: its run of rejections (count, time of the first)
         and the newest ones held (times, rows, innovations, noise variances).
-    recs : tuple ``(m, item, t, nis, accepted, k, off, nu, sigma)``
+    recs : tuple ``(m, item, t, nis, accepted, k, off, nu, sigma, status)``
         Innovation records from ``ctl[C_NREC]`` on; record j's ``k`` rows of
-        innovation and sigma start at ``off[j]`` of the flat ``nu`` and
-        ``sigma`` (filled from ``ctl[C_NFLAT]`` on).
+        innovation, sigma and status (int8: accepted 0, refused by the row's
+        own gate 1, refused with the whole update 2, as
+        :data:`.engine.ROW_STATUS`) start at ``off[j]`` of the flat ``nu``,
+        ``sigma`` and ``status`` (filled from ``ctl[C_NFLAT]`` on).
     recov : tuple ``(m, item, t, after, rejected_for)``
         Recoveries, from ``ctl[C_NRECOV]`` on.
     counts : (M, N_COUNTS) int64
@@ -881,7 +883,7 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
     kinds, mk, d_off, d_w, data, p_off, par, i_off, index, per_row = meas
     gpar, thr = gate
     streak, first_rej, rej_t, rej_k, rej_nu, rej_rd, rej_n = rstate
-    rec_m, rec_i, rec_t, rec_nis, rec_acc, rec_k, rec_off, rec_nu, rec_sig = recs
+    rec_m, rec_i, rec_t, rec_nis, rec_acc, rec_k, rec_off, rec_nu, rec_sig, rec_st = recs
     rv_m, rv_i, rv_t, rv_after, rv_for = recov
     st_dx = store[4]
     def_aux, def_x = fb
@@ -978,6 +980,7 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
                 rec_m[jr], rec_i[jr], rec_t[jr], rec_k[jr], rec_off[jr] = m, i, tm, k, o
                 for r in range(k):
                     rec_nu[o + r] = nu[r]
+                    rec_st[o + r] = 0
                 ctl[C_NREC] = jr + 1
                 ctl[C_NFLAT] = o + k
                 gate_vec = gate_on
@@ -999,6 +1002,7 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
                         keep[r] = nu[r] * nu[r] / s_rows[r] <= thr[1]
                         if not keep[r]:
                             refused += 1
+                            rec_st[o + r] = 1
                     counts[m, N_ROWS] += k
                     counts[m, N_ROWS_REJECTED] += refused
                     counts[m, N_ROW_GATED] += 1
@@ -1046,6 +1050,8 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
                     for r in range(k):
                         rec_sig[o + r] = math.sqrt(S[r, r])
                 if not accepted:
+                    for r in range(k):  # a vector gate (no row refused alone): every row goes with the update
+                        rec_st[o + r] = 2
                     _hold_rejection(m, tm, nu, rd, k, streak, first_rej, rej_t, rej_k, rej_nu, rej_rd, rej_n)
                     counts[m, N_REJECTED] += 1
                     i += 1

@@ -56,6 +56,11 @@ _default_feedback = StateBlock.feedback
 NAV_SIGMA_BLOCKS = ("pos", "vel", "att")
 #: IMU rows per segment of a run (see the module text): 5.5 min at 200 Hz
 SEGMENT_ROWS = 65536
+#: what happened to each row of an innovation (``FilterOutput.innovations[name]["status"]``), by code:
+#: used in the update; refused by its own gate (a measurement gated row by row: one satellite among
+#: several); refused with its whole update by the chi-square gate of the vector
+ROW_STATUS = ("accepted", "refused_row_gate", "refused_update_gate")
+ROW_ACCEPTED, ROW_REFUSED_ROW, ROW_REFUSED_UPDATE = 0, 1, 2
 
 
 @dataclass(frozen=True)
@@ -253,8 +258,13 @@ class FilterOutput(Track):
         (``rejected`` counts updates with at least one rejected row); a
         measurement gated per row adds ``rows`` and ``rows_rejected``.
     innovations : dict
-        Per measurement name: arrays ``t``, ``nu`` (m, k), ``sigma`` (m, k),
-        ``nis``, ``accepted``.
+        Per measurement name: per update ``t``, ``nu`` (m, k), ``sigma`` (m,
+        k), ``nis``, ``accepted`` (the update was applied: every row, or
+        the rows that passed their own gate), ``dof`` (its rows) and
+        ``update_row`` (the measurement's own row, as ``linearize`` got
+        it); per row of every update, flat: ``status`` (int8, a code of
+        :data:`ROW_STATUS`) and, for a measurement that names its rows
+        (``row_labels``, the satellites of tight coupling), ``label``.
     settings : FilterSettings
     store : SmootherStore or None
     recoveries : list of dict
@@ -527,7 +537,8 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
 
     write_row(0)
     counts = {m.name: {"used": 0, "rejected": 0, "skipped": skipped[m.name]} for m in measurements}
-    innov = {m.name: {"t": [], "nu": [], "sigma": [], "nis": [], "accepted": []} for m in measurements}
+    innov = {m.name: {"t": [], "nu": [], "sigma": [], "nis": [], "accepted": [], "status": [], "update_row": []}
+             for m in measurements}
     rejected_streak = {}
     rejected_recent = {}  # per measurement: (t, innovation, R) of the current run of rejections
     first_rejection = {}
@@ -586,7 +597,10 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
                     rec["sigma"].append(np.sqrt(s_rows))
                     rec["nis"].append(float(np.sum(nu * nu / s_rows)))
                     rec["accepted"].append(False)
+                    rec["status"].append(np.full(len(nu), ROW_REFUSED_ROW, np.int8))
+                    rec["update_row"].append(row)
                     return C_nb
+                status = np.where(keep, ROW_ACCEPTED, ROW_REFUSED_ROW).astype(np.int8)
                 nu, H, R = nu[keep], H[keep], R[np.ix_(keep, keep)]
             gate = None
         res = joseph_update(P, nu, H, R, gate_probability=gate)
@@ -603,6 +617,11 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         rec["sigma"].append(np.sqrt(np.diag(res.S)) if s_all is None else np.sqrt(s_all))
         rec["nis"].append(res.nis)
         rec["accepted"].append(res.accepted)
+        rec["update_row"].append(row)
+        if nu_all is not None:
+            rec["status"].append(status)
+        else:
+            rec["status"].append(np.full(len(nu), ROW_ACCEPTED if res.accepted else ROW_REFUSED_UPDATE, np.int8))
         if not res.accepted:
             counts[meas.name]["rejected"] += 1
             return C_nb
@@ -675,7 +694,8 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         T = max(int(compiled_m[it_m[it_m >= 0]].sum()), 1)
         T_flat = max(int(rows_of.sum()), 1)
         recs = (np.zeros(T, np.int64), np.zeros(T, np.int64), np.zeros(T), np.zeros(T), np.zeros(T, np.bool_),
-                np.zeros(T, np.int64), np.zeros(T, np.int64), np.zeros(T_flat), np.zeros(T_flat))
+                np.zeros(T, np.int64), np.zeros(T, np.int64), np.zeros(T_flat), np.zeros(T_flat),
+                np.zeros(T_flat, np.int8))
         recov = (np.zeros(T, np.int64), np.zeros(T, np.int64), np.zeros(T), np.zeros(T, np.int64), np.zeros(T))
         counts = np.zeros((M, U.N_COUNTS), np.int64)
         store = (st_k, st_Pm, st_Pp, st_Phi, st_dx, nbase)
@@ -743,14 +763,18 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             raise type(e)(f"{e}; {note}") from e
         nr = int(ctl[U.C_NREC])
         rec_m, rec_i, rec_t, rec_nis, rec_acc, rec_k, rec_off = (a[:nr] for a in recs[:7])
-        rec_nu, rec_sig = recs[7], recs[8]
+        rec_nu, rec_sig, rec_st = recs[7], recs[8], recs[9]
 
         def records(mi):
             sel = np.nonzero(rec_m == mi)[0]
             if not len(sel):
-                return _innovation_arrays({"t": [], "nu": [], "sigma": [], "nis": [], "accepted": []})
+                return _innovation_arrays({"t": [], "nu": [], "sigma": [], "nis": [], "accepted": [], "status": [],
+                                           "update_row": []})
             dof = rec_k[sel]
-            out = {"t": rec_t[sel], "nis": rec_nis[sel], "accepted": rec_acc[sel], "dof": dof}
+            out = {"t": rec_t[sel], "nis": rec_nis[sel], "accepted": rec_acc[sel], "dof": dof,
+                   "update_row": it_row[rec_i[sel]]}
+            at_rows = np.repeat(rec_off[sel] - (np.cumsum(dof) - dof), dof) + np.arange(int(dof.sum()))
+            out["status"] = rec_st[at_rows]
             if (dof == dof[0]).all():
                 at = rec_off[sel][:, None] + np.arange(dof[0])
                 out["nu"], out["sigma"] = rec_nu[at], rec_sig[at]
@@ -853,6 +877,8 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             if cc[U.N_ROW_GATED]:
                 c["rows"] = int(cc[U.N_ROWS])
                 c["rows_rejected"] = int(cc[U.N_ROWS_REJECTED])
+        if hasattr(m, "row_labels"):  # what each row is (a satellite), for the innovation file
+            innovations[m.name]["label"] = np.asarray(m.row_labels(innovations[m.name]["update_row"]), dtype=object)
     if rec_c is not None:
         recoveries = sorted(recoveries + rec_c["recoveries"], key=lambda r: r["_item"])
     for r in recoveries:
@@ -944,10 +970,14 @@ def _check_rows(t, a, lla, v, q):
 def _innovation_arrays(rec):
     """A measurement's innovation record as arrays: ``nu`` and ``sigma`` are
     (m, k) when every update has k rows, else object arrays of (k_i,) arrays
-    (one row per satellite in view, say); ``dof`` holds each update's k."""
+    (one row per satellite in view, say); ``dof`` holds each update's k,
+    ``status`` every row's code (:data:`ROW_STATUS`), flat."""
     out = {kk: np.asarray(rec[kk]) for kk in ("t", "nis", "accepted")}
+    out["accepted"] = out["accepted"].astype(bool)
     dof = np.array([len(v) for v in rec["nu"]], dtype=np.int64)
     out["dof"] = dof
+    out["update_row"] = np.asarray(rec["update_row"], np.int64)
+    out["status"] = (np.concatenate(rec["status"]).astype(np.int8) if rec["status"] else np.empty(0, np.int8))
     for kk in ("nu", "sigma"):
         if len(dof) and (dof == dof[0]).all():
             out[kk] = np.asarray(rec[kk])

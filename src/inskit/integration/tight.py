@@ -116,6 +116,15 @@ class _RangeRows:
         """Names of the satellites of update ``row`` (in the order of its rows)."""
         return self._sats[self._start[row]:self._start[row + 1]].tolist()
 
+    def row_labels(self, rows):
+        """The satellite of every row of the updates ``rows`` ((m,) int), flat
+        and in order: what each innovation row is (the innovation file's
+        ``label``)."""
+        rows = np.asarray(rows, np.int64)
+        a, b = self._start[rows], self._start[rows + 1]
+        n = b - a
+        return self._sats[np.repeat(a - (np.cumsum(n) - n), n) + np.arange(int(n.sum()))]
+
     def _compiled(self, layout, kind, cls):
         """The compiled form (:mod:`._updates`): per table row the rotated
         satellite state, value, sigma and the state and aux index of its

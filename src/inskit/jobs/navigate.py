@@ -1766,12 +1766,28 @@ def clear_previous_run(out_dir: Path, previous=None, keep=()) -> list:
 
 
 def write_innovations(innovations: dict, path) -> Path:
-    """Every innovation row of a run as one table (``measurement, t, row, nu,
-    sigma, nis, accepted``): one line per component (a satellite, an axis),
-    built with array operations."""
-    from ..files import write_csv
+    """Every innovation row of a run as one table (``measurement, t, row,
+    label, nu, sigma, nis, accepted, status``): one line per component (an
+    axis, a satellite), built with array operations.
 
-    cols = {k: [] for k in ("measurement", "t", "row", "nu", "sigma", "nis", "accepted")}
+    ``accepted`` (1 or 0) and ``status`` say what happened to that row:
+    ``accepted`` (used in the update), ``refused_row_gate`` (a measurement
+    gated row by row, the pseudoranges and Dopplers of tight coupling: this
+    row failed its own gate while the update went on with the others, or
+    every row of it failed) or ``refused_update_gate`` (the chi-square gate
+    of the whole vector refused the update and so this row); the summary's
+    ``rows_rejected`` counts the ``refused_row_gate`` lines, its
+    ``rejected`` the updates with at least one refused line.  ``label`` is
+    what the row is: the satellite (``G05``) of a range row, the axis of
+    the fixed-row measurements, empty where unknown (a user's plug-in).
+    ``nis`` is the update's (the rows used, when some were refused).
+    """
+    from ..files import write_csv
+    from ..integration.engine import ROW_STATUS
+    from .plots import COMPONENTS
+
+    cols = {k: [] for k in ("measurement", "t", "row", "label", "nu", "sigma", "nis", "accepted", "status")}
+    names = np.array(ROW_STATUS, dtype=object)
     for name, v in innovations.items():
         t = np.asarray(v.get("t", []), float)
         if not len(t):
@@ -1784,13 +1800,25 @@ def write_innovations(innovations: dict, path) -> Path:
             k = np.full(len(t), nu.shape[1], np.int64)
             nu_f, sg_f = nu.reshape(-1), sg.reshape(-1)
         starts = np.repeat(np.cumsum(k) - k, k)
+        row = np.arange(len(nu_f)) - starts
+        status = v.get("status")
+        if status is None or len(status) != len(nu_f):  # a record without row codes: its update's verdict
+            status = np.where(np.repeat(np.asarray(v["accepted"], bool), k), 0, 2)
+        status = np.asarray(status, np.int64)
+        label = v.get("label")
+        if label is None or len(label) != len(nu_f):
+            axes = COMPONENTS.get(name, ())
+            label = (np.array(axes, dtype=object)[row] if nu.dtype != object and len(axes) == nu.shape[1]
+                     else np.full(len(nu_f), "", dtype=object))
         cols["measurement"].append(np.full(len(nu_f), name, dtype=object))
         cols["t"].append(np.repeat(t, k))
-        cols["row"].append(np.arange(len(nu_f)) - starts)
+        cols["row"].append(row)
+        cols["label"].append(np.asarray(label, dtype=object))
         cols["nu"].append(nu_f)
         cols["sigma"].append(sg_f)
         cols["nis"].append(np.repeat(np.asarray(v["nis"], float), k))
-        cols["accepted"].append(np.repeat(np.asarray(v["accepted"], bool), k).astype(int))
+        cols["accepted"].append((status == 0).astype(int))
+        cols["status"].append(names[status])
     data = {c: (np.concatenate(v) if v else np.empty(0)) for c, v in cols.items()}
     return write_csv(path, data, "%.10g")
 

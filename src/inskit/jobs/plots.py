@@ -227,7 +227,8 @@ def _innovations(c, path, plt):
         if nu.dtype == object:  # one row per satellite in view: all rows of an update at its time
             tt = np.repeat(v["t"], v["dof"])
             z = np.concatenate(list(nu)) / np.concatenate(list(sg)) if len(nu) else np.empty(0)
-            ok = np.repeat(acc, v["dof"])
+            st = v.get("status")  # per row: one satellite refused while the others were used
+            ok = (np.asarray(st) == 0) if st is not None and len(st) == len(z) else np.repeat(acc, v["dof"])
             ax.plot(tt[ok] - t0, z[ok], ".", ms=1.5, label="each row (satellite)")
             bad = [(tt[~ok], z[~ok])]
         else:

@@ -393,8 +393,9 @@ def _fig_track(run, go):
             if name not in run.innov:
                 continue
             v = run.innov[name]
-            tu, first = np.unique(v["t"], return_index=True)
-            acc = v["accepted"][first] > 0.5
+            tu, inv = np.unique(v["t"], return_inverse=True)
+            acc = np.zeros(len(tu), bool)  # an update is used when any of its rows is (one satellite may be refused)
+            np.logical_or.at(acc, inv, v["accepted"] > 0.5)
             s = run.forward.interpolate(tu)
             ned = earth.lla_to_ned(s.lla, ref)
             for m, label, colour in ((acc, f"{name} updates (solution at the update)", "#7f7f7f"),
