@@ -223,3 +223,85 @@ def test_track_legend_hides_no_part_of_the_track_and_tick_labels_do_not_collide(
     assert ax.get_legend().get_window_extent().y1 <= frame.y0  # below the frame
     boxes = sorted((t.get_window_extent() for t in ax.get_xticklabels() if t.get_text()), key=lambda b: b.x0)
     assert all(b.x0 >= a.x1 for a, b in zip(boxes, boxes[1:]))
+
+
+def _long_innovations(run, hours=4.0):
+    """``run`` with the innovations of a long log: fixes at 1 Hz (one of them
+    refused, 9 sigma off in down) and the NHC at 10 Hz, every component
+    spread alike (unit normal) so that none should hide another."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    rng = np.random.default_rng(3)
+    t0 = run.gnss.time[0]
+    t1 = t0 + np.arange(0.0, hours * 3600.0, 1.0)
+    t10 = t0 + np.arange(0.0, hours * 3600.0, 0.1)
+    pos = {"t": t1, "nu": rng.standard_normal((len(t1), 3)), "sigma": np.ones((len(t1), 3)),
+           "nis": np.ones(len(t1)), "accepted": np.ones(len(t1), bool), "dof": np.full(len(t1), 3)}
+    pos["nu"][5000] = (0.5, -0.2, 9.0)
+    pos["accepted"][5000] = False
+    nhc = {"t": t10, "nu": rng.standard_normal((len(t10), 2)), "sigma": np.ones((len(t10), 2)),
+           "nis": np.ones(len(t10)), "accepted": np.ones(len(t10), bool), "dof": np.full(len(t10), 2)}
+    nhc["nu"][77_777, 0] = -6.5  # the worst lateral innovation, once in 144 000
+    fwd = SimpleNamespace(solution=run.forward.solution, innovations={"gnss_pos": pos, "nhc": nhc})
+    return SimpleNamespace(forward=fwd, gnss=run.gnss, config=run.config, windows=[], used=run.used,
+                           smoothed=None, settings=run.settings)
+
+
+def test_innovations_plot_of_a_long_log_shows_every_component_thinned(run, tmp_path, monkeypatch):
+    """innovations.png of a 4 h log: the components were drawn one after the
+    other, all 14 400 fixes (144 000 NHC updates) each, so down covered north
+    and east (the NHC's vertical its lateral) and the panel showed one colour;
+    now each component is thinned to its bulk and its extremes and all are
+    drawn in one shuffled order: each colour shows, the worst points are
+    drawn, the refused fix is marked and every entry is in the legend."""
+    import numpy as np
+    from matplotlib.colors import to_rgb
+
+    res = _long_innovations(run)
+    fig = _drawn(monkeypatch, PL._innovations, res, tmp_path)
+    img = np.asarray(fig.canvas.buffer_rgba())[..., :3].astype(float) / 255.0
+    colours = [to_rgb(c) for c in ("tab:blue", "tab:orange", "tab:green")]
+    h = img.shape[0]
+    for ax, n_comp, what in zip(fig.axes, (3, 2), ("gnss_pos", "nhc")):
+        b = ax.get_window_extent()
+        panel = img[int(h - b.y1) + 2:int(h - b.y0) - 2, int(b.x0) + 2:int(b.x1) - 2]
+        near = [int((np.abs(panel - c).sum(axis=2) < 0.25).sum()) for c in colours[:n_comp]]
+        share = np.array(near) / sum(near)
+        assert share.min() > 0.5 / n_comp, (what, share)  # no component covered by another
+        labels = [t.get_text() for t in ax.get_legend().get_texts()]
+        assert labels[:n_comp] == list(PL.COMPONENTS[what])[:n_comp] and "±3" in labels, labels
+        drawn = np.concatenate([c.get_offsets() for c in ax.collections if len(c.get_offsets())])
+        assert len(drawn) <= n_comp * PL.MAX_SCATTER_POINTS  # thinned: 14 400 x 3 and 144 000 x 2 rows
+    gnss, nhc = fig.axes[0], fig.axes[1]
+    assert "rejected (1 update)" in [t.get_text() for t in gnss.get_legend().get_texts()]
+    marks = [ln for ln in gnss.get_lines() if ln.get_marker() == "x"]
+    assert len(marks) == 1 and 9.0 in marks[0].get_ydata()
+    assert -6.5 in np.concatenate([c.get_offsets()[:, 1] for c in nhc.collections])  # the worst one drawn
+    assert nhc.get_ylim()[0] < -6.5 and gnss.get_ylim()[1] > 9.0
+
+
+def test_biases_plot_keeps_a_one_sample_spike_of_a_long_run(run, tmp_path, monkeypatch):
+    """biases.png drew every n-th row of the solution (an even stride), so a
+    one-row transient of an estimate between two kept rows was not drawn;
+    now each bin keeps its minimum and maximum."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from inskit.units import DEG_PER_HOUR
+
+    sol = run.forward.solution
+    n = len(sol.time)
+    assert n > 4 * PL.MAX_LINE_POINTS  # thinned
+    extra = dict(sol.extra)
+    k = n // 2 + 1
+    extra["bg_z_rad_s"] = extra["bg_z_rad_s"].copy()
+    extra["bg_z_rad_s"][k] = 900.0 * DEG_PER_HOUR
+    fwd = SimpleNamespace(solution=SimpleNamespace(time=sol.time, extra=extra, lla=sol.lla), innovations={})
+    res = SimpleNamespace(**{a: getattr(run, a) for a in ("smoothed", "config", "windows", "used", "gnss")},
+                          forward=fwd)
+    fig = _drawn(monkeypatch, PL._biases, res, tmp_path)
+    z = fig.axes[0].get_lines()[2]
+    assert len(z.get_xdata()) <= PL.MAX_LINE_POINTS and np.isclose(np.max(z.get_ydata()), 900.0)

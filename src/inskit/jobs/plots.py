@@ -1,10 +1,16 @@
 """Plots of an integration run: track, errors with 3-sigma envelopes,
 innovations, sensor-error estimates.  PNG files, no display needed.
 
-Lines over the IMU epochs are drawn from decimated rows (at most
-:data:`MAX_LINE_POINTS` per line, an even stride): a 1100 px wide figure shows
-no more, and matplotlib's time grows with the points.  matplotlib is imported
-only inside the plotting functions."""
+Long series are drawn from decimated rows: a 1100 px wide figure shows no
+more, and matplotlib's time grows with the points.  Lines keep at most about
+:data:`MAX_LINE_POINTS` points, the minimum and the maximum of every bin
+(:func:`inskit.jobs.report.decimate`), so a spike or the worst error is
+never dropped; the innovation clouds keep at most
+:data:`MAX_SCATTER_POINTS` points per component, each bin's extremes plus
+an even stride (:func:`inskit.jobs.report.decimate_scatter`: the extremes
+alone would draw two bands and no bulk), drawn in a shuffled order so that
+no component covers the others.  matplotlib is imported only inside the
+plotting functions."""
 
 from __future__ import annotations
 
@@ -19,16 +25,31 @@ from ..units import DEG_PER_HOUR, MILLI_G
 from .outages import antenna_positions
 
 
-#: most points of one line drawn over the IMU epochs
+#: most points of one line drawn over the IMU epochs (or over the fixes)
 MAX_LINE_POINTS = 4000
+#: most points of one component's cloud of normalised innovations, and of them the bins' extremes (two a
+#: bin: 250 bins, 4 px each across the panel; more would crowd the cloud's edges into bands)
+MAX_SCATTER_POINTS = 3000
+SCATTER_EXTREMES = 500
 
 
-def _every(n, max_points=MAX_LINE_POINTS):
-    """Row indices: an even stride over ``n`` rows keeping at most about
-    ``max_points`` of them, and always the last row."""
-    step = max(1, -(-n // max_points))
-    idx = np.arange(0, n, step)
-    return idx if (n == 0 or idx[-1] == n - 1) else np.append(idx, n - 1)
+def _thin(n, ys, max_points=MAX_LINE_POINTS):
+    """Row indices of at most about ``max_points`` of ``n`` rows keeping the
+    minimum and maximum of every bin of each series in ``ys``, the first and
+    the last row (:func:`inskit.jobs.report.decimate`)."""
+    from .report import decimate
+
+    return decimate(n, ys, max_points)
+
+
+def _thin_line(t, y, max_points=MAX_LINE_POINTS):
+    """``line_breaks(t, y)`` decimated: the breaks (NaN points) found on
+    every sample and all kept, the values thinned to each bin's extremes."""
+    tb, yb = line_breaks(t, y)
+    if len(tb) <= max_points:
+        return tb, yb
+    k = np.union1d(_thin(len(tb), [yb], max_points), np.flatnonzero(np.isnan(yb)))
+    return tb[k], yb[k]
 
 
 def _plt():
@@ -65,10 +86,12 @@ def _track(c, path, plt):
     ax.plot(pg[res.used, 1], pg[res.used, 0], ".", ms=2, color="0.6", label="GNSS fixes used")
     if (~res.used).any():
         ax.plot(pg[~res.used, 1], pg[~res.used, 0], ".", ms=3, color="tab:red", label="GNSS withheld (outages)")
-    pf = earth.lla_to_ned(fwd.lla[_every(len(fwd.time), 4 * MAX_LINE_POINTS)], ref)
+    # thinned on latitude and longitude (north and east to within the Earth's curvature), then turned local
+    pf = earth.lla_to_ned(fwd.lla[_thin(len(fwd.time), [fwd.lla[:, 0], fwd.lla[:, 1]], 4 * MAX_LINE_POINTS)], ref)
     ax.plot(pf[:, 1], pf[:, 0], lw=0.8, color="tab:blue", label="forward filter")
     if res.smoothed is not None:
-        ps = earth.lla_to_ned(res.smoothed.nav.lla[_every(len(res.smoothed.nav.time), 4 * MAX_LINE_POINTS)], ref)
+        sl = res.smoothed.nav.lla
+        ps = earth.lla_to_ned(sl[_thin(len(sl), [sl[:, 0], sl[:, 1]], 4 * MAX_LINE_POINTS)], ref)
         ax.plot(ps[:, 1], ps[:, 0], lw=0.8, color="tab:green", label="RTS smoother")
     ax.set_xlabel("east [m]")
     ax.set_ylabel("north [m]")
@@ -154,13 +177,14 @@ def _errors(c, path, plt):
         for j, name in enumerate(("north", "east", "down")):
             ax = axes[j]
             # no line across a gap of the fixes: nothing was measured there
-            ax.plot(*line_breaks(tg - t0, d[:, j]), lw=0.7, color=color)
+            ax.plot(*_thin_line(tg - t0, d[:, j]), lw=0.7, color=color)
             errs[j].append(d[:, j])
             sig = si.extra.get(("sigma_n_m", "sigma_e_m", "sigma_d_m")[j])
             if sig is not None:  # the uncoupled scheme has no covariance: no envelope
                 has_sigma = True
-                ax.plot(*line_breaks(tg - t0, 3 * sig), lw=0.5, ls="--", color=color)
-                ax.plot(*line_breaks(tg - t0, -3 * sig), lw=0.5, ls="--", color=color)
+                tb, sb = _thin_line(tg - t0, 3 * sig)
+                ax.plot(tb, sb, lw=0.5, ls="--", color=color)
+                ax.plot(tb, -sb, lw=0.5, ls="--", color=color)
             if rej.any() and label == "forward":
                 ax.plot(tg[rej] - t0, d[rej, j], "x", ms=5, mew=1.2, color="tab:red", zorder=5)
             ax.set_ylabel(f"{name} [m]")
@@ -191,6 +215,8 @@ def _errors(c, path, plt):
     return save_figure(fig, path)
 
 
+#: the legend of the rows of a measurement with one row per satellite in view
+SATELLITE_ROWS = "each row (satellite)"
 #: what each row of a measurement's innovation is (its legend), where the rows are fixed
 COMPONENTS = {"gnss_pos": ("north", "east", "down"), "gnss_vel": ("north", "east", "down"),
               "zupt": ("v north", "v east", "v down"), "nhc": ("lateral (body y)", "vertical (body z)")}
@@ -208,7 +234,39 @@ def _symlog_ticks(ax, lim, lin):
     ax.yaxis.set_major_formatter(FuncFormatter(lambda v, _: f"{v:g}"))
 
 
+def _innovation_rows(v, name):
+    """One measurement's innovation record, one entry per row of every
+    update, flat: ``(t, z = nu / sigma, component index, refused, component
+    names)``; a row is refused when its own gate or its update's refused it.
+    Rows that are satellites (named by the record's ``label``, or as many
+    as are in view) are one component: row j is not the same satellite from
+    one update to the next."""
+    nu, sg = v["nu"], v["sigma"]
+    acc = np.asarray(v["accepted"], bool)
+    if nu.dtype == object or "label" in v:  # one row per satellite in view: all rows of an update at its time
+        k = np.asarray(v["dof"], np.int64)
+        z = (np.concatenate([np.ravel(a) for a in nu]) / np.concatenate([np.ravel(a) for a in sg]) if len(nu)
+             else np.empty(0))
+        comp = np.zeros(len(z), np.int64)
+        names = [SATELLITE_ROWS]
+    else:
+        k = np.full(len(v["t"]), nu.shape[1], np.int64)
+        z = (nu / sg).reshape(-1)
+        comp = np.tile(np.arange(nu.shape[1]), len(v["t"]))
+        known = COMPONENTS.get(name, ())
+        names = [known[j] if j < len(known) else f"component {j}" for j in range(nu.shape[1])]
+    refused = np.repeat(~acc, k)
+    st = v.get("status")  # per row: one satellite refused while the others were used
+    if st is not None and len(st) == len(z):
+        refused |= np.asarray(st) != 0
+    return np.repeat(np.asarray(v["t"], float), k), z, comp, refused, names
+
+
 def _innovations(c, path, plt):
+    from matplotlib.lines import Line2D
+
+    from .report import decimate_scatter
+
     res, t0 = c.res, c.t0
     # innovations
     inn = res.forward.innovations
@@ -219,34 +277,45 @@ def _innovations(c, path, plt):
                 f"({res.settings.scheme} scheme)", ha="center", va="center", transform=ax.transAxes)
         ax.set_axis_off()
         return save_figure(fig, path)
+    # fixed, not the rcParams cycle: a library imported beside inskit (gnss_lib_py sets its own) changed them
+    colours = ["tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:pink", "tab:olive", "tab:cyan"]
     fig, axes = plt.subplots(len(names), 1, figsize=(11, 2.6 * len(names)), sharex=True, squeeze=False)
+    thinned = False
     for ax, k in zip(axes[:, 0], names):
         v = inn[k]
-        nu, sg = v["nu"], v["sigma"]
-        acc = np.asarray(v["accepted"], bool)
-        if nu.dtype == object:  # one row per satellite in view: all rows of an update at its time
-            tt = np.repeat(v["t"], v["dof"])
-            z = np.concatenate(list(nu)) / np.concatenate(list(sg)) if len(nu) else np.empty(0)
-            st = v.get("status")  # per row: one satellite refused while the others were used
-            ok = (np.asarray(st) == 0) if st is not None and len(st) == len(z) else np.repeat(acc, v["dof"])
-            ax.plot(tt[ok] - t0, z[ok], ".", ms=1.5, label="each row (satellite)")
-            bad = [(tt[~ok], z[~ok])]
-        else:
-            z = nu / sg
-            names_j = COMPONENTS.get(k, ())
-            for j in range(nu.shape[1]):
-                ax.plot(v["t"][acc] - t0, z[acc, j], ".", ms=1.5,
-                        label=names_j[j] if j < len(names_j) else f"component {j}")
-            bad = [(v["t"][~acc], z[~acc, j]) for j in range(nu.shape[1])]
-        n_bad = int((~acc).sum())
+        tt, z, comp, refused, labels = _innovation_rows(v, k)
+        finite = np.isfinite(z)
+        # each component thinned on its own (its extremes and its bulk), then all drawn in one shuffled
+        # order: drawn one after the other, the last (down, the NHC's vertical) covered the others whole
+        # on a long log, which then showed a green or orange band and nothing of north and east
+        keep, handles = [], []
+        for j, label in enumerate(labels):
+            m = np.flatnonzero((comp == j) & ~refused & finite)
+            sel = m[decimate_scatter(len(m), z[m], MAX_SCATTER_POINTS, SCATTER_EXTREMES)]
+            thinned |= len(sel) < len(m)
+            keep.append(sel)
+            handles.append(Line2D([], [], ls="none", marker="o", ms=3, mew=0, color=colours[j % len(colours)],
+                                  label=label))
+        sel = np.concatenate(keep)
+        sel = sel[np.random.default_rng(0).permutation(len(sel))]
+        ax.scatter(tt[sel] - t0, z[sel], s=3, c=np.asarray(colours, dtype=object)[comp[sel] % len(colours)].tolist(),
+                   linewidths=0, zorder=2)
+        n_bad = int(refused.sum())
         if n_bad:
-            tb = np.concatenate([b[0] for b in bad])
-            zb = np.concatenate([b[1] for b in bad])
-            ax.plot(tb - t0, zb, "x", ms=4, mew=1.0, color="tab:red", label=f"rejected ({n_bad} update{'s' if n_bad > 1 else ''})")
-        ax.axhline(3, color="k", lw=0.5, ls="--", label="±3")
+            m = np.flatnonzero(refused & finite)
+            bad = m[decimate_scatter(len(m), z[m], MAX_SCATTER_POINTS)]
+            thinned |= len(bad) < len(m)
+            n_upd = len(np.unique(tt[refused]))
+            ups = f"{n_upd} update{'s' if n_upd > 1 else ''}"
+            what = f"{n_bad} row{'s' if n_bad > 1 else ''} in {ups}" if labels == [SATELLITE_ROWS] else ups
+            ax.plot(tt[bad] - t0, z[bad], "x", ms=4, mew=1.0, color="tab:red", zorder=3)
+            handles.append(Line2D([], [], ls="none", marker="x", ms=4, mew=1.0, color="tab:red",
+                                  label=f"rejected ({what})"))
+        ax.axhline(3, color="k", lw=0.5, ls="--")
         ax.axhline(-3, color="k", lw=0.5, ls="--")
+        handles.append(Line2D([], [], color="k", lw=0.5, ls="--", label="±3"))
         ax.set_ylabel(f"{k}\nnu / sigma")
-        zf = np.abs(z[np.isfinite(z)]) if z.size else np.empty(0)
+        zf = np.abs(z[finite])
         zmax = float(zf.max()) if zf.size else 0.0
         if zmax > 30:  # decades: a symlog axis, linear within the gate's +-3
             lim = 10 ** (np.log10(zmax) + 0.15)  # the worst point inside, not on the frame
@@ -256,13 +325,14 @@ def _innovations(c, path, plt):
         else:
             lim = max(8.0, 1.05 * zmax)  # the whole range, the worst case included
             ax.set_ylim(-lim, lim)
-        h, lab = ax.get_legend_handles_labels()
-        patch = _outage_patch(res.windows)  # beside the frame: inside it, it hid points
-        ax.legend(h + patch, lab + [p.get_label() for p in patch], fontsize=7, loc="upper left",
+        # beside the frame: inside it, it hid points
+        ax.legend(handles=handles + _outage_patch(res.windows), fontsize=7, loc="upper left",
                   bbox_to_anchor=(1.005, 1.0), frameon=False)
         ax.grid(alpha=0.3)
         _shade(ax, res.windows, t0)
-    axes[0, 0].set_title("normalised innovations (dashed: ±3; x: refused by the gate)")
+    axes[0, 0].set_title("normalised innovations (dashed: ±3; x: refused by the gate)" + (
+        f"\nthinned to at most {MAX_SCATTER_POINTS} points per component, each time bin's extremes kept"
+        if thinned else ""))
     axes[-1, 0].set_xlabel("time after first GNSS fix [s]")
     fig.tight_layout()
     return save_figure(fig, path)
@@ -272,7 +342,9 @@ def _biases(c, path, plt):
     res, fwd, t0 = c.res, c.fwd, c.t0
     # sensor-error estimates, in the datasheet units of the report (deg/h, mg)
     fig, axes = plt.subplots(2, 1, figsize=(11, 6), sharex=True)
-    k = _every(len(fwd.time))
+    bg = [fwd.extra[f"bg_{a}_rad_s"] for a in "xyz"]
+    ba = [fwd.extra[f"ba_{a}_m_s2"] for a in "xyz"]
+    k = _thin(len(fwd.time), bg + ba)  # a spike of an estimate is kept (an even stride could step over it)
     tt = fwd.time[k] - t0
     for a in "xyz":
         axes[0].plot(tt, fwd.extra[f"bg_{a}_rad_s"][k] / DEG_PER_HOUR, lw=0.8, label=a)

@@ -104,16 +104,17 @@ def decimate(n, ys, max_points=MAX_POINTS):
     return idx[idx < n]
 
 
-def decimate_scatter(n, y, max_points=MAX_POINTS):
+def decimate_scatter(n, y, max_points=MAX_POINTS, extremes=None):
     """Indices of at most ``max_points`` of ``n`` scattered samples ``y``
-    that show both their extremes and their bulk: half the points are the
-    minimum and maximum of each bin (:func:`decimate`), the rest an even
-    stride over all samples.  The extremes alone draw a cloud of
-    innovations as two bands at its edges, none near zero where most lie
-    (the 8 h drive's 26 000 fixes looked bimodal at +-2 sigma)."""
+    that show both their extremes and their bulk: ``extremes`` points
+    (default half) are the minimum and maximum of each bin
+    (:func:`decimate`), the rest an even stride over all samples.  The
+    extremes alone draw a cloud of innovations as two bands at its edges,
+    none near zero where most lie (the 8 h drive's 26 000 fixes looked
+    bimodal at +-2 sigma)."""
     if n <= max_points:
         return np.arange(n)
-    ext = decimate(n, [y], max_points // 2)
+    ext = decimate(n, [y], max_points // 2 if extremes is None else min(int(extremes), max_points))
     rest = np.linspace(0, n - 1, max(0, max_points - len(ext))).astype(np.int64)
     return np.unique(np.concatenate([ext, rest]))
 
