@@ -25,9 +25,10 @@ from .cli_output import emit as _emit
 @click.option("--force", is_flag=True, help="Overwrite the HTML file if it exists.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON summary object on stdout.")
 def report(run_dir, out_file, force, as_json):
-    """One self-contained HTML page (plotly inlined, works offline) of a
-    navigate run folder: health, key figures, track, sigmas, innovations,
-    sensor estimates, outages and the configuration used."""
+    """One self-contained HTML page (plotly inlined, compressed; works
+    offline in Chrome/Edge 80+, Firefox 113+, Safari 16.4+) of a navigate
+    run folder: health, key figures, track, sigmas, innovations, sensor
+    estimates, outages and the configuration used."""
     from .jobs.report import build_report
 
     res = build_report(run_dir, out_file, overwrite=force)
