@@ -1,5 +1,6 @@
 """inskit.jobs.simulate: the scenario plot."""
 
+from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
@@ -26,4 +27,39 @@ def test_scenario_plot_does_not_join_the_yaw_across_its_wrap(tmp_path, monkeypat
     _, y = att.get_lines()[2].get_data()
     ok = ~np.isnan(y)
     assert (np.abs(np.diff(y))[ok[1:] & ok[:-1]] < 180).all()
-    assert ok.sum() == len(t[::10])  # every point plotted still drawn
+    assert ok.sum() == n  # every point still drawn (too few to be thinned)
+
+
+def test_scenario_track_is_drawn_over_thinned_fixes_with_a_legend(tmp_path, monkeypatch):
+    """scenario.png of the car drive: its 1843 GNSS dots were drawn after
+    the truth line and hid it whole (the panel was grey, 'dots: GNSS' in
+    the title the only key); now the fixes lie under the line, at most
+    MAX_FIX_DOTS of them, and a legend below the frame names both."""
+    from matplotlib.colors import to_rgb
+
+    from inskit.simulation.scenario import load_scenario, simulate
+
+    sc = load_scenario(Path(__file__).resolve().parents[1] / "examples" / "car.toml")
+    sim = simulate(sc.model_copy(update={"imu": sc.imu.model_copy(update={"rate_hz": 40.0})}), seed=1)
+    # the fixes of a 4 h drive: ten copies of each
+    many = SimpleNamespace(lla=np.repeat(sim.gnss.lla, 10, axis=0))
+    figs = []
+    monkeypatch.setattr(JS, "save_figure", lambda fig, path, dpi=110: figs.append(fig))
+    JS._plot(SimpleNamespace(truth=sim.truth, gnss=many, scenario=sim.scenario), tmp_path / "s.png")
+    fig = figs[0]
+    fig.canvas.draw()
+    track = fig.axes[0]
+    dots, line = track.get_lines()
+    assert dots.get_marker() == "." and len(dots.get_xdata()) <= JS.MAX_FIX_DOTS
+    assert line.get_zorder() > dots.get_zorder()
+    img = np.asarray(fig.canvas.buffer_rgba())[..., :3].astype(float) / 255.0
+    b = track.get_window_extent()
+    h = img.shape[0]
+    panel = img[int(h - b.y1) + 2:int(h - b.y0) - 2, int(b.x0) + 2:int(b.x1) - 2]
+    blue = int((np.abs(panel - to_rgb("tab:blue")).sum(axis=2) < 0.25).sum())
+    grey = int((np.abs(panel - to_rgb("0.6")).sum(axis=2) < 0.1).sum())
+    assert blue > grey, (blue, grey)  # the track shows; the dots beside it
+    labels = [t.get_text() for t in track.get_legend().get_texts()]
+    assert labels == ["truth", f"GNSS fixes ({len(many.lla)}, every 10th drawn)"]
+    for ax in (track, fig.axes[3]):  # below the frame, over no line
+        assert ax.get_legend().get_window_extent().y1 <= ax.get_window_extent().y0

@@ -42,10 +42,11 @@ def _thin(n, ys, max_points=MAX_LINE_POINTS):
     return decimate(n, ys, max_points)
 
 
-def _thin_line(t, y, max_points=MAX_LINE_POINTS):
-    """``line_breaks(t, y)`` decimated: the breaks (NaN points) found on
-    every sample and all kept, the values thinned to each bin's extremes."""
-    tb, yb = line_breaks(t, y)
+def _thin_line(t, y, max_points=MAX_LINE_POINTS, **breaks):
+    """``line_breaks(t, y, **breaks)`` decimated: the breaks (NaN points)
+    found on every sample and all kept, the values thinned to each bin's
+    extremes."""
+    tb, yb = line_breaks(t, y, **breaks)
     if len(tb) <= max_points:
         return tb, yb
     k = np.union1d(_thin(len(tb), [yb], max_points), np.flatnonzero(np.isnan(yb)))

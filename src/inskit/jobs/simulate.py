@@ -117,34 +117,53 @@ def _write_raw(sim, obs_path, nav_path, truth_path):
     }, float_format="%.15g")
 
 
+#: most GNSS fixes drawn as dots on the scenario's track (an even stride beyond: an outage stays a gap)
+MAX_FIX_DOTS = 2000
+
+
 def _plot(sim, path):
+    """``scenario.png``: the truth track over the GNSS fixes, speed, height
+    and attitude, drawn from thinned rows (each bin's extremes,
+    :func:`inskit.jobs.plots._thin`)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
 
     from .. import earth
-    from ..analysis import line_breaks
+    from .plots import MAX_LINE_POINTS, _thin, _thin_line
 
     tr = sim.truth
-    p = earth.lla_to_ned(tr.lla[::10], tr.lla[0])
+    k = _thin(len(tr.time), [tr.lla[:, 0], tr.lla[:, 1]], 4 * MAX_LINE_POINTS)
+    p = earth.lla_to_ned(tr.lla[k], tr.lla[0])
     fig, ax = plt.subplots(2, 2, figsize=(11, 8))
-    ax[0, 0].plot(p[:, 1], p[:, 0], lw=0.8)
+    # the fixes under the track, light and thinned: drawn over it, 1843 grey dots of the car's 31 min hid the
+    # whole line (and 14 400 of a 4 h drive would)
     g = earth.lla_to_ned(sim.gnss.lla, tr.lla[0])
-    ax[0, 0].plot(g[:, 1], g[:, 0], ".", ms=1.5, color="0.5")
-    ax[0, 0].set_aspect("equal")
+    step = max(1, -(-len(g) // MAX_FIX_DOTS))
+    ax[0, 0].plot(g[::step, 1], g[::step, 0], ".", ms=2.5, color="0.6", zorder=1)
+    ax[0, 0].plot(p[:, 1], p[:, 0], lw=1.0, color="tab:blue", zorder=2)
+    # equal scales by widening the data limits: a long north-south drive kept a narrow frame
+    ax[0, 0].set_aspect("equal", adjustable="datalim")
     ax[0, 0].set_xlabel("east [m]")
     ax[0, 0].set_ylabel("north [m]")
-    ax[0, 0].set_title(f"{sim.scenario.name}: track (dots: GNSS)")
-    tt = tr.time[::10]
-    ax[0, 1].plot(tt, np.linalg.norm(tr.v_n[::10], axis=1))
+    ax[0, 0].set_title(f"{sim.scenario.name}: track")
+    fixes = f"GNSS fixes ({len(g)}" + (f", every {step}th drawn)" if step > 1 else ")")
+    ax[0, 0].legend(handles=[Line2D([], [], color="tab:blue", lw=1.0, label="truth"),
+                             Line2D([], [], ls="none", marker=".", ms=5, color="0.6", label=fixes)],
+                    fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, frameon=False)
+    speed = np.linalg.norm(tr.v_n, axis=1)
+    k = _thin(len(tr.time), [speed, tr.lla[:, 2]])
+    ax[0, 1].plot(tr.time[k], speed[k])
     ax[0, 1].set_ylabel("speed [m/s]")
-    ax[1, 0].plot(tt, tr.lla[::10, 2])
+    ax[1, 0].plot(tr.time[k], tr.lla[k, 2])
     ax[1, 0].set_ylabel("height [m]")
-    rpy = np.degrees(tr.euler[::10])
+    rpy = np.degrees(tr.euler)
     for j, nme in enumerate(("roll", "pitch", "yaw")):  # broken at the +-180 deg wrap: no swing drawn there
-        ax[1, 1].plot(*line_breaks(tt, rpy[:, j], period=360.0), lw=0.8, label=nme)
-    ax[1, 1].legend(fontsize=8)
+        ax[1, 1].plot(*_thin_line(tr.time, rpy[:, j], period=360.0), lw=0.8, label=nme)
+    # below the frame: inside it, the legend hid the yaw held at 180 deg
+    ax[1, 1].legend(fontsize=8, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=3, frameon=False)
     ax[1, 1].set_ylabel("attitude [deg]")
     for a in (ax[0, 1], ax[1, 0], ax[1, 1]):
         a.set_xlabel("time [s]")
