@@ -44,6 +44,7 @@ def test_report_json(run_dir, tmp_path):
     # tight coupling never fuses the RTK fixes: they are scored as a reference, not as a fit
     assert "against the reference fixes (never fused)" in text and "fit to the used fixes" not in text
     assert "unhealthy" not in text
+    assert '"customdata":["G' in text  # a range's innovation hovers with its satellite, not its row index
 
 
 def test_report_default_path_and_table(run_dir):

@@ -216,6 +216,9 @@ def read_innovations(path):
     out = {}
     for name, g in df.groupby("measurement", sort=False):
         out[str(name)] = {c: g[c].to_numpy(float) for c in ("t", "row", "nu", "sigma", "accepted")}
+        # what each row is (a satellite, an axis), in files that say it
+        out[str(name)]["label"] = (g["label"].fillna("").astype(str).to_numpy() if "label" in df.columns
+                                   else g["row"].astype(int).astype(str).to_numpy())
     return out
 
 
@@ -474,6 +477,10 @@ def _fig_innovations(run, go, make_subplots):
         v = run.innov[name]
         with np.errstate(divide="ignore", invalid="ignore"):
             z = np.where(v["sigma"] > 0, v["nu"] / v["sigma"], np.nan)
+        # rows that are satellites (row j is another satellite from one update to the next) hover by name
+        lab, rows = v["label"], v["row"].astype(np.int64)
+        _, first, inv = np.unique(rows, return_index=True, return_inverse=True)
+        by_label = bool(len(lab)) and bool((lab != "").all()) and bool((lab != lab[first][inv]).any())
         for m, label, colour in ((v["accepted"] > 0.5, "accepted", "#1f77b4"),
                                  (v["accepted"] <= 0.5, "rejected", "#d62728")):
             k = np.flatnonzero(m & np.isfinite(z))
@@ -484,8 +491,9 @@ def _fig_innovations(run, go, make_subplots):
             fig.add_trace(go.Scatter(x=_round(v["t"][kk] - run.t0, 6), y=_round(z[kk], 3), mode="markers",
                                      name=label, legendgroup=label, showlegend=r == 1,
                                      marker=dict(size=3, color=colour),
-                                     customdata=v["row"][kk].astype(int),
-                                     hovertemplate="t %{x:.2f} s, ν/σ %{y:.2f}, row %{customdata}"),
+                                     customdata=(v["label"][kk] if by_label else v["row"][kk].astype(int)),
+                                     hovertemplate="t %{x:.2f} s, ν/σ %{y:.2f}, "
+                                                   + ("%{customdata}" if by_label else "row %{customdata}")),
                           row=r, col=1)
         for g in (-3, 3):
             fig.add_hline(y=g, line=dict(color="#555", width=1, dash="dash"), row=r, col=1)
