@@ -61,15 +61,36 @@ def check_smoothing_samples(samples) -> int:
     return n
 
 
+def _local_line(x, w):
+    """Each of ``x`` replaced by the least-squares line through the ``w``
+    values centred on it (odd ``w <= len(x)``), the first and last ``w // 2``
+    by the line through the first and last ``w`` values: a Savitzky-Golay
+    filter of order 1 with its ends fitted.  The moving average is taken of
+    the residual from the straight line through the ends, so that the sums
+    stay small however long the stretch (written here rather than imported
+    from scipy.signal, whose import alone costs a quarter of a second)."""
+    n, h = len(x), w // 2
+    i = np.arange(n, dtype=float)
+    trend = x[0] + (x[-1] - x[0]) * i / (n - 1)
+    r = x - trend
+    out = np.empty(n)
+    out[h:n - h] = np.convolve(r, np.full(w, 1.0 / w), mode="valid")
+    j = np.arange(w, dtype=float)
+    for lo, hi, at in ((0, w, slice(0, h)), (n - w, n, slice(n - h, n))):
+        slope, icpt = np.polyfit(j, r[lo:hi], 1)
+        out[at] = icpt + slope * (np.arange(n)[at] - lo)
+    return out + trend
+
+
 def smooth_time_tags(path, t, samples, *, info=None):
     """The time tags ``t`` smoothed over ``samples`` consecutive rows.
 
     Within each stretch between gaps (an interval longer than
     :data:`STRETCH_GAP_FACTOR` median intervals), each tag is replaced by the
     value at its row of the least-squares straight line through the
-    ``samples`` tags centred on it (a Savitzky-Golay filter of order 1: the
-    moving average inside the stretch, a line fitted to its first and last
-    ``samples`` rows at its ends).  A stretch shorter than ``samples`` rows
+    ``samples`` tags centred on it (:func:`_local_line`: the moving average
+    inside the stretch, a line fitted to its first and last ``samples`` rows
+    at its ends).  A stretch shorter than ``samples`` rows
     keeps its tags.
 
     Parameters
@@ -105,14 +126,12 @@ def smooth_time_tags(path, t, samples, *, info=None):
                     time_tag_interval_median_s=med, time_smoothing_samples=samples)
     if samples == 1 or len(t) < 3:
         return t
-    from scipy.signal import savgol_filter
-
     dt = np.diff(t)
     ends = np.flatnonzero(dt > STRETCH_GAP_FACTOR * np.median(dt)) + 1
     out = t.copy()
     for a, b in zip(np.r_[0, ends], np.r_[ends, len(t)]):
         if b - a >= samples:
-            out[a:b] = t[a] + savgol_filter(t[a:b] - t[a], samples, 1, mode="interp")
+            out[a:b] = t[a] + _local_line(t[a:b] - t[a], samples)
     bad = np.flatnonzero(np.diff(out) <= 0)
     if bad.size:
         i = int(bad[0]) + 1
