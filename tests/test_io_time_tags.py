@@ -107,3 +107,13 @@ def test_the_rate_reader_smooths_and_an_increment_file_refuses(tmp_path):
                  "0.01,1e-5,0,0,0,0,-0.098\n0.02,1e-5,0,0,0,0,-0.098\n")
     with pytest.raises(InputError, match="time_smoothing_samples = 11 applies to rate files"):
         C.read_imu(q, time_smoothing=11)
+
+
+@pytest.mark.parametrize("n, w", [(11, 11), (12, 11), (500, 11), (20000, 21), (37, 5)])
+def test_the_local_line_is_scipys_order_one_savitzky_golay(n, w):
+    from scipy.signal import savgol_filter
+
+    from inskit.io.time_tags import _local_line
+
+    x = np.cumsum(0.01 + np.random.default_rng(n).uniform(-1e-3, 1e-3, n))
+    assert np.allclose(_local_line(x, w), savgol_filter(x, w, 1, mode="interp"), rtol=0, atol=1e-12)
