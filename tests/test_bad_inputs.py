@@ -276,8 +276,8 @@ def test_truncated_csv(capsys, sim, tmp_path):
 
 
 @pytest.mark.parametrize("content, expected", [
-    (bytes(range(256)) * 40, "not a readable CSV file"),
-    (b"\x89PNG\r\n\x1a\n" + np.random.default_rng(0).bytes(3000), "not a readable CSV file"),
+    (bytes(range(256)) * 40, "line 1 holds NUL (zero) bytes, which no text holds: not a text file"),
+    (b"\x89PNG\r\n\x1a\n" + np.random.default_rng(0).bytes(3000), "line 4 holds NUL (zero) bytes"),
     (b"<html><body>404 not found</body></html>\n", "has a header but no data rows"),
     ("time_s,dtheta_x_rad\n\u00e9t\u00e9,\u2603\n".encode(), "line 2: column 'time_s' has '\u00e9t\u00e9'"),
 ])
@@ -291,6 +291,22 @@ def test_garbage_csv(capsys, sim, tmp_path, content, expected):
     assert not out.exists()
 
 
+def test_a_file_saved_as_utf16_or_damaged_by_zero_bytes_is_named_as_such(capsys, sim, tmp_path):
+    """Windows PowerShell's '>' saves UTF-16: navigate said 'not a readable CSV file ('utf-8' codec can't
+    decode byte 0xff in position 0: invalid start byte)'.  A block of NUL bytes inside a truth file (a
+    logger that lost power) was scored: pandas read '0.0123<NUL...>45' as 0.0123."""
+    bad = tmp_path / "imu.csv"
+    bad.write_bytes((sim / "imu.csv").read_text().replace("\n", "\r\n").encode("utf-16"))
+    refused(navigate(capsys, sim, tmp_path, imu=bad), str(bad), "is UTF-16 text", "save it as UTF-8")
+    assert empty_or_absent(tmp_path / "nav")
+    lines = lines_of(sim / "truth.csv")
+    lines[1000] = lines[1000][:30] + "\0" * 512 + lines[1000][30:]
+    truth = tmp_path / "truth.csv"
+    truth.write_text("".join(lines))
+    refused(run(capsys, "evaluate", sim / "truth.csv", truth), str(truth), "line 1001 holds NUL (zero) bytes",
+            "damaged in writing")
+
+
 # --- 7. gzip under a .csv name, truncated gzip -------------------------------------------------------
 def test_gzip_under_a_csv_name_is_read(capsys, sim, tmp_path):
     z = tmp_path / "imu.csv"
@@ -300,7 +316,10 @@ def test_gzip_under_a_csv_name_is_read(capsys, sim, tmp_path):
     assert json.loads(out)["epochs"] == len(lines_of(sim / "imu.csv")) - 1
     data = z.read_bytes()
     z.write_bytes(data[: len(data) // 2])  # a download cut short
-    refused(run(capsys, "mechanize", z, "--init", "45,7,300,0,0,0,0,0,0"), str(z), "not a readable CSV file")
+    refused(run(capsys, "mechanize", z, "--init", "45,7,300,0,0,0,0,0,0"), str(z), "a damaged gzip file", "cut short")
+    z.write_bytes(data[:10] + bytes(b ^ 0x5A for b in data[10:]))  # corrupt data after a good gzip header
+    refused(run(capsys, "mechanize", z, "--init", "45,7,300,0,0,0,0,0,0"), str(z), "a damaged gzip file",
+            "its data is corrupt")  # was zlib's 'Error -3 while decompressing data', exit 3 (a bug)
 
 
 # --- 8. semicolons -------------------------------------------------------------------------------------

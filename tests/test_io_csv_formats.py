@@ -3,6 +3,8 @@ Parquet) are read straight into their arrays, exactly (every double as Python's 
 ``float()`` reads its text), and every other file still goes the pandas way, whose messages name the
 line and the column."""
 
+import re
+
 import numpy as np
 import pytest
 
@@ -159,7 +161,8 @@ def test_a_truncated_gzip_log_is_refused_with_its_name(tmp_path):
     data = gzip.compress(p.read_bytes())
     gz = tmp_path / "cut.csv.gz"
     gz.write_bytes(data[: len(data) // 2])
-    with pytest.raises(InputError, match=r"cut\.csv\.gz: not a readable CSV file"):
+    with pytest.raises(InputError, match=r"cut\.csv\.gz: a damaged gzip file: its data ends before the compressed "
+                                         r"stream does \(cut short"):
         C.read_imu(gz)
 
 
@@ -491,3 +494,108 @@ def test_read_solution_ranges_false_reads_a_diverged_solution_but_not_a_malforme
     bad.write_text((tmp_path / "s.csv").read_text().replace("\n1,", "\n0,", 1))
     with pytest.raises(InputError, match="duplicate timestamp"):  # the form is still checked
         io.read_solution(bad, ranges=False)
+
+
+_GNSS = ("time_s,lat_deg,lon_deg,height_m,sigma_n_m,sigma_e_m,sigma_d_m\n"
+         "0,45,7,300,0.5,0.5,1\n1,45.00001,7,300,0.5,0.5,1\n2,45.00002,7,300,0.5,0.5,1\n")
+
+
+@pytest.mark.parametrize("encoding, needle", [
+    ("utf-16", "is UTF-16 text (it starts with the byte-order mark FF FE)"),  # PowerShell 5 '>', Excel 'Unicode Text'
+    ("utf-16-be", "is UTF-16 text without a byte-order mark"),
+    ("utf-16-le", "is UTF-16 text without a byte-order mark"),
+    ("utf-32", "is UTF-32 text (it starts with the byte-order mark FF FE 00 00)"),
+])
+@pytest.mark.parametrize("kind", ["imu", "gnss", "solution", "gzip"])
+def test_a_file_saved_as_utf16_or_utf32_is_named_as_such(tmp_path, encoding, needle, kind):
+    """A CSV saved as UTF-16 was 'not a readable CSV file ('utf-8' codec can't decode byte 0xff in position 0:
+    invalid start byte)' with a byte-order mark, and 'missing column(s) time_s ...; found t, Unnamed: 1, ...'
+    without one."""
+    import gzip
+
+    t, dth, dv = _increments(50)
+    p = tmp_path / "f.csv"
+    if kind in ("imu", "gzip"):
+        _write(p, t, dth, dv)
+    elif kind == "gnss":
+        p.write_text(_GNSS)
+    else:
+        sol = C.NavSolution(t, np.tile([0.7, 0.1, 100.0], (50, 1)), np.zeros((50, 3)), np.tile([1.0, 0, 0, 0], (50, 1)))
+        C.write_solution(p, sol)
+    text = p.read_text().replace("\n", "\r\n").encode(encoding)
+    p.write_bytes(gzip.compress(text) if kind == "gzip" else text)
+    read = {"imu": C.read_imu, "gzip": C.read_imu, "gnss": io.read_gnss, "solution": C.read_solution}[kind]
+    with pytest.raises(InputError, match=re.escape(f"f.csv: {needle}") + ".*save it as UTF-8"):
+        read(p)
+
+
+@pytest.mark.parametrize("kind", ["rates", "increments", "increments.gz", "gnss"])
+def test_nul_bytes_in_a_cell_are_refused_naming_the_line_not_read_as_a_shorter_number(tmp_path, kind):
+    """A block of zero bytes in a log (a logger that lost power) inside a number: pandas' parser ended the
+    number at the first NUL and dropped the rest of the cell, so '1.2547<NUL x 50>6971e-3' was read as
+    1.2547 (an angle increment a thousand times too large) and the run went on without a word."""
+    import gzip
+
+    if kind == "gnss":
+        text = _GNSS.replace("45.00001", "45.0\0\0\0\0\0\0\0\00001")
+        line = 3
+    else:
+        t, dth, dv = _increments(400)
+        p = tmp_path / "clean.csv"
+        _write(p, t, dth, dv)
+        text = p.read_text()
+        if kind == "rates":
+            text = text.replace("dtheta_", "gyro_").replace("_rad,", "_rad_s,").replace("dv_", "accel_")
+            text = text.replace("_m_s,", "_m_s2,").replace("dv_z_m_s\n", "accel_z_m_s2\n").replace("_m_s\n", "_m_s2\n")
+            rows = text.splitlines(True)
+            text = rows[0] + "".join(r for r in rows[2:])  # rates: a first row like the others
+        rows = text.splitlines(True)
+        cells = rows[300].split(",")
+        cells[3] = cells[3][:5] + "\0" * 50 + cells[3][5:]
+        rows[300] = ",".join(cells)
+        text = "".join(rows)
+        line = 301
+    p = tmp_path / "f.csv"
+    data = text.encode()
+    p.write_bytes(gzip.compress(data) if kind.endswith(".gz") else data)
+    read = io.read_gnss if kind == "gnss" else (lambda q: C.read_imu(q, check_units=False))
+    with pytest.raises(InputError, match=rf"f\.csv: line {line} holds NUL \(zero\) bytes, which no text holds: not "
+                                         r"a text file, or one damaged in writing"):
+        read(p)
+
+
+def test_a_corrupt_gzip_file_is_refused_not_an_internal_error(tmp_path):
+    """A gzip file whose compressed data is damaged raised zlib's 'Error -3 while decompressing data: invalid
+    code lengths set', which the command line showed as an internal error (exit 3, 'this is a bug')."""
+    import gzip
+
+    t, dth, dv = _increments(3000)
+    p = tmp_path / "imu.csv"
+    _write(p, t, dth, dv)
+    data = gzip.compress(p.read_bytes())
+    p.write_bytes(data[:20] + bytes(b ^ 0xA5 for b in data[20:2000]) + data[2000:])
+    for read in (C.read_imu, io.read_imu, io.read_gnss, C.read_solution, C.read_height):
+        with pytest.raises(InputError, match=r"imu\.csv: a damaged gzip file: its data is corrupt \(.*\): a "
+                                             r"corrupted copy or download\?"):
+            read(p)
+
+
+def test_a_byte_that_is_not_utf8_is_named_by_its_line(tmp_path):
+    """A Latin-1 degree sign in a cell: 'not a readable CSV file ('utf-8' codec can't decode byte 0xb0 in
+    position 13: invalid start byte)', a position in a block of pandas' reader, not in the file."""
+    p = tmp_path / "gnss.csv"
+    p.write_bytes(_GNSS.replace("45.00002", "45.00002\xb0").encode("latin-1"))
+    with pytest.raises(InputError, match=r"gnss\.csv: line 4: byte 0xb0 is not UTF-8 \(a binary file, or text saved "
+                                         r"in another encoding such as Latin-1 or Windows-1252\)"):
+        io.read_gnss(p)
+
+
+def test_a_row_with_a_field_too_many_names_its_line_and_the_counts(tmp_path):
+    """It was pandas' 'not a readable CSV file (Error tokenizing data. C error: Expected 7 fields in line 5,
+    saw 8)'."""
+    p = tmp_path / "gnss.csv"
+    p.write_text("time_s,lat_deg,lon_deg,height_m,sigma_n_m,sigma_e_m,sigma_d_m\n"
+                 "0,45,7,300,0.5,0.5,1\n1,45.00001,7,300,0.5,0.5,1\n\n"  # a blank line counts as a line
+                 "2,45.00002,7,300,0,5,0.5,1\n")  # a decimal comma
+    with pytest.raises(InputError, match=r"gnss\.csv: line 5: has 8 fields, the header names 7: a comma too many"):
+        io.read_gnss(p)

@@ -32,8 +32,39 @@ def test_a_truncated_gzip_pos_names_the_file(tmp_path):
     data = DRIVE_POS.read_bytes()
     p = tmp_path / "cut.pos.gz"
     p.write_bytes(data[: len(data) // 2])
-    with pytest.raises(InputError, match=r"cut\.pos\.gz: not a readable \.pos file \(.*\): truncated"):
+    with pytest.raises(InputError, match=r"cut\.pos\.gz: a damaged gzip file: .* \(cut short"):
         read_pos(p)
+
+
+@pytest.mark.parametrize("fault, needle", [
+    ("utf-16", r"is UTF-16 text \(it starts with the byte-order mark FF FE\).*save it as UTF-8"),
+    ("utf-16-le", r"is UTF-16 text without a byte-order mark"),
+    ("nul", r"line 4 holds NUL \(zero\) bytes, which no text holds: not a text file, or one damaged in writing"),
+    ("corrupt gzip", r"a damaged gzip file: its data is corrupt"),
+])
+@pytest.mark.parametrize("reader", ["read_pos", "read_gnss"])
+def test_a_pos_file_that_is_no_utf8_text_is_named_as_such(tmp_path, fault, needle, reader):
+    """Saved as UTF-16, it was 'no '%  GPST latitude(deg) ...' column header line: not an RTKLIB .pos file'
+    (read_pos) or 'not a readable CSV file ('utf-8' codec can't decode byte 0xff ...)' (read_gnss); a corrupt
+    gzip file was zlib's 'Error -3 while decompressing data' (an internal error); NUL bytes in a number
+    were refused with the cell's NULs shown (read_pos) or as CSV (read_gnss)."""
+    from inskit.io import read_gnss
+
+    text = gzip.decompress(DRIVE_POS.read_bytes()).decode()
+    if fault == "nul":
+        lines = text.splitlines(True)
+        lines[3] = lines[3][:40] + "\0" * 30 + lines[3][40:]
+        data = "".join(lines).encode()
+    elif fault == "corrupt gzip":
+        raw = DRIVE_POS.read_bytes()
+        data = raw[:20] + bytes(b ^ 0xA5 for b in raw[20:2000]) + raw[2000:]
+    else:
+        data = text.encode(fault)
+    p = tmp_path / "sol.pos"
+    p.write_bytes(data)
+    read = read_pos if reader == "read_pos" else read_gnss
+    with pytest.raises(InputError, match=r"sol\.pos: " + needle):
+        read(p)
 
 
 @pytest.mark.parametrize("week, shown", [("2374.5", "2374.5"), ("-1", "-1")])

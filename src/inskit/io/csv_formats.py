@@ -13,6 +13,8 @@ unless blank lines, which the parsers skip, come before it
 
 from __future__ import annotations
 
+import io
+import zlib
 from pathlib import Path
 
 import numpy as np
@@ -85,13 +87,25 @@ def read_table(path) -> tuple:
         _refuse_repeated_names(path, head.split(","))
     import pandas as pd  # here, not at import: the lean readers and the writers need no pandas
 
+    # only an empty cell is missing: 'nan', 'NA', 'null' stay text, so a message can show what the cell holds
+    options = {"skipinitialspace": True, "keep_default_na": False, "na_values": [""]}
     try:
-        # only an empty cell is missing: 'nan', 'NA', 'null' stay text, so a message can show what the cell holds
-        df = pd.read_csv(path, skipinitialspace=True, compression="gzip" if gz else "infer",
-                         keep_default_na=False, na_values=[""])
+        if not gz and path.suffix.lower() in _PANDAS_COMPRESSIONS:  # another compression, which pandas infers
+            df = pd.read_csv(path, compression="infer", **options)
+        else:  # plain or gzip: its bytes checked as pandas reads them (a NUL byte, UTF-16)
+            with CheckedBytes(path) as stream:
+                df = pd.read_csv(stream, compression=None, **options)
+    except TextFault as exc:
+        raise InputError(str(exc)) from None
     except pd.errors.EmptyDataError:
         raise InputError(f"{path}: the file is empty; expected a header line and data rows") from None
-    except (pd.errors.ParserError, UnicodeDecodeError, EOFError, OSError) as exc:
+    except pd.errors.ParserError as exc:
+        raise InputError(_parser_error_message(path, exc)) from None
+    except UnicodeDecodeError:
+        raise InputError(undecodable_message(path)) from None
+    except GZIP_ERRORS as exc:
+        if gz:
+            raise InputError(gzip_damage_message(path, exc)) from None
         raise InputError(f"{path}: not a readable CSV file ({str(exc).splitlines()[0]})") from None
     df.columns = [str(c).strip() for c in df.columns]
     if len(df.columns) == 1 and any(sep in df.columns[0] for sep in (";", "\t")):
@@ -105,6 +119,25 @@ def read_table(path) -> tuple:
     if blank:
         df = df.drop(columns=blank)
     return path, df
+
+
+#: file name suffixes of the compressions other than gzip that pandas infers from the name (gzip is told by content)
+_PANDAS_COMPRESSIONS = (".bz2", ".xz", ".zip", ".zst", ".tar")
+
+
+def _parser_error_message(path, exc) -> str:
+    """pandas' tokenizer error ('Error tokenizing data. C error: Expected 7
+    fields in line 9, saw 8') as a message of ours: the line (pandas counts
+    a text editor's lines) and its count of fields against the header's."""
+    import re
+
+    text = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    m = re.search(r"Expected (\d+) fields in line (\d+), saw (\d+)", text)
+    if m:
+        want, line, saw = (int(g) for g in m.groups())
+        return (f"{path}: line {line}: has {saw} fields, the header names {want}: a comma too many (a decimal "
+                "comma, a text with a comma in it, rows of another table?)")
+    return f"{path}: not a readable CSV file ({text})"
 
 
 def data_line(path, row) -> int:
@@ -196,6 +229,175 @@ def _first_line(path):
 def _is_gzip(path) -> bool:
     with open(path, "rb") as fh:
         return fh.read(2) == b"\x1f\x8b"
+
+
+#: what damaged gzip data raises while it is decompressed: zlib's error (corrupt data), EOFError (cut short),
+#: gzip.BadGzipFile (an OSError: a bad header or check sum)
+GZIP_ERRORS = (zlib.error, EOFError, OSError)
+
+
+def gzip_damage_message(path, exc) -> str:
+    """The message of a gzip file whose data cannot be decompressed
+    (``exc``, one of :data:`GZIP_ERRORS`): cut short, or corrupted."""
+    detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+    if isinstance(exc, EOFError):
+        return (f"{path}: a damaged gzip file: its data ends before the compressed stream does (cut short: copied "
+                "or downloaded incompletely, or still being written?)")
+    return f"{path}: a damaged gzip file: its data is corrupt ({detail}): a corrupted copy or download?"
+
+
+class TextFault(Exception):
+    """A fault in a text file's bytes (:func:`text_fault`): its message
+    is the user's (the caller raises it as an InputError)."""
+
+
+#: byte-order marks of the text encodings a spreadsheet or a shell may save instead of UTF-8 (UTF-32 before
+#: UTF-16: FF FE 00 00 starts with FF FE)
+_BOMS = ((b"\xff\xfe\x00\x00", "UTF-32", "FF FE 00 00"), (b"\x00\x00\xfe\xff", "UTF-32", "00 00 FE FF"),
+         (b"\xff\xfe", "UTF-16", "FF FE"), (b"\xfe\xff", "UTF-16", "FE FF"))
+_SAVE_AS_UTF8 = ("inskit reads UTF-8: save it as UTF-8 (Excel: 'CSV UTF-8'; PowerShell: '| Out-File -Encoding utf8' "
+                 "rather than '>')")
+
+
+def text_fault(path, head: bytes, offset=None, what="comma-separated text") -> str | None:
+    """Why a file is no UTF-8 text, from its bytes, or None.
+
+    Parameters
+    ----------
+    path : Path
+        The file (plain or gzip: its decompressed bytes), for the message and
+        for the line of a NUL byte.
+    head : bytes
+        Its first bytes (decompressed), at least its first line when it has
+        one.
+    offset : int, optional
+        Where a NUL byte was found (decompressed bytes from the start), when
+        the caller has seen one beyond ``head``.
+    what : str
+        What the file should hold, for the message.
+
+    Returns
+    -------
+    str or None
+        * UTF-16 or UTF-32 text, told by its byte-order mark (Excel's 'Unicode
+          Text', Windows PowerShell's ``>``), or UTF-16 without one (every
+          other byte of the first line zero);
+        * a NUL byte, which no text holds: not a text file, or one damaged in
+          writing (a logger that lost power, a full disk: blocks of zeros).
+    """
+    for bom, enc, shown in _BOMS:
+        if head.startswith(bom):
+            return (f"{path}: is {enc} text (it starts with the byte-order mark {shown}), as Excel's 'Unicode Text' "
+                    f"and Windows PowerShell's '>' save it; {_SAVE_AS_UTF8}")
+    if offset is None:
+        offset = head.find(b"\x00")
+        if offset < 0:
+            return None
+    first = head.split(b"\n", 1)[0][:200]
+    if len(first) >= 4 and offset < len(first) and any(
+            not any(first[k::2]) and all(first[1 - k::2]) for k in (0, 1)):
+        return (f"{path}: is UTF-16 text without a byte-order mark (every other byte of its first line is zero); "
+                f"{_SAVE_AS_UTF8}")
+    return (f"{path}: line {_line_of_offset(path, offset)} holds NUL (zero) bytes, which no text holds: not a text "
+            "file, or one damaged in writing (a logger that lost power or a full disk leaves blocks of zeros); "
+            f"expected {what}")
+
+
+def _line_of_offset(path, offset) -> int:
+    """The line (from 1) of byte ``offset`` of a file (plain or gzip:
+    decompressed bytes), for a message: the line ends before it, plus 1."""
+    import gzip
+
+    n, seen = 1, 0
+    try:
+        with (gzip.open(path, "rb") if _is_gzip(path) else open(path, "rb")) as fh:
+            while seen < offset:
+                block = fh.read(min(1 << 24, offset - seen))
+                if not block:
+                    break
+                n += block.count(b"\n")
+                seen += len(block)
+    except Exception:  # noqa: BLE001 (a damaged file: the count so far)
+        pass
+    return n
+
+
+def undecodable_message(path, what="comma-separated text") -> str:
+    """The message of a file with a byte that is no UTF-8 (after a
+    UnicodeDecodeError): the line and the byte, found by decoding the file
+    (plain or gzip) again, in blocks; a message only."""
+    import codecs
+    import gzip
+
+    dec = codecs.getincrementaldecoder("utf-8-sig")()
+    line = 1
+    try:
+        with (gzip.open(path, "rb") if _is_gzip(path) else open(path, "rb")) as fh:
+            while True:
+                block = fh.read(1 << 22)
+                try:
+                    text = dec.decode(block, final=not block)
+                except UnicodeDecodeError as exc:
+                    line += exc.object[:exc.start].count(b"\n")
+                    return (f"{path}: line {line}: byte 0x{exc.object[exc.start]:02x} is not UTF-8 (a binary file, "
+                            "or text saved in another encoding such as Latin-1 or Windows-1252); expected UTF-8 "
+                            f"{what}: save it as UTF-8")
+                line += text.count("\n")
+                if not block:
+                    break
+    except GZIP_ERRORS as exc:
+        return gzip_damage_message(path, exc)
+    return f"{path}: not UTF-8 text; expected UTF-8 {what} (save it as UTF-8)"
+
+
+class CheckedBytes(io.RawIOBase):
+    """A binary stream over a file (plain or gzip, decompressed) that
+    refuses, as it is read, what :func:`text_fault` refuses (a byte-order
+    mark of UTF-16 or UTF-32 at its start, a NUL byte anywhere), raising
+    :class:`TextFault`.  For a parser that reads the file once anyway
+    (pandas): the check costs a ``find`` per block, no second pass.
+
+    pandas' C parser ends a number at a NUL byte and drops the rest of the
+    cell: a cell ``1.2547<NUL x 50>6971e-3`` was read as 1.2547 (rad, an
+    angle increment a thousand times too large) without a word.
+    """
+
+    def __init__(self, path, what="comma-separated text"):
+        import gzip
+
+        super().__init__()
+        self.path, self.what = Path(path), what
+        self._raw = gzip.open(path, "rb") if _is_gzip(path) else open(path, "rb")
+        self._seen = 0
+        self._head = b""
+
+    def readable(self):
+        return True
+
+    def read(self, size=-1):
+        data = self._raw.read(size)
+        self._check(data)
+        return data
+
+    def readinto(self, b):
+        data = self.read(len(b))
+        b[:len(data)] = data
+        return len(data)
+
+    def _check(self, data):
+        if not self._seen:
+            self._head = data[:4096]
+            fault = text_fault(self.path, data, what=self.what)
+        else:
+            k = data.find(b"\x00")
+            fault = None if k < 0 else text_fault(self.path, self._head, self._seen + k, self.what)
+        if fault:
+            raise TextFault(fault)
+        self._seen += len(data)
+
+    def close(self):
+        self._raw.close()
+        super().close()
 
 
 def check_path_argument(path, name="path"):

@@ -78,7 +78,7 @@ def _first_lines(path, n=_PEEK_LINES) -> list:
                 if len(out) >= n:
                     break
             return out
-    except (OSError, EOFError, UnicodeError):
+    except Exception:  # noqa: BLE001 (damaged gzip data raises zlib.error too: the reader then says why)
         return []
 
 

@@ -7,6 +7,7 @@ that must agree take the same ``week0``.
 
 from __future__ import annotations
 
+import io
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -18,8 +19,9 @@ from ..errors import InputError
 from ..files import require_file
 from ..types import GnssData, ImuData, check_euler
 from ..units import DEG, G0, MAX_HEIGHT_M
-from .csv_formats import (_header_names, at_row, check_imu_time, check_imu_units, check_time_column,
-                          lean_columns, numeric_columns, open_text, read_table, repeated_rows, require_columns)
+from .csv_formats import (GZIP_ERRORS, CheckedBytes, TextFault, _header_names, at_row, check_imu_time,
+                          check_imu_units, check_time_column, gzip_damage_message, lean_columns, numeric_columns,
+                          read_table, repeated_rows, require_columns)
 from .time_tags import smooth_time_tags
 
 GPS_EPOCH = datetime(1980, 1, 6, tzinfo=timezone.utc)
@@ -157,7 +159,9 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0, info=None):
     if info is not None:
         info["pos_heights"] = "ellipsoidal"
     try:
-        with open_text(path) as fh:
+        # a NUL byte or UTF-16 refused as read (CheckedBytes); a byte that is no UTF-8 (a comment's accent) replaced
+        with io.TextIOWrapper(io.BufferedReader(CheckedBytes(path, "RTKLIB .pos solution text"), 1 << 20),
+                              encoding="utf-8-sig", errors="replace") as fh:
             for lineno, line in enumerate(fh, start=1):
                 if line.startswith("%"):
                     if "height=" in line and "geodetic" in line.lower() and info is not None:
@@ -169,9 +173,10 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0, info=None):
                     continue
                 if line.strip():
                     rows.append((lineno, _pos_fields(line, sep)))
-    except (EOFError, OSError) as exc:  # a truncated or damaged gzip file
-        raise InputError(f"{path}: not a readable .pos file ({str(exc).splitlines()[0]}): truncated or "
-                         "damaged?") from None
+    except TextFault as exc:
+        raise InputError(str(exc)) from None
+    except GZIP_ERRORS as exc:  # a truncated or damaged gzip file
+        raise InputError(gzip_damage_message(path, exc)) from None
     if header is None:
         raise InputError(f"{path}: no '%  GPST latitude(deg) ...' (or x-ecef(m)) column header line: not an RTKLIB "
                          ".pos file")
