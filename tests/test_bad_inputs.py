@@ -769,6 +769,23 @@ def test_an_rtklib_pos_latitude_beyond_the_pole_is_refused(capsys, sim, tmp_path
         assert empty_or_absent(tmp_path / "nav")
 
 
+def test_rtklib_pos_rows_without_their_header_are_named_as_such(capsys, sim, tmp_path):
+    """navigate --gnss rows.pos (the default [gnss] format "inskit") said 'missing column(s) time_s, lat_deg,
+    ...; found 2025/08/27 17:30:00.000 45.0000000 7.0000000 ...; the file looks like the 'rtklib-pos' format',
+    and with --gnss-format rtklib-pos 'not an RTKLIB .pos file'."""
+    pos = tmp_path / "rows.pos"
+    row = "2025/08/27 17:30:{s:06.3f}   45.0000000  7.0000000  300.000   1   8   0.0100   0.0100   0.0300   0.0000" \
+          "   0.0000   0.0000   0.00    0.0\n"
+    pos.write_text("".join(row.format(s=float(i)) for i in range(5)))
+    for fmt in ((), ("--gnss-format", "rtklib-pos")):
+        err = refused(run(capsys, "navigate", "--imu", sim / "imu.csv", "--gnss", pos, *fmt, "--out", tmp_path / "nav",
+                          "--no-plots"), str(pos), "holds RTKLIB .pos solution rows ('2025/08/27 17:30:00.000' ...) "
+                      "but no '%' column header line above them", "if the times are GPST, put RTKLIB's header line "
+                      "for these 15 fields first: '%  GPST  latitude(deg)")
+        assert ("then set [gnss] format = \"rtklib-pos\"" in err) == (not fmt)
+        assert empty_or_absent(tmp_path / "nav")
+
+
 def test_rates_near_the_float_limit_do_not_slip_past_the_unit_check(capsys, sim, rates, tmp_path):
     """Gyro values of 1e300 under a rad/s header overflowed the norm to inf;
     the NaN percentiles then passed every rule and the log was accepted."""

@@ -2,6 +2,7 @@
 download (:func:`inskit.io.rtklib.read_pos`)."""
 
 import gzip
+import re
 from pathlib import Path
 
 import numpy as np
@@ -65,6 +66,44 @@ def test_a_pos_file_that_is_no_utf8_text_is_named_as_such(tmp_path, fault, needl
     read = read_pos if reader == "read_pos" else read_gnss
     with pytest.raises(InputError, match=r"sol\.pos: " + needle):
         read(p)
+
+
+@pytest.mark.parametrize("comments", [0, 1])
+def test_pos_rows_without_their_column_header_are_refused_saying_what_is_missing(tmp_path, comments):
+    """Rows without the '%  GPST  latitude(deg) ...' line: read_gnss took the file for the inskit CSV
+    ('missing column(s) time_s, lat_deg, ...; found 2025/07/08 19:34:18.499 40.0966268 -105.1474483 ...'),
+    read_pos said 'not an RTKLIB .pos file'.  The header names the time system (UTC is 18 s from GPST), so
+    the rows are not read on a guess; the message gives RTKLIB's header line for the rows' layout, and with
+    it first the file reads as the original."""
+    from inskit.io import read_gnss
+    from inskit.io.formats import detect_gnss_format
+
+    ref, _ = read_pos(DRIVE_POS)
+    lines = gzip.decompress(DRIVE_POS.read_bytes()).decode().splitlines(True)
+    assert lines[0].startswith("%") and not lines[1].startswith("%")
+    p = tmp_path / "rows.pos"
+    p.write_text("% program   : RTKPOST ver.demo5\n" * comments + "".join(lines[1:]))
+    assert detect_gnss_format(p) == "rtklib-pos"
+    for read in (read_pos, read_gnss):
+        with pytest.raises(InputError, match=r"rows\.pos: holds RTKLIB \.pos solution rows \('2025/07/08 "
+                                             r"19:34:18\.499' \.\.\.\) but no '%' column header line above them, "
+                                             r"which names their time system .*out-outhead = on\), or, if the times "
+                                             r"are GPST, put RTKLIB's header line for these 24 fields first") as exc:
+            read(p)
+    header = re.search(r"fields first: '([^']*)'", str(exc.value)).group(1)
+    p.write_text(header + "\n" + "".join(lines[1:]))
+    g, _ = read_pos(p)
+    assert np.array_equal(g.time, ref.time) and np.array_equal(g.lla, ref.lla) and np.array_equal(g.v_n, ref.v_n)
+
+
+def test_ecef_rows_without_their_header_get_no_guessed_header_line(tmp_path):
+    """15 fields as an llh file has, but ECEF metres, not degrees: no header line is offered."""
+    p = tmp_path / "xyz.pos"
+    p.write_text("2374 243258.499  -1288159.1234  -4720805.5678   4079537.9012   1  21   0.0100   0.0100   0.0100"
+                 "   0.0000   0.0000   0.0000   0.00    0.0\n" * 2)
+    with pytest.raises(InputError, match=r"xyz\.pos: holds RTKLIB \.pos solution rows .*out-outhead = on\) "
+                                         r"\('%  GPST  latitude\(deg\)  longitude\(deg\) .* \.\.\.'\)$"):
+        read_pos(p)
 
 
 @pytest.mark.parametrize("week, shown", [("2374.5", "2374.5"), ("-1", "-1")])

@@ -104,8 +104,9 @@ def detect_imu_format(path) -> str | None:
 
 def detect_gnss_format(path) -> str | None:
     """The GNSS format of ``path``: ``"rtklib-pos"`` when its first line is
-    an RTKLIB ``%`` comment, ``"inskit"`` when its header holds ``time_s``,
-    else None."""
+    an RTKLIB ``%`` comment (or a .pos data row: the file lacks its header,
+    which :func:`inskit.io.rtklib.read_pos` then says), ``"inskit"`` when
+    its header holds ``time_s``, else None."""
     lines = _first_lines(path, 1)
     if not lines:
         return None
@@ -113,6 +114,10 @@ def detect_gnss_format(path) -> str | None:
         return "rtklib-pos"
     if "time_s" in [c.strip() for c in lines[0].split(",")]:
         return "inskit"
+    from .rtklib import looks_like_pos_row
+
+    if looks_like_pos_row(lines[0]):  # .pos rows without their '%' header: read_pos says what is missing
+        return "rtklib-pos"
     return None
 
 

@@ -8,6 +8,7 @@ that must agree take the same ``week0``.
 from __future__ import annotations
 
 import io
+import re
 from datetime import datetime, timezone
 from pathlib import Path
 
@@ -178,8 +179,8 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0, info=None):
     except GZIP_ERRORS as exc:  # a truncated or damaged gzip file
         raise InputError(gzip_damage_message(path, exc)) from None
     if header is None:
-        raise InputError(f"{path}: no '%  GPST latitude(deg) ...' (or x-ecef(m)) column header line: not an RTKLIB "
-                         ".pos file")
+        raise InputError(headerless_pos_message(path) or f"{path}: no '%  GPST latitude(deg) ...' (or x-ecef(m)) "
+                         "column header line: not an RTKLIB .pos file")
     hline, header = header
     tsys = header[0]
     if tsys not in POS_TIME_SYSTEMS:
@@ -256,6 +257,61 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0, info=None):
         if (sv <= 0).any():
             v = sv = None  # velocity sigmas absent: treat the velocity as unusable
     return GnssData(t[keep], lla, sig, v, sv), week0
+
+
+#: a data row of a .pos file: a calendar date and time (``2025/07/08 19:34:18.499``) or a GPS week and seconds of
+#: week (``2374 243258.499``), then at least five numbers, separated by blanks or RTKLIB's out-fieldsep
+_POS_ROW = re.compile(r"\s*(\d{4}/\d{1,2}/\d{1,2}\s+\d{1,2}:\d{2}:\d{2}(\.\d*)?|\d{1,4}\s+\d+(\.\d*)?)"
+                      r"([\s,;]+[-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?){5,}[\s,;]*")
+#: RTKLIB's column header of an llh solution with degrees, without and with velocity (its outsolhead), by the
+#: number of fields of a row
+_POS_LLH_HEADER = ("%  GPST  latitude(deg)  longitude(deg)  height(m)  Q  ns  sdn(m)  sde(m)  sdu(m)  sdne(m)  "
+                   "sdeu(m)  sdun(m)  age(s)  ratio")
+_POS_DEFAULT_HEADERS = {15: _POS_LLH_HEADER,
+                        24: _POS_LLH_HEADER + "  vn(m/s)  ve(m/s)  vu(m/s)  sdvn  sdve  sdvu  sdvne  sdveu  sdvun"}
+
+
+def looks_like_pos_row(line) -> bool:
+    """Is ``line`` a data row of an RTKLIB .pos file (:data:`_POS_ROW`)?"""
+    return _POS_ROW.fullmatch(line.rstrip("\r\n")) is not None
+
+
+def headerless_pos_message(path, also="") -> str | None:
+    """The message of a .pos file whose rows come without their column
+    header line (``%  GPST  latitude(deg) ...``), or None when it has one
+    or its first row is no .pos row.
+
+    The header names the time system (GPST, UTC or JST: 18 s apart since
+    2017) and the columns (degrees or d m s, llh or xyz, with velocity or
+    not), so rows without it are not read on a guess; the message shows
+    the line RTKLIB writes for its default llh layout when the rows have
+    its number of fields and degrees where it has them.  ``also`` is added
+    to the advice (the format to set).
+    """
+    from .formats import _first_lines
+
+    first = None
+    for line in _first_lines(path):
+        if line.startswith("%"):
+            if any(c in line for c in _POS_HEADER_MARKS):
+                return None
+            continue
+        if line.strip():
+            first = line
+            break
+    if first is None or not looks_like_pos_row(first):
+        return None
+    fields = _pos_fields(first, next((c for c in (",", ";") if c in first), None))
+    default = _POS_DEFAULT_HEADERS.get(len(fields))
+    try:
+        degrees = abs(float(fields[2])) <= 90.0 and abs(float(fields[3])) <= 360.0 and "/" in fields[0]
+    except ValueError:
+        degrees = False
+    fix = (f", or, if the times are GPST, put RTKLIB's header line for these {len(fields)} fields first: {default!r}"
+           if default and degrees else " ('%  GPST  latitude(deg)  longitude(deg)  height(m)  Q  ns  sdn(m) ...')")
+    return (f"{path}: holds RTKLIB .pos solution rows ({first.strip()[:23]!r} ...) but no '%' column header line "
+            "above them, which names their time system (GPST, UTC or JST) and their columns: they are not read on a "
+            f"guess; write the solution with its header (RTKLIB: out-outhead = on){fix}{also}")
 
 
 #: a column header of a .pos file names one of these (RTKLIB's out-solformat llh, with degrees or d m s, or xyz)

@@ -330,8 +330,14 @@ def _format_hint(section, path, fmt):
         other = (detect_imu_format if section == "imu" else detect_gnss_format)(path)
         if other is None or other == fmt:
             raise
-        raise InputError(f"{exc}; the file looks like the {other!r} format: set [{section}] format = \"{other}\" "
-                         f"(or --{section}-format {other})") from None
+        setting = f"[{section}] format = \"{other}\" (or --{section}-format {other})"
+        if other == "rtklib-pos":  # .pos rows without their header: what is missing, not the CSV reader's refusal
+            from ..io.rtklib import headerless_pos_message
+
+            headerless = headerless_pos_message(path, also=f"; then set {setting}")
+            if headerless:
+                raise InputError(headerless) from None
+        raise InputError(f"{exc}; the file looks like the {other!r} format: set {setting}") from None
 
 
 def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = None, notes: dict | None = None):
