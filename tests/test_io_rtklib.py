@@ -68,8 +68,22 @@ def test_a_pos_file_that_is_no_utf8_text_is_named_as_such(tmp_path, fault, needl
         read(p)
 
 
-@pytest.mark.parametrize("comments", [0, 1])
-def test_pos_rows_without_their_column_header_are_refused_saying_what_is_missing(tmp_path, comments):
+def _as_form(line, form):
+    """A blank-separated calendar row of a .pos file as RTKLIB writes it with out-timeform = tow or
+    out-fieldsep = ','."""
+    from inskit.io.rtklib import gps_week_seconds
+
+    f = line.split()
+    if form == "tow":
+        week, sow = gps_week_seconds([f"{f[0]} {f[1]}"])
+        return f"{int(week[0])} {float(sow[0]):.3f} " + " ".join(f[2:]) + "\n"
+    if form == "comma":
+        return f"{f[0]} {f[1]}," + ",".join(f[2:]) + "\n"
+    return line
+
+
+@pytest.mark.parametrize("comments, form", [(0, "calendar"), (1, "calendar"), (0, "tow"), (0, "comma")])
+def test_pos_rows_without_their_column_header_are_refused_saying_what_is_missing(tmp_path, comments, form):
     """Rows without the '%  GPST  latitude(deg) ...' line: read_gnss took the file for the inskit CSV
     ('missing column(s) time_s, lat_deg, ...; found 2025/07/08 19:34:18.499 40.0966268 -105.1474483 ...'),
     read_pos said 'not an RTKLIB .pos file'.  The header names the time system (UTC is 18 s from GPST), so
@@ -81,17 +95,18 @@ def test_pos_rows_without_their_column_header_are_refused_saying_what_is_missing
     ref, _ = read_pos(DRIVE_POS)
     lines = gzip.decompress(DRIVE_POS.read_bytes()).decode().splitlines(True)
     assert lines[0].startswith("%") and not lines[1].startswith("%")
+    rows = "".join(_as_form(line, form) for line in lines[1:])
     p = tmp_path / "rows.pos"
-    p.write_text("% program   : RTKPOST ver.demo5\n" * comments + "".join(lines[1:]))
+    p.write_text("% program   : RTKPOST ver.demo5\n" * comments + rows)
     assert detect_gnss_format(p) == "rtklib-pos"
     for read in (read_pos, read_gnss):
-        with pytest.raises(InputError, match=r"rows\.pos: holds RTKLIB \.pos solution rows \('2025/07/08 "
-                                             r"19:34:18\.499' \.\.\.\) but no '%' column header line above them, "
+        with pytest.raises(InputError, match=r"rows\.pos: holds RTKLIB \.pos solution rows \('" + re.escape(
+                rows[:23]) + r"' \.\.\.\) but no '%' column header line above them, "
                                              r"which names their time system .*out-outhead = on\), or, if the times "
                                              r"are GPST, put RTKLIB's header line for these 24 fields first") as exc:
             read(p)
     header = re.search(r"fields first: '([^']*)'", str(exc.value)).group(1)
-    p.write_text(header + "\n" + "".join(lines[1:]))
+    p.write_text(header + "\n" + rows)
     g, _ = read_pos(p)
     assert np.array_equal(g.time, ref.time) and np.array_equal(g.lla, ref.lla) and np.array_equal(g.v_n, ref.v_n)
 

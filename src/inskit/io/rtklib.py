@@ -301,10 +301,14 @@ def headerless_pos_message(path, also="") -> str | None:
             break
     if first is None or not looks_like_pos_row(first):
         return None
-    fields = _pos_fields(first, next((c for c in (",", ";") if c in first), None))
+    sep = next((c for c in (",", ";") if c in first), None)
+    fields = _pos_fields(first, sep)
     default = _POS_DEFAULT_HEADERS.get(len(fields))
+    if default and sep:  # the rows' separator between the names too (RTKLIB's out-fieldsep)
+        names = default[1:].split()
+        default = f"%  {names[0]}{sep}{sep.join(names[1:])}"
     try:
-        degrees = abs(float(fields[2])) <= 90.0 and abs(float(fields[3])) <= 360.0 and "/" in fields[0]
+        degrees = abs(float(fields[2])) <= 90.0 and abs(float(fields[3])) <= 360.0
     except ValueError:
         degrees = False
     fix = (f", or, if the times are GPST, put RTKLIB's header line for these {len(fields)} fields first: {default!r}"
