@@ -599,3 +599,25 @@ def test_a_row_with_a_field_too_many_names_its_line_and_the_counts(tmp_path):
                  "2,45.00002,7,300,0,5,0.5,1\n")  # a decimal comma
     with pytest.raises(InputError, match=r"gnss\.csv: line 5: has 8 fields, the header names 7: a comma too many"):
         io.read_gnss(p)
+
+
+@pytest.mark.parametrize("gz", [False, True])
+def test_a_last_line_cut_short_is_named_as_such(tmp_path, gz):
+    """A log copied while still being written ends mid-line: it was 'line 12: column 'dv_x_m_s' is empty'
+    or 'has '3.15697030281273e-'', which read as a fault of the data rather than of the copy.  A bad last
+    line that ends in a line end gets no such note."""
+    import gzip
+
+    t, dth, dv = _increments(10)
+    p = tmp_path / "imu.csv"
+    _write(p, t, dth, dv)
+    text = p.read_text()
+    for cut, note in ((text[:text.rindex(",", 0, len(text) - 40)], True),          # mid-row, no line end
+                      (text[:text.rindex("e", 0, len(text) - 2) + 1], True),      # inside a number: '3.1e'
+                      (text[:text.rindex(",", 0, len(text) - 40)] + "\n", False)):  # a short row, complete
+        p.write_bytes(gzip.compress(cut.encode()) if gz else cut.encode())
+        with pytest.raises(InputError, match=r"imu\.csv: line 11: column '\w+' (is empty|has '[-0-9.e]+'); "
+                                             r"expected a finite number") as exc:
+            C.read_imu(p)
+        assert str(exc.value).endswith("; it is the last line and has no line end: the file seems cut short (still "
+                                       "being written, or copied incompletely?)") == note, str(exc.value)

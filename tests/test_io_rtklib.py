@@ -121,6 +121,16 @@ def test_ecef_rows_without_their_header_get_no_guessed_header_line(tmp_path):
         read_pos(p)
 
 
+def test_a_pos_file_cut_mid_line_is_named_as_such(tmp_path):
+    """It was 'line 406: has 12 fields, the header names 24', which did not say why."""
+    text = gzip.decompress(DRIVE_POS.read_bytes()).decode()
+    p = tmp_path / "cut.pos"
+    p.write_text(text[:text.index("\n", 20000) + 80])
+    with pytest.raises(InputError, match=r"cut\.pos: line \d+: has \d+ fields, the header names 24; it is the last "
+                                         r"line and has no line end: the file seems cut short"):
+        read_pos(p)
+
+
 @pytest.mark.parametrize("week, shown", [("2374.5", "2374.5"), ("-1", "-1")])
 def test_an_imu_log_week_that_is_no_week_number_is_refused(tmp_path, week, shown):
     """gps_week 2374.5 was truncated to 2374 without a word."""

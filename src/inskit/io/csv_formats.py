@@ -603,9 +603,43 @@ def numeric_columns(path, df, columns):
                 from .parquet import is_parquet
 
                 what = "is empty (null) or NaN" if is_parquet(path) else "is empty"
-            raise InputError(f"{path}: {at_row(path, i)}: column '{c}' {what}; expected a finite number")
+            cut = cut_short_note(path) if i == len(df) - 1 else ""
+            raise InputError(f"{path}: {at_row(path, i)}: column '{c}' {what}; expected a finite number{cut}")
         out[:, j] = col
     return out
+
+
+def cut_short_note(path) -> str:
+    """``"; ..."`` saying the file seems cut short when its last line has
+    no line end (a file still being written, or copied incompletely),
+    for the message of a fault in its last line; ``""`` otherwise (a
+    Parquet file, a file ending in a line end).  Reads to the end of a
+    gzip file: for a message only."""
+    import gzip
+
+    from .parquet import is_parquet
+
+    try:
+        if is_parquet(path):
+            return ""
+        if _is_gzip(path):
+            last = b""
+            with gzip.open(path, "rb") as fh:
+                while block := fh.read(1 << 24):
+                    last = block[-1:]
+        else:
+            with open(path, "rb") as fh:
+                fh.seek(0, 2)
+                if fh.tell() == 0:
+                    return ""
+                fh.seek(-1, 2)
+                last = fh.read(1)
+    except Exception:  # noqa: BLE001 (a damaged file: its message says so)
+        return ""
+    if not last or last in b"\r\n":
+        return ""
+    return ("; it is the last line and has no line end: the file seems cut short (still being written, or copied "
+            "incompletely?)")
 
 
 def require_columns(path, df, columns, hint=""):

@@ -21,8 +21,8 @@ from ..files import require_file
 from ..types import GnssData, ImuData, check_euler
 from ..units import DEG, G0, MAX_HEIGHT_M
 from .csv_formats import (GZIP_ERRORS, CheckedBytes, TextFault, _header_names, at_row, check_imu_time,
-                          check_imu_units, check_time_column, gzip_damage_message, lean_columns, numeric_columns,
-                          read_table, repeated_rows, require_columns)
+                          check_imu_units, check_time_column, cut_short_note, gzip_damage_message, lean_columns,
+                          numeric_columns, read_table, repeated_rows, require_columns)
 from .time_tags import smooth_time_tags
 
 GPS_EPOCH = datetime(1980, 1, 6, tzinfo=timezone.utc)
@@ -206,9 +206,10 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0, info=None):
     if missing:
         raise InputError(f"{path}: missing column(s) {', '.join(missing)} in the header")
     width = len(names)
-    for lineno, f in rows:
+    for k, (lineno, f) in enumerate(rows):
         if len(f) < width:
-            raise InputError(f"{path}: line {lineno}: has {len(f)} fields, the header names {width}")
+            cut = cut_short_note(path) if k == len(rows) - 1 else ""
+            raise InputError(f"{path}: line {lineno}: has {len(f)} fields, the header names {width}{cut}")
     # a few thousand lines of fields split above: columns by NumPy (no pandas, half a second to import)
     table = np.array([f[:width] for _, f in rows], dtype=str)
     linenos = np.array([ln for ln, _ in rows])
@@ -221,8 +222,9 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0, info=None):
         col = _floats(table[:, j])
         if (~np.isfinite(col)).any() and (c in need or c in _POS_VELOCITY["llh"] + _POS_VELOCITY["xyz"]):
             i = int(np.argmax(~np.isfinite(col)))
+            cut = cut_short_note(path) if i == len(rows) - 1 else ""
             raise InputError(f"{path}: line {linenos[i]}: column '{c}' has {str(table[i, j])!r}; expected a "
-                             "finite number")
+                             f"finite number{cut}")
         num[c] = col
     if form == "dms":
         for c in ("latitude", "longitude"):
