@@ -621,3 +621,31 @@ def test_a_last_line_cut_short_is_named_as_such(tmp_path, gz):
             C.read_imu(p)
         assert str(exc.value).endswith("; it is the last line and has no line end: the file seems cut short (still "
                                        "being written, or copied incompletely?)") == note, str(exc.value)
+
+
+@pytest.mark.parametrize("above, needle", [
+    ("# ", r"line 1 \('# \w+,.*'\) starts with '#', a comment mark, where the header must be: .*numpy\.savetxt"),
+    ("# exported by the logger\n", r"line 1 \('# exported by the logger'\) starts with '#', a comment mark"),
+    ("sep=,\n", r"line 1 is 'sep=,', a spreadsheet's separator hint, not the header: delete that line"),
+])
+@pytest.mark.parametrize("kind", ["imu", "gnss", "solution", "rtklibexplorer"])
+def test_a_first_line_that_is_not_the_header_says_what_it_is(tmp_path, above, needle, kind):
+    """numpy.savetxt's '# ' before the header, a comment above it, Excel's 'sep=,' line: the readers said
+    'missing column(s) time_s ...; found # time_s, dtheta_x_rad, ...' or '... found sep=, Unnamed: 1'."""
+    p = tmp_path / "f.csv"
+    if kind == "imu":
+        t, dth, dv = _increments(50)
+        _write(p, t, dth, dv)
+    elif kind == "gnss":
+        p.write_text(_GNSS)
+    elif kind == "rtklibexplorer":
+        p.write_text("gps_week,gps_sow_s,acc_x_g,acc_y_g,acc_z_g,gyro_x_dps,gyro_y_dps,gyro_z_dps,counter_ms\n"
+                     + "".join(f"2374,{243261.99 + 0.01 * i:.2f},0.1,0.0,1.0,0.1,0.2,0.3,{i}\n" for i in range(50)))
+    else:
+        n = 50
+        C.write_solution(p, C.NavSolution(12.0 + np.arange(n), np.tile([0.7, 0.1, 100.0], (n, 1)), np.zeros((n, 3)),
+                                          np.tile([1.0, 0, 0, 0], (n, 1))))
+    p.write_text(above + p.read_text())
+    read = {"imu": io.read_imu, "rtklibexplorer": io.read_imu, "gnss": io.read_gnss, "solution": C.read_solution}
+    with pytest.raises(InputError, match=r"f\.csv: " + needle):
+        read[kind](p)

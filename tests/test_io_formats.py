@@ -136,6 +136,24 @@ def test_a_byte_order_mark_does_not_hide_the_format(tmp_path):
     assert len(io.read_gnss(q)) == 2197
 
 
+def test_a_header_with_quoted_names_keeps_its_format(tmp_path):
+    """A spreadsheet that quotes every cell: '"gps_week","gps_sow_s",...' was taken for the inskit format and
+    refused ('missing column(s) time_s ...; found gps_week, gps_sow_s, ...', the names it had just read)."""
+    import gzip
+
+    lines = gzip.decompress(DRIVE_IMU.read_bytes())[:40000].decode().splitlines()[:-1]
+    plain, quoted = tmp_path / "plain.csv", tmp_path / "quoted.csv"
+    plain.write_text("\n".join(lines) + "\n")
+    quoted.write_text("\n".join(",".join(f'"{c}"' for c in line.split(",")) for line in lines) + "\n")
+    assert detect_imu_format(quoted) == "rtklibexplorer"
+    a, b = io.read_imu(plain), io.read_imu(quoted)
+    assert np.array_equal(a.time, b.time) and np.array_equal(a.dv_b, b.dv_b) and np.array_equal(a.dtheta_b, b.dtheta_b)
+    g = tmp_path / "gnss.csv"
+    g.write_text('"time_s","lat_deg","lon_deg","height_m","sigma_n_m","sigma_e_m","sigma_d_m"\n'
+                 "0,45,7,300,0.5,0.5,1\n1,45.00001,7,300,0.5,0.5,1\n")
+    assert detect_gnss_format(g) == "inskit" and len(io.read_gnss(g)) == 2
+
+
 def test_a_one_row_rtklibexplorer_log_is_refused(tmp_path):
     """`head -2` of the bundled log: one sample, which read_imu turned into a one-epoch log (mechanize then
     'navigated' 0 s)."""

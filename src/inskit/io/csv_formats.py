@@ -82,6 +82,7 @@ def read_table(path) -> tuple:
         gz = fh.read(2) == b"\x1f\x8b"
     head = _first_line(path)
     if head is not None and head.replace("\t", " ").isprintable():  # a text header (not binary garbage)
+        _refuse_header_in_disguise(path, head)
         if "," not in head and any(sep in head for sep in (";", "\t")):  # before pandas' 'Expected 1 fields'
             _refuse_separator(path, head)
         _refuse_repeated_names(path, head.split(","))
@@ -178,6 +179,24 @@ def at_row(path, row) -> str:
     from .parquet import is_parquet
 
     return f"row {int(row)}" if is_parquet(path) else f"line {data_line(path, row)}"
+
+
+def _refuse_header_in_disguise(path, head):
+    """A first line that is not the header but looks like one, or stands
+    above it, refused saying what it is: a spreadsheet's separator hint
+    (``sep=,``, which Excel writes and reads), or a line starting with
+    ``#`` (a comment above the header, or the header behind numpy.savetxt's
+    comment mark, which it writes unless ``comments=""``): the readers
+    found 'missing column(s) time_s; found # time_s, ...' or '... found
+    sep=, Unnamed: 1'."""
+    shown = head.strip()
+    if shown.lower().startswith("sep=") and len(shown) <= 6:
+        raise InputError(f"{path}: line 1 is {shown!r}, a spreadsheet's separator hint, not the header: delete that "
+                         "line (the column names must be the first line)")
+    if shown.startswith("#"):
+        raise InputError(f"{path}: line 1 ({shown[:60]!r}) starts with '#', a comment mark, where the header must "
+                         "be: the column names alone on the first line (numpy.savetxt writes '# ' before its header "
+                         "unless comments=''); delete the '#' (or the comment lines above the header)")
 
 
 def _refuse_separator(path, header):
@@ -446,6 +465,7 @@ def _header_names(path):
     except UnicodeDecodeError:
         return None
     if ",".join(names).replace("\t", " ").isprintable():  # a text header (not binary garbage)
+        _refuse_header_in_disguise(path, ",".join(names))
         _refuse_repeated_names(path, names)
     return names if len(names) > 1 and all(n and n == n.strip() for n in names) else None
 

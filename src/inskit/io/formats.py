@@ -84,7 +84,8 @@ def _first_lines(path, n=_PEEK_LINES) -> list:
 
 def _header_columns(path) -> list:
     lines = _first_lines(path, 1)
-    return [c.strip() for c in lines[0].split(",")] if lines else []
+    # a spreadsheet may quote every name ('"gps_week","gps_sow_s",...'), which pandas reads as the names
+    return [c.strip().strip('"').strip() for c in lines[0].split(",")] if lines else []
 
 
 def _format_list(formats) -> str:
@@ -112,7 +113,7 @@ def detect_gnss_format(path) -> str | None:
         return None
     if lines[0].startswith("%"):
         return "rtklib-pos"
-    if "time_s" in [c.strip() for c in lines[0].split(",")]:
+    if "time_s" in _header_columns(path):
         return "inskit"
     from .rtklib import looks_like_pos_row
 
