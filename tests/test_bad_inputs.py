@@ -189,6 +189,18 @@ def test_time_going_back_or_repeated(capsys, sim, tmp_path, kind):
     assert empty_or_absent(tmp_path / "nav")
 
 
+def test_gnss_times_in_milliseconds_are_named(capsys, sim, tmp_path):
+    """Fixes with time_s in ms (the IMU reader refuses an IMU log in ms, not fixes): navigate said only
+    'overlaps 1 used GNSS fix(es) ... (mismatched time bases, or logs of different runs?)'."""
+    rows = lines_of(sim / "gnss.csv")
+    bad = tmp_path / "gnss.csv"
+    bad.write_text(rows[0] + "".join(",".join([repr(1000.0 * float(r.split(",")[0]))] + r.split(",")[1:])
+                                     for r in rows[1:]))
+    refused(navigate(capsys, sim, tmp_path, gnss=bad), "overlaps 1 used GNSS fix(es)", "; the fixes span 51000 s, "
+            "986.3 times the IMU log's 51.71 s: is the fixes' time column in milliseconds (times must be seconds)?")
+    assert empty_or_absent(tmp_path / "nav")
+
+
 # --- 4. NaN and inf cells -----------------------------------------------------------------
 @pytest.mark.parametrize("cell, shown", [("nan", "'nan'"), ("", "is empty"), ("inf", "has inf"),
                                          ("-1e999", "has '-1e999'"), ("1,2e-3", None)])

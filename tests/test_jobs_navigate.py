@@ -1035,3 +1035,12 @@ def test_tight_innovation_file_says_per_satellite_row_what_the_gate_did(tmp_path
     assert (both[both.label == bad_sat].status == "refused_row_gate").sum() >= 15
     assert set(pr.label) <= set(sats)
     assert (df[df.measurement == "nhc"].label.isin(["lateral (body y)", "vertical (body z)"])).all()
+def test_time_unit_hint_speaks_only_for_spans_a_thousand_times_apart():
+    from inskit.jobs.navigate import time_unit_hint
+
+    imu = np.arange(0.0, 600.0, 0.01)
+    assert time_unit_hint(np.arange(0.0, 600.0), imu) == ""
+    assert time_unit_hint(np.arange(0.0, 7200.0), imu) == ""  # fixes logged longer than the IMU: no unit
+    assert "is the fixes' time column in milliseconds" in time_unit_hint(np.arange(0.0, 600.0) * 1000.0, imu)
+    assert "is the IMU log's time column in milliseconds" in time_unit_hint(np.arange(0.0, 600.0), imu * 1000.0)
+    assert time_unit_hint(np.array([5.0]), imu) == ""  # one fix: no span

@@ -400,12 +400,35 @@ def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = N
             f"GNSS ({gpath.name}: {gnss.time[0]:.3f}..{gnss.time[-1]:.3f} s) and IMU ({ipath.name}: "
             f"{imu.time[0]:.3f}..{imu.time[-1]:.3f} s) do not overlap: mismatched time bases?"
             + (" With RINEX the IMU time must be GPS seconds of week." if raw is not None else "")
+            + time_unit_hint(gnss.time, imu.time)
         )
     start = max(gnss.time[0], cfg.imu.start_s if cfg.imu.start_s is not None else -np.inf)
     k0 = int(np.searchsorted(imu.time, start))
     if len(imu) - k0 < 10:
         raise InputError(f"{ipath.name}: fewer than 10 IMU samples after the start time {start:.3f} s")
     return imu.slice(k0), gnss
+
+
+#: GNSS fixes and an IMU log of one run whose spans differ more than this many times have a time column in
+#: another unit (milliseconds: a thousand times)
+TIME_SPAN_RATIO_UNIT = 200.0
+
+
+def time_unit_hint(t_gnss, t_imu) -> str:
+    """``"; ..."`` for a message about GNSS fixes and an IMU log that do not
+    fit in time, when their spans differ by more than
+    :data:`TIME_SPAN_RATIO_UNIT` times: one time column in milliseconds
+    (the IMU reader refuses an IMU log in ms, not fixes: a fix every
+    1000 "s" is a plausible log of sparse fixes); ``""`` otherwise."""
+    span_g, span_i = float(t_gnss[-1] - t_gnss[0]), float(t_imu[-1] - t_imu[0])
+    if min(span_g, span_i) <= 0.0:
+        return ""
+    ratio = span_g / span_i
+    if max(ratio, 1.0 / ratio) < TIME_SPAN_RATIO_UNIT:
+        return ""
+    which = "the fixes'" if ratio > 1.0 else "the IMU log's"
+    return (f"; the fixes span {span_g:.6g} s, {ratio:.4g} times the IMU log's {span_i:.6g} s: is {which} time column "
+            "in milliseconds (times must be seconds)?")
 
 
 #: odometer speed / GNSS track speed outside this band (median while moving) is a unit or scale mistake
@@ -812,7 +835,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
             raise InputError(f"{cfg.resolve(cfg.imu.file) if cfg.imu.file else 'the IMU log'}: the IMU log "
                              f"({imu.time[0]:.3f}..{imu.time[-1]:.3f} s) overlaps {int(span.sum())} used GNSS "
                              "fix(es); the start-up needs the fixes while the IMU runs (mismatched time bases, "
-                             "or logs of different runs?)")
+                             f"or logs of different runs?){time_unit_hint(gnss_used.time, imu.time)}")
         g_start = gnss_used if span.all() else gnss_used.select(span)
 
         def start(imu):
@@ -1290,7 +1313,7 @@ def gnss_coverage_warnings(fix_time, imu_time, raw_update_time=None) -> list[str
     beyond = max(0.0, t0 - float(ft[0])) + max(0.0, float(ft[-1]) - t1) if len(ft) else 0.0
     if outside and beyond > OUTSIDE_IMU_WARN_S:  # a receiver started a few seconds before the IMU is no news
         out.append(f"GNSS: {outside} of {len(ft)} fixes lie outside the IMU log's span ({t0:.3f}..{t1:.3f} s) "
-                   "and are not used")
+                   f"and are not used{time_unit_hint(ft, imu_time)}")
     return out
 
 
