@@ -277,8 +277,9 @@ def test_truncated_csv(capsys, sim, tmp_path):
     bad = tmp_path / "imu.csv"
     bad.write_text(cut)
     n_lines = cut.count("\n") + 1
-    refused(navigate(capsys, sim, tmp_path, imu=bad), str(bad), f"line {n_lines}: column", "is empty",
-            "expected a finite number; it is the last line and has no line end: the file seems cut short")
+    refused(navigate(capsys, sim, tmp_path, imu=bad), str(bad), f"line {n_lines}: has ",
+            " fields, the header names 7: column", "is missing; expected a finite number; it is the last line and has "
+            "no line end: the file seems cut short")
     assert empty_or_absent(tmp_path / "nav")
     # a header and nothing else
     bad.write_text(text.splitlines()[0] + "\n")

@@ -616,8 +616,8 @@ def test_a_last_line_cut_short_is_named_as_such(tmp_path, gz):
                       (text[:text.rindex("e", 0, len(text) - 2) + 1], True),      # inside a number: '3.1e'
                       (text[:text.rindex(",", 0, len(text) - 40)] + "\n", False)):  # a short row, complete
         p.write_bytes(gzip.compress(cut.encode()) if gz else cut.encode())
-        with pytest.raises(InputError, match=r"imu\.csv: line 11: column '\w+' (is empty|has '[-0-9.e]+'); "
-                                             r"expected a finite number") as exc:
+        with pytest.raises(InputError, match=r"imu\.csv: line 11: (has \d fields, the header names 7: column '\w+' "
+                                             r"is missing|column '\w+' has '[-0-9.e]+'); expected a finite number") as exc:
             C.read_imu(p)
         assert str(exc.value).endswith("; it is the last line and has no line end: the file seems cut short (still "
                                        "being written, or copied incompletely?)") == note, str(exc.value)
@@ -649,3 +649,16 @@ def test_a_first_line_that_is_not_the_header_says_what_it_is(tmp_path, above, ne
     read = {"imu": io.read_imu, "rtklibexplorer": io.read_imu, "gnss": io.read_gnss, "solution": C.read_solution}
     with pytest.raises(InputError, match=r"f\.csv: " + needle):
         read[kind](p)
+
+
+def test_a_row_with_fields_missing_says_so_not_that_a_cell_is_empty(tmp_path):
+    """pandas fills the fields a short row lacks with NaN: it was 'line 4: column 'sigma_d_m' is empty',
+    whose cell was not empty but absent."""
+    p = tmp_path / "gnss.csv"
+    p.write_text(_GNSS.replace("2,45.00002,7,300,0.5,0.5,1", "2,45.00002,7,300,0.5"))
+    with pytest.raises(InputError, match=r"gnss\.csv: line 4: has 5 fields, the header names 7: column 'sigma_e_m' is "
+                                         r"missing; expected a finite number$"):
+        io.read_gnss(p)
+    p.write_text(_GNSS.replace("2,45.00002,7,300,0.5,0.5,1", "2,45.00002,7,300,0.5,,1"))
+    with pytest.raises(InputError, match=r"gnss\.csv: line 4: column 'sigma_e_m' is empty; expected a finite number$"):
+        io.read_gnss(p)

@@ -619,14 +619,39 @@ def numeric_columns(path, df, columns):
             raw = df[c].iloc[i]
             shown = plain_number(raw) if isinstance(raw, (int, float, np.number)) else repr(raw)
             what = f"has {shown}"
+            where = at_row(path, i)
             if isinstance(raw, float) and np.isnan(raw):  # an empty CSV cell; a null or a NaN in Parquet
                 from .parquet import is_parquet
 
                 what = "is empty (null) or NaN" if is_parquet(path) else "is empty"
+                short = None if is_parquet(path) else _short_row(path, int(where.split()[1]))
+                if short:  # pandas fills the fields a short row lacks with NaN: not an empty cell
+                    where += f": has {short[0]} fields, the header names {short[1]}"
+                    what = "is missing"
             cut = cut_short_note(path) if i == len(df) - 1 else ""
-            raise InputError(f"{path}: {at_row(path, i)}: column '{c}' {what}; expected a finite number{cut}")
+            raise InputError(f"{path}: {where}: column '{c}' {what}; expected a finite number{cut}")
         out[:, j] = col
     return out
+
+
+def _short_row(path, line):
+    """``(fields, header fields)`` when line ``line`` of CSV file ``path``
+    holds fewer fields than its header line, else None: for a message only
+    (the file is read again up to that line)."""
+    import csv
+
+    try:
+        with open_text(path) as fh:
+            header = None
+            for k, text in enumerate(fh, start=1):
+                if header is None and text.strip():
+                    header = len(next(csv.reader([text])))
+                if k == line:
+                    n = len(next(csv.reader([text]))) if text.strip() else 0
+                    return (n, header) if header and n < header else None
+    except Exception:  # noqa: BLE001 (a damaged file: the plain message)
+        pass
+    return None
 
 
 def cut_short_note(path) -> str:
