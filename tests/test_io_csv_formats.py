@@ -662,3 +662,24 @@ def test_a_row_with_fields_missing_says_so_not_that_a_cell_is_empty(tmp_path):
     p.write_text(_GNSS.replace("2,45.00002,7,300,0.5,0.5,1", "2,45.00002,7,300,0.5,,1"))
     with pytest.raises(InputError, match=r"gnss\.csv: line 4: column 'sigma_e_m' is empty; expected a finite number$"):
         io.read_gnss(p)
+
+
+@pytest.mark.parametrize("kind", ["gnss", "imu"])
+def test_a_header_with_a_name_missing_is_refused_not_read_shifted(tmp_path, kind):
+    """Rows with one field more than the header names: pandas made the first field an index and moved every
+    name one column on, so time_s held the latitudes ('line 3: time_s=44.9999998 goes back in time', or,
+    for a drive northwards, no message at all)."""
+    p = tmp_path / "f.csv"
+    if kind == "gnss":
+        rows = [f"{i},{45.0 + 1e-5 * i!r},7,300,0.5,0.5,1,0.1" for i in range(5)]  # lat rises: a valid time
+        p.write_text("time_s,lat_deg,lon_deg,height_m,sigma_n_m,sigma_e_m,sigma_d_m\n" + "\n".join(rows) + "\n")
+        read = io.read_gnss
+    else:
+        t, dth, dv = _increments(50)
+        _write(p, t, dth, dv)
+        lines = p.read_text().splitlines(True)
+        p.write_text(lines[0].replace(",dv_z_m_s", "") + "".join(lines[1:]))
+        read = C.read_imu
+    with pytest.raises(InputError, match=r"f\.csv: line 2: has (8|7) fields, the header names (7|6): a name missing "
+                                         r"from the header \(or a comma too many on every row\?\)"):
+        read(p)

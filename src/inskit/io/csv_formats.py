@@ -108,6 +108,12 @@ def read_table(path) -> tuple:
         if gz:
             raise InputError(gzip_damage_message(path, exc)) from None
         raise InputError(f"{path}: not a readable CSV file ({str(exc).splitlines()[0]})") from None
+    if not isinstance(df.index, pd.RangeIndex):  # rows with more fields than the header names: pandas made the
+        # first ones an index and shifted every name onto the next column (time_s held the latitudes)
+        fields = len(df.columns) + df.index.nlevels
+        raise InputError(f"{path}: {at_row(path, 0)}: has {fields} fields, the header names {len(df.columns)}: a "
+                         "name missing from the header (or a comma too many on every row?); each column needs its "
+                         "name")
     df.columns = [str(c).strip() for c in df.columns]
     if len(df.columns) == 1 and any(sep in df.columns[0] for sep in (";", "\t")):
         _refuse_separator(path, df.columns[0])
