@@ -131,7 +131,10 @@ def test_mechanize_height_ref_takes_a_number_or_a_height_log(files, tmp_path, ca
         ends.append(json.loads(out)["final"]["height_m"])
     assert ends[0] == ends[1]
     code, _, err = run(*base, "--height", "aid", "--height-ref", tmp_path / "nosuch.csv")
-    assert code == 2 and "neither a height in metres nor a height log" in err and len(err.strip().splitlines()) == 1
+    assert code == 2 and "neither a height in metres nor a height log (no such file)" in err
+    assert len(err.strip().splitlines()) == 1
+    code, _, err = run(*base, "--height", "aid", "--height-ref", tmp_path)  # a folder was called 'no such file'
+    assert code == 2 and "neither a height in metres nor a height log (a folder)" in err
     code, _, err = run(*base, "--height-ref", "50")
     assert code == 2 and "--height-ref would be ignored with --height free" in err
 

@@ -96,7 +96,8 @@ def _height_ref(text, imu):
     from .jobs.height import height_profile_at
 
     if not Path(text).is_file():
-        raise InputError(f"--height-ref: {text!r} is neither a height in metres nor a height log (no such file)")
+        what = "a folder" if Path(text).is_dir() else "no such file"
+        raise InputError(f"--height-ref: {text!r} is neither a height in metres nor a height log ({what})")
     return height_profile_at(text, imu.time, log=_log)
 
 
