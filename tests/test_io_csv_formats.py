@@ -683,3 +683,19 @@ def test_a_header_with_a_name_missing_is_refused_not_read_shifted(tmp_path, kind
     with pytest.raises(InputError, match=r"f\.csv: line 2: has (8|7) fields, the header names (7|6): a name missing "
                                          r"from the header \(or a comma too many on every row\?\)"):
         read(p)
+
+
+def test_seconds_of_week_restarting_at_a_week_boundary_are_named(tmp_path):
+    """A logger writing GPS seconds of week as time_s across Saturday midnight: it was only 'goes back in
+    time', which a user reads as a logger fault."""
+    p = tmp_path / "gnss.csv"
+    rows = [f"{t!r},45,7,300,0.5,0.5,1" for t in (604798.0, 604799.0, 0.0, 1.0)]
+    p.write_text(_GNSS.splitlines(True)[0] + "\n".join(rows) + "\n")
+    with pytest.raises(InputError, match=r"gnss\.csv: line 4: time_s=0\.0 goes back in time from line 3 \(604799\.0\); "
+                                         r"timestamps must strictly increase; GPS seconds of week that restart at a "
+                                         r"week boundary\? continue them past 604800 s$"):
+        io.read_gnss(p)
+    p.write_text(_GNSS.splitlines(True)[0] + "\n".join(rows[:2] + ["604797.0,45,7,300,0.5,0.5,1"]) + "\n")
+    with pytest.raises(InputError, match=r"goes back in time from line 3 \(604799\.0\); timestamps must strictly "
+                                         r"increase$"):
+        io.read_gnss(p)

@@ -701,6 +701,11 @@ def require_columns(path, df, columns, hint=""):
         )
 
 
+#: seconds in a GPS week: a time column of seconds of week that falls from its last hour to the first hour
+#: of the next week is said to restart there (:func:`check_time_column`)
+WEEK_ROLLOVER_S = 604800.0
+
+
 def check_time_column(path, t, column="time_s"):
     d = np.diff(t)
     bad = d <= 0
@@ -709,10 +714,14 @@ def check_time_column(path, t, column="time_s"):
         if d[i - 1] == 0:
             raise InputError(f"{path}: {at_row(path, i)}: duplicate timestamp {column}={float(t[i])!r} (same as "
                              f"{at_row(path, i - 1)})")
+        week = WEEK_ROLLOVER_S
+        rollover = (t[i - 1] > week - 3600.0) and (t[i - 1] <= week) and (0.0 <= t[i] < 3600.0)
         raise InputError(
             f"{path}: {at_row(path, i)}: {column}={float(t[i])!r} goes back in time from "
             f"{at_row(path, i - 1)} ({float(t[i - 1])!r}); "
             "timestamps must strictly increase"
+            + ("; GPS seconds of week that restart at a week boundary? continue them past 604800 s" if rollover
+               else "")
         )
 
 
