@@ -190,7 +190,8 @@ def test_arguments_of_the_wrong_type_are_named_before_any_work(tmp_path):
     sc = tmp_path / "still.toml"
     sc.write_text(SCENARIO)
     for seed, shown in ((1.5, "float 1.5"), ("1", "str '1'"), (-1, "-1"), (True, "bool True")):
-        with pytest.raises(InputError, match=rf"^seed must be an integer >= 0, got {re.escape(shown)}$"):
+        with pytest.raises(InputError, match=rf"^seed must be an integer >= 0 or a numpy\.random\.Generator, got "
+                                             rf"{re.escape(shown)}$"):
             inskit.simulate(sc, seed)
     with pytest.raises(InputError, match=r"^scenario must be a file path \(str or Path\) or a Scenario, got dict"):
         inskit.simulate({"name": "still"})
@@ -198,3 +199,28 @@ def test_arguments_of_the_wrong_type_are_named_before_any_work(tmp_path):
         inskit.simulate(sc, truth_rate_hz="10")
     a, b = inskit.simulate(sc, np.int64(3)), inskit.simulate(str(sc), 3, truth_rate_hz=np.float64(100.0))
     np.testing.assert_array_equal(a.imu.dv_b, b.imu.dv_b)
+
+
+def test_a_generator_seed_is_drawn_from_and_spawns_the_raw_gnss_child(tmp_path):
+    """seed=numpy.random.Generator was let through and then failed on a [raw_gnss] scenario ('SeedSequence
+    expects int or sequence of ints ... not Generator'); now a fresh default_rng(s) gives the numbers of seed=s,
+    raw observations included, and a generator used twice gives another run (it advances)."""
+    sc = tmp_path / "raw.toml"
+    sc.write_text(SCENARIO.replace("rate_hz = 100.0", "rate_hz = 100.0\ngrade = \"tactical\"")
+                  + "[raw_gnss]\nrate_hz = 1.0\n")
+
+    def obs(sim):
+        return np.concatenate([np.ravel(v) for _, v in sorted(sim.raw.obs.items())])
+
+    by_int = inskit.simulate(sc, 3)
+    g = np.random.default_rng(3)
+    by_gen = inskit.simulate(sc, g)
+    np.testing.assert_array_equal(by_gen.imu.dv_b, by_int.imu.dv_b)
+    np.testing.assert_array_equal(by_gen.gnss.lla, by_int.gnss.lla)
+    np.testing.assert_array_equal(obs(by_gen), obs(by_int))
+    again = inskit.simulate(sc, g)
+    assert not np.array_equal(again.imu.dv_b, by_int.imu.dv_b)
+    assert not np.array_equal(obs(again), obs(by_int), equal_nan=True)
+    with pytest.raises(InputError, match=r"^seed must be an integer >= 0 or a numpy\.random\.Generator, got "
+                                         r"SeedSequence"):
+        inskit.simulate(sc, np.random.SeedSequence(3))

@@ -98,15 +98,17 @@ def _check_path(name, value, also=""):
 
 
 def _check_seed(seed):
-    """A seed numpy's default_rng and SeedSequence take alike: an int >= 0 (or None: fresh entropy)."""
+    """A seed of :func:`simulate`: an int >= 0, None (fresh entropy) or a
+    ``numpy.random.Generator`` (drawn from: :func:`inskit.simulation.scenario.simulate`)."""
     import numpy as np
 
     if seed is None or isinstance(seed, np.random.Generator):
         return seed
     if isinstance(seed, bool) or not isinstance(seed, numbers.Integral):
-        raise InputError(f"seed must be an integer >= 0, got {type(seed).__name__} {seed!r}")
+        raise InputError(f"seed must be an integer >= 0 or a numpy.random.Generator, got {type(seed).__name__} "
+                         f"{seed!r}")
     if seed < 0:
-        raise InputError(f"seed must be an integer >= 0, got {seed}")
+        raise InputError(f"seed must be an integer >= 0 or a numpy.random.Generator, got {seed}")
     return int(seed)
 
 
@@ -218,9 +220,13 @@ def simulate(scenario, seed=0, *, truth_rate_hz=None, out_dir=None, overwrite=Fa
     scenario : str, Path or Scenario
         A scenario TOML file (``docs/config.md``, "Scenario files") or a
         validated :class:`inskit.simulation.scenario.Scenario`.
-    seed : int >= 0
+    seed : int >= 0, None or numpy.random.Generator
         Seed of every random draw (same seed, same numbers; None: fresh
-        entropy, another run every call).
+        entropy, another run every call).  A Generator is drawn from and
+        advances (a second call with it gives another run); raw GNSS draws
+        from a child it spawns.  A fresh ``numpy.random.default_rng(s)``
+        gives the numbers of ``seed=s``, the files of ``inskit simulate
+        --seed s``.
     truth_rate_hz : float, optional
         Rate of the truth (default: the IMU rate).
     out_dir : str or Path, optional

@@ -533,13 +533,30 @@ def raw_gnss_start(sc: Scenario, duration_s):
     return week, sow, from_week_sow(week, sow)
 
 
+def child_rng(seed) -> np.random.Generator:
+    """The generator of the draws kept apart from the main stream (raw GNSS):
+    the first child of ``SeedSequence(seed)`` for an integer seed (or None:
+    fresh entropy); for a ``numpy.random.Generator``, a child spawned from it
+    (``Generator.spawn``: the first spawned child of ``default_rng(s)`` is
+    the first child of ``SeedSequence(s)``, so a fresh ``default_rng(s)``
+    gives the numbers of the seed ``s``); a generator that cannot spawn (its
+    bit generator has no ``SeedSequence``) seeds the child with four draws."""
+    if isinstance(seed, np.random.Generator):
+        try:
+            return seed.spawn(1)[0]
+        except TypeError:  # a bit generator without a SeedSequence to spawn from
+            return np.random.default_rng(seed.integers(0, 2**63, size=4))
+    return np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0])
+
+
 def simulate_raw_gnss(sc: Scenario, trajectory, seed):
     """Raw GNSS observations of a scenario (:func:`.gnss_raw.simulate_raw`).
 
     The draws come from a child of ``numpy.random.SeedSequence(seed)``, not
     from the generator of the other draws: adding ``[raw_gnss]`` changes no
     IMU or GNSS-fix number, and the raw observations do not depend on the
-    IMU settings.  Epochs are the receiver tags ``0, 1/rate, ...`` up to
+    IMU settings.  ``seed`` may be a ``numpy.random.Generator``: the child
+    is then spawned from it (:func:`child_rng`).  Epochs are the receiver tags ``0, 1/rate, ...`` up to
     the scenario's end.  Klobuchar coefficients: ``iono_alpha/beta`` if
     given, else the navigation file's (``nav:PATH``), else RTKLIB's
     default set (:data:`inskit.gnss.atmosphere.KLOBUCHAR_DEFAULT_ALPHA`),
@@ -553,7 +570,7 @@ def simulate_raw_gnss(sc: Scenario, trajectory, seed):
     from .gnss_raw import simulate_raw
 
     r = sc.raw_gnss
-    rng = np.random.default_rng(np.random.SeedSequence(seed).spawn(1)[0])
+    rng = child_rng(seed)
     duration = trajectory.duration
     _, _, t0 = raw_gnss_start(sc, duration)
     t_sim = np.arange(0.0, duration + 1e-9, 1.0 / r.rate_hz)
@@ -621,6 +638,12 @@ def simulate(sc: Scenario, seed=0, *, truth_rate_hz=None, progress=None) -> Simu
     so the same seed gives the same numbers (and byte-identical files).
     Raw GNSS observations (``[raw_gnss]``) draw from their own child
     generator (:func:`simulate_raw_gnss`).
+
+    ``seed`` is an integer >= 0, None (fresh entropy) or a
+    ``numpy.random.Generator``, which is then drawn from (it advances: a
+    second call with the same generator gives other numbers) and spawns the
+    raw-GNSS child (:func:`child_rng`); a fresh ``default_rng(s)`` gives the
+    numbers of the seed ``s``.
     """
     if truth_rate_hz is not None and not 0 < truth_rate_hz <= MAX_RATE_HZ:
         raise ConfigError(f"the truth rate must be within (0, {MAX_RATE_HZ:g}] Hz, got {truth_rate_hz}")
