@@ -1,3 +1,4 @@
+import re
 from pathlib import Path
 
 import numpy as np
@@ -437,3 +438,26 @@ def test_an_outage_after_the_segments_end_is_refused(tmp_path):
     cut = sc.model_copy(update={"duration_limit_s": total / 2,
                                 "gnss": sc.gnss.model_copy(update={"outages_s": [[0.75 * total, total]]})})
     build_trajectory(cut, np.random.default_rng(0))
+
+
+def test_sensor_overrides_are_checked_when_the_scenario_is_read(tmp_path):
+    """[imu] gyro = { bias_instability_tau_s = 0 } was 'internal error: ZeroDivisionError' (exit 3), noise = -1 was
+    simulated, and overrides of an 'ideal' IMU were refused only after the trajectory, without the file's name; now
+    each is refused by load_scenario naming the file, the field and the term."""
+    base = ("name = \"s\"\n[start]\nlat_deg = 45\nlon_deg = 7\n[imu]\nrate_hz = 100\n{}\n"
+            "[[segment]]\ntype = \"static\"\nduration_s = 5\n")
+    p = tmp_path / "s.toml"
+    for lines, said in (
+            ('grade = "tactical"\ngyro = { bias_instability_tau_s = 0 }',
+             r"field 'imu\.gyro': bias_instability_tau_s = 0: must be > 0 \[s\]"),
+            ('grade = "tactical"\naccel = { noise = -1 }', r"field 'imu\.accel': noise = -1: must be >= 0"),
+            ('grade = "tactical"\ngyro = { nois = 1 }', r"field 'imu\.gyro': nois: unknown error term"),
+            ("accel = { noise = 80 }", r"field 'imu': gyro and accel override the terms of a grade preset; an "
+                                       r"'ideal' IMU has none")):
+        p.write_text(base.format(lines))
+        with pytest.raises(ConfigError, match=rf"^{re.escape(str(p))}: {said}"):
+            load_scenario(p)
+    p.write_text(base.format('grade = "tactical"\ngyro = { fixed_bias = [10, 0, 0], noise = 0 }\n'
+                             'accel = { noise = 0, turn_on_bias = 0, bias_instability = 0 }'))
+    sim = simulate(load_scenario(p), 1)
+    np.testing.assert_allclose(sim.draws["gyro_bias"][1:, 0], np.radians(10 / 3600), rtol=0.3)

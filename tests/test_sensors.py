@@ -117,8 +117,44 @@ def test_presets_units_at_the_edge():
 def test_preset_overrides_are_checked():
     p = preset("tactical", gyro={"noise": 0.2})
     assert p.gyro.white_noise == pytest.approx(0.2 * DEG / 60)
-    with pytest.raises(ConfigError, match=r"imu.gyro: unknown error term\(s\) nois"):
+    with pytest.raises(ConfigError, match=r"^imu\.gyro: nois: unknown error term; the terms of a gyro are fixed_bias"):
         preset("tactical", gyro={"nois": 0.2})
+
+
+@pytest.mark.parametrize("kind, terms, said", [
+    ("gyro", {"bias_instability_tau_s": 0}, r"bias_instability_tau_s = 0: must be > 0 \[s\]"),
+    ("gyro", {"bias_instability_tau_s": -10}, r"bias_instability_tau_s = -10: must be > 0 \[s\]"),
+    ("gyro", {"fixed_bias": [1, 2]}, r"fixed_bias = \[1, 2\]: expected three finite numbers \[x, y, z\] \[deg/h\]"),
+    ("gyro", {"fixed_bias": 1.0}, r"fixed_bias = 1\.0: expected three finite numbers"),
+    ("gyro", {"noise": [1, 2, 3]}, r"noise = \[1, 2, 3\]: expected one finite number \[deg/sqrt\(h\)\]"),
+    ("gyro", {"saturation": 0}, r"saturation = 0: must be > 0 \[deg/s\]"),
+    ("accel", {"noise": -1}, r"noise = -1: must be >= 0 \[micro-g/sqrt\(Hz\)\]"),
+    ("accel", {"turn_on_bias": -5}, r"turn_on_bias = -5: must be >= 0 \[micro-g\]"),
+    ("accel", {"quantization": -1}, r"quantization = -1: must be >= 0 \[m/s\]"),
+    ("accel", {"scale_factor_ppm": -2e6}, r"scale_factor_ppm = -2000000\.0: must be > -1e6 \[ppm\]"),
+    ("accel", {"g_sensitivity": 3}, r"g_sensitivity: an accelerometer has no g-sensitivity"),
+])
+def test_preset_override_values_are_checked(kind, terms, said):
+    """bias_instability_tau_s = 0 was 'internal error: ZeroDivisionError', -10 a NaN in every increment,
+    fixed_bias = [1, 2] numpy's broadcast error, noise = -1 or saturation = 0 (every reading clipped to 0) were
+    simulated without a word and an accelerometer's g_sensitivity was ignored."""
+    with pytest.raises(ConfigError, match=rf"^imu\.{kind}: {said}"):
+        preset("tactical", **{kind: terms})
+
+
+def test_every_term_of_the_table_is_a_keyword_of_the_datasheet_conversion():
+    """TRIAD_TERMS (the checks and docs/config.md) and triad_from_datasheet name the same terms, and the values
+    the table allows convert: a term added to one and not the other would be refused or ignored."""
+    import inspect
+
+    from inskit.simulation.sensors import TRIAD_TERMS, triad_from_datasheet
+
+    keywords = set(inspect.signature(triad_from_datasheet).parameters) - {"kind", "rng", "misalignment_mrad"}
+    assert set(TRIAD_TERMS) == keywords
+    e = preset("tactical", gyro={"fixed_bias": [1, -2, 3], "g_sensitivity": -3.0, "saturation": 100},
+               accel={"fixed_bias": [0, 0, 50], "quantization": 1e-4, "bias_instability_tau_s": 60})
+    assert e.gyro.fixed_bias == pytest.approx(np.array([1, -2, 3]) * DEG_PER_HOUR)
+    assert e.accel.quantization == 1e-4 and e.accel.bias_instability_tau_s == 60
 
 
 def test_compiled_gauss_markov_recursion_equals_scipy_lfilter():

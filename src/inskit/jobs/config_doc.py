@@ -30,6 +30,7 @@ from pydantic_core import PydanticUndefined
 from ..errors import InputError
 from ..files import write_text
 from ..simulation.scenario import Scenario, segment_keys_text
+from ..simulation.sensors import TRIAD_TERMS
 from .config import INTERNAL_KEYS, NavigateConfig
 
 #: the file this module generates, relative to the repository root
@@ -114,7 +115,10 @@ SCENARIO_MEANINGS = {
 
 #: cross-key rules of the scenario sections, whose models have no docstrings (keys: model name)
 SECTION_RULES = {
-    "ImuSpec": "Rules: imu.gyro and imu.accel overrides need a grade other than \"ideal\".",
+    "ImuSpec": "Rules: imu.gyro and imu.accel overrides need a grade other than \"ideal\". They take these "
+               "terms of the grade's datasheet (gyro unit / accelerometer unit; allowed values): " + "; ".join(
+                   f"{k} ({r.gyro_unit}" + (f" / {r.accel_unit}" if r.accel_unit else ", gyros only")
+                   + f"; {r.takes}): {r.meaning}" for k, r in TRIAD_TERMS.items()) + ".",
     "RawGnssSection": "Rules: give start_utc, or start_gps_week with start_sow_s, or neither (default: GPS week "
                       "2374, 243240 s of week, the day of the drive_0708 log); the scenario must end inside that "
                       "GPS week.",

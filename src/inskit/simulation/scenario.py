@@ -30,7 +30,7 @@ from ..units import DEG, MAX_RATE_HZ, MAX_SAMPLES
 from .gnss import GnssErrors, simulate_gnss
 from .imu import INCREMENT_TOLERANCE, ideal_imu, max_oscillation_hz, truth_solution
 from .segments import SegmentTrajectory
-from .sensors import ImuErrors, apply_imu_errors, preset
+from .sensors import ImuErrors, apply_imu_errors, preset, triad_terms_problem
 
 
 class _S(BaseModel):
@@ -54,8 +54,10 @@ class StartSpec(_S):
 class ImuSpec(_S):
     rate_hz: float = Field(100.0, gt=0, le=MAX_RATE_HZ)
     grade: Literal["ideal", "navigation", "tactical", "industrial-mems", "consumer-mems"] = "ideal"
-    gyro: dict = Field(default_factory=dict, description="datasheet-unit overrides of the gyro preset")
-    accel: dict = Field(default_factory=dict, description="datasheet-unit overrides of the accel preset")
+    gyro: dict = Field(default_factory=dict, description="datasheet-unit overrides of the gyro preset (keys and "
+                       "units: the rules above)")
+    accel: dict = Field(default_factory=dict, description="datasheet-unit overrides of the accel preset (keys and "
+                        "units: the rules above)")
     quadrature_nodes: int = Field(3, ge=1, le=12)
     lever_arm_b_m: tuple[float, float, float] = Field(
         (0.0, 0.0, 0.0), description="IMU position from the trajectory (truth) point, body axes")
@@ -64,6 +66,24 @@ class ImuSpec(_S):
         "[imu] mount_rpy_deg (the same numbers there rotate the readings back into vehicle axes); the truth file "
         "keeps the vehicle's attitude")
     _angles = field_validator("mount_rpy_deg")(check_angles)
+
+    @field_validator("gyro", "accel")
+    @classmethod
+    def _terms(cls, v, info):
+        """Each override a term of the sensor with a value it takes (:data:`.sensors.TRIAD_TERMS`): a
+        negative sigma, ``bias_instability_tau_s = 0`` (a ZeroDivisionError), ``fixed_bias = [1, 2]``
+        (numpy's broadcast error) and an accelerometer's ``g_sensitivity`` (ignored) were let through."""
+        problem = triad_terms_problem(info.field_name, v)
+        if problem:
+            raise ValueError(problem)
+        return v
+
+    @model_validator(mode="after")
+    def _overrides_need_a_grade(self):
+        if self.grade == "ideal" and (self.gyro or self.accel):
+            raise ValueError("gyro and accel override the terms of a grade preset; an 'ideal' IMU has none: give a "
+                             "grade (e.g. grade = \"tactical\") or drop the overrides")
+        return self
 
 
 class GnssSpec(_S):

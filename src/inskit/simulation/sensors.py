@@ -151,18 +151,89 @@ PRESETS = {
 }
 
 
+@dataclass(frozen=True)
+class TermRule:
+    """A datasheet term of a triad that a preset's overrides may set: its
+    units (gyro, accelerometer; None: the term does not exist for that
+    sensor) and the values it takes."""
+
+    gyro_unit: str
+    accel_unit: str | None
+    takes: str   # "3 numbers" (any sign), ">= 0", "> 0", "> -1e6" (ppm: above -100 %), "any"
+    meaning: str
+
+    def problem(self, value) -> str | None:
+        """What is wrong with ``value`` (datasheet units), in words; None: nothing."""
+        import math
+
+        def number(x):
+            return not isinstance(x, bool) and isinstance(x, (int, float, np.integer, np.floating)) and math.isfinite(x)
+
+        if self.takes == "3 numbers":
+            if not (isinstance(value, (list, tuple, np.ndarray)) and len(value) == 3 and all(map(number, value))):
+                return "expected three finite numbers [x, y, z]"
+            return None
+        if not number(value):
+            return "expected one finite number"
+        v = float(value)
+        ok = {">= 0": v >= 0, "> 0": v > 0, "> -1e6": v > -1e6, "any": True}[self.takes]
+        return None if ok else f"must be {self.takes}"
+
+
+#: the datasheet terms a preset's triads take as overrides (``[imu] gyro = {...}`` and ``accel = {...}`` of a
+#: scenario, :func:`preset`): one table for the checks and the documentation (docs/config.md)
+TRIAD_TERMS = {
+    "fixed_bias": TermRule("deg/h", "micro-g", "3 numbers", "constant bias per axis [x, y, z]"),
+    "turn_on_bias": TermRule("deg/h", "micro-g", ">= 0", "turn-on bias, 1 sigma per axis, drawn per run"),
+    "bias_instability": TermRule("deg/h", "micro-g", ">= 0", "bias instability B: a Gauss-Markov bias whose "
+                                 "Allan deviation peaks at 0.664 B"),
+    "bias_instability_tau_s": TermRule("s", "s", "> 0", "correlation time of that Gauss-Markov bias"),
+    "rate_random_walk": TermRule("deg/h/sqrt(h)", "micro-g/sqrt(h)", ">= 0", "rate random walk of the bias"),
+    "noise": TermRule("deg/sqrt(h)", "micro-g/sqrt(Hz)", ">= 0", "white noise: angle / velocity random walk"),
+    "scale_factor_ppm": TermRule("ppm", "ppm", "> -1e6", "scale-factor error, the same on every axis"),
+    "g_sensitivity": TermRule("deg/h/g", None, "any", "bias per g of specific force"),
+    "quantization": TermRule("rad", "m/s", ">= 0", "LSB of the increments, 0: none"),
+    "saturation": TermRule("deg/s", "g", "> 0", "output limit: larger readings clip"),
+}
+
+
+def triad_terms_problem(kind, terms) -> str | None:
+    """What is wrong with the overrides ``terms`` (a dict) of the ``kind``
+    (``"gyro"`` or ``"accel"``) triad, in words naming the key (None:
+    nothing): an unknown key, a term the sensor has not
+    (``g_sensitivity`` of an accelerometer), or a value outside
+    :data:`TRIAD_TERMS`' rule (a negative sigma, a correlation time of 0,
+    a bias of two axes)."""
+    if not isinstance(terms, dict):
+        return f"expected a table of error terms, got {type(terms).__name__} {terms!r}"
+    for key, value in terms.items():
+        rule = TRIAD_TERMS.get(key)
+        unit = None if rule is None else (rule.gyro_unit if kind == "gyro" else rule.accel_unit)
+        if unit is None:
+            known = [k for k, r in TRIAD_TERMS.items() if (r.gyro_unit if kind == "gyro" else r.accel_unit)]
+            what = "an accelerometer has no g-sensitivity" if key in TRIAD_TERMS else "unknown error term"
+            sensor = "a gyro" if kind == "gyro" else "an accelerometer"
+            return f"{key}: {what}; the terms of {sensor} are {', '.join(known)}"
+        problem = rule.problem(value)
+        if problem:
+            return f"{key} = {value!r}: {problem} [{unit}] ({rule.meaning})"
+    return None
+
+
 def preset(name, **overrides) -> ImuErrors:
     """The :class:`ImuErrors` of a grade preset; ``overrides`` replace
-    datasheet-unit fields: ``gyro={"noise": 0.1}``, ``accel={...}``."""
+    datasheet-unit fields: ``gyro={"noise": 0.1}``, ``accel={...}``
+    (:data:`TRIAD_TERMS`: their units and values; anything else is a
+    ConfigError naming the key)."""
     if name not in PRESETS:
         raise ConfigError(f"unknown IMU grade {name!r}; choose one of {', '.join(PRESETS)}")
-    allowed = {"fixed_bias", "turn_on_bias", "bias_instability", "bias_instability_tau_s", "rate_random_walk",
-               "noise", "scale_factor_ppm", "g_sensitivity", "quantization", "saturation"}
+    for kind in overrides:
+        if kind not in ("gyro", "accel"):
+            raise ConfigError(f"preset: unknown sensor {kind!r}; give gyro={{...}} and/or accel={{...}}")
     for kind in ("gyro", "accel"):
-        bad = sorted(set(overrides.get(kind, {})) - allowed)
-        if bad:
-            raise ConfigError(f"imu.{kind}: unknown error term(s) {', '.join(bad)}; expected some of "
-                              f"{', '.join(sorted(allowed))}")
+        problem = triad_terms_problem(kind, overrides.get(kind, {}))
+        if problem:
+            raise ConfigError(f"imu.{kind}: {problem}")
     p = PRESETS[name]
     g = {**p["gyro"], **overrides.get("gyro", {})}
     a = {**p["accel"], **overrides.get("accel", {})}
@@ -256,4 +327,5 @@ def apply_imu_errors(imu: ImuData, errors: ImuErrors, rng) -> tuple[ImuData, dic
                                  "gyro_bias": bg_series, "accel_bias": ba_series}
 
 
-__all__ = ["ImuErrors", "PRESETS", "TriadErrors", "apply_imu_errors", "preset", "replace", "triad_from_datasheet"]
+__all__ = ["ImuErrors", "PRESETS", "TRIAD_TERMS", "TriadErrors", "apply_imu_errors", "preset", "replace",
+           "triad_from_datasheet", "triad_terms_problem"]
