@@ -10,6 +10,7 @@ from inskit import earth
 from inskit.errors import ConfigError
 from inskit.simulation import ideal_imu, truth_solution
 from inskit.simulation.scenario import build_trajectory, load_scenario
+from inskit.simulation.scenario import simulate as simulate_scenario
 from inskit.simulation.segments import Channel, SegmentTrajectory, smoothstep, smoothstep_integral
 from inskit.strapdown import mechanize
 
@@ -476,3 +477,62 @@ def test_a_scenario_made_in_code_is_checked_when_built():
                                   "segment": [{"type": "cruise", "duration_s": 5, "radius_m": 5}]})
     with pytest.raises(ConfigError, match=r"^segment 1 \(cruise\): radius_m is not a key"):
         build_trajectory(sc)
+
+
+def _scenario(tmp_path, start, segments):
+    p = tmp_path / "s.toml"
+    p.write_text(f"name = \"s\"\n[start]\n{start}\n[imu]\nrate_hz = 20.0\n{segments}")
+    return p
+
+
+@pytest.mark.parametrize("start, where, said", [
+    ("lat_deg = 89.9999\nlon_deg = 10\nspeed_m_s = 30", "segment 1 (cruise)", "north pole at t = 0.2"),
+    ("lat_deg = 90\nlon_deg = 10\nyaw_deg = 90\nspeed_m_s = 10", "segment 1 (cruise)", "north pole at t = 0.00 s"),
+    ("lat_deg = -89.999\nlon_deg = 10\nyaw_deg = 180\nspeed_m_s = 50", "segment 1 (cruise)", "south pole at t = 2.1"),
+])
+def test_a_trajectory_over_a_pole_is_refused_naming_the_segment(tmp_path, start, where, said):
+    """A cruise over the pole went past 90 deg of latitude (from the pole itself, east: a longitude of 2.6e8
+    rad) and was refused as "`lla` holds a latitude of 1.5707963 rad ... degrees where radians are expected?
+    (np.radians)"."""
+    p = _scenario(tmp_path, start, "[[segment]]\ntype = \"cruise\"\nduration_s = 10.0\n")
+    with pytest.raises(ConfigError, match=rf"^{re.escape(str(p))}: {re.escape(where)}: the trajectory reaches the "
+                                          rf"{said}.* while moving; .* cannot pass over a pole"):
+        ideal_imu(build_trajectory(load_scenario(p)), np.arange(0.0, 10.0, 0.05))
+
+
+def test_at_rest_on_the_pole_and_circling_it_past_a_full_turn_simulate(tmp_path):
+    """Rest on the pole is a position; a vehicle circling the pole (or the globe) past a full turn of longitude
+    was refused as "`lla` holds a longitude of 6.28 rad ... degrees where radians are expected?": now its
+    longitudes are wrapped into (-180, 180] deg and its ideal IMU, mechanized in the wander-azimuth frame,
+    reproduces the truth."""
+    tr = build_trajectory(load_scenario(_scenario(tmp_path, "lat_deg = 90\nlon_deg = 10",
+                                                  "[[segment]]\ntype = \"static\"\nduration_s = 5.0\n")))
+    assert truth_solution(tr, np.arange(0.0, 5.0, 0.05)).lla[:, 0] == pytest.approx(np.pi / 2)
+    # 89.999 deg: a circle of 700 m, 70 s at 10 m/s: 200 s is nearly three full turns of longitude
+    tr = build_trajectory(load_scenario(_scenario(tmp_path, "lat_deg = 89.999\nlon_deg = 170\nyaw_deg = 90\n"
+                                                  "speed_m_s = 10", "[[segment]]\ntype = \"cruise\"\n"
+                                                  "duration_s = 200.0\n")))
+    t = np.arange(0.0, 200.0 + 1e-9, 0.05)
+    truth = truth_solution(tr, t)
+    lon = truth.lla[:, 1]
+    assert np.all((lon > -np.pi) & (lon <= np.pi))
+    assert np.unwrap(lon)[-1] - lon[0] > 2 * 2 * np.pi  # more than two full turns of longitude
+    sol = mechanize(ideal_imu(tr, t), truth.state(0), frame="wander")
+    d = earth.lla_to_ecef(sol.lla) - earth.lla_to_ecef(truth.lla)
+    assert np.abs(d).max() < 0.02  # 7 mm here at 20 Hz after 200 s of turning 5 deg/s; a wrap wrong by 2 pi: km
+
+
+@pytest.mark.parametrize("start, seg, where, said", [
+    ("speed_m_s = 300", "type = \"descend\"\nangle_deg = 80\nduration_s = 1000", "segment 2 (descend)",
+     r"-100,0\d\d m at t = 34\d\.\d\d s"),
+    ("speed_m_s = 3000", "type = \"climb\"\nangle_deg = 80\nduration_s = 1000", "segment 2 (climb)",
+     r"100,\d\d\d m at t = 3\d\.\d\d s"),
+])
+def test_a_trajectory_beyond_100_km_of_height_is_refused(tmp_path, start, seg, where, said):
+    """A descent at 80 deg for 1000 s at 300 m/s went 295 km into the Earth and wrote a truth file that
+    inskit's own reader refused ('height_m=-100001.5 is beyond +-100 km of the ellipsoid')."""
+    p = _scenario(tmp_path, f"lat_deg = 45\nlon_deg = 10\n{start}",
+                  f"[[segment]]\ntype = \"cruise\"\nduration_s = 5.0\n[[segment]]\n{seg}\n")
+    with pytest.raises(ConfigError, match=rf"^{re.escape(str(p))}: {re.escape(where)}: the trajectory's height "
+                                          rf"reaches {said}, beyond \+-100 km"):
+        simulate_scenario(load_scenario(p))

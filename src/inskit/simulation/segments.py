@@ -29,6 +29,10 @@ _A, _E2 = earth.A, earth.E2
 
 G_COORD = 9.80665  # gravity used only to set the bank angle of coordinated turns
 
+#: how close to a pole [rad of latitude, about 6 m] a moving trajectory may come: nearer, the integration of
+#: latitude and longitude is singular (:meth:`SegmentTrajectory._check_position`); at rest it may sit on the pole
+POLE_MARGIN_RAD = 1e-6
+
 
 def smoothstep(x):
     """Quintic smooth step and its first two derivatives and its integral."""
@@ -360,6 +364,7 @@ class SegmentTrajectory:
         self.t = 0.0
         self.segments: list[dict] = []
         self.label: str | None = None
+        self._labels: list[str] = []  # what the messages call each entry of ``segments``
         self._pos = None
 
     # --- segments -------------------------------------------------------------
@@ -460,6 +465,7 @@ class SegmentTrajectory:
         if duration <= 0:
             raise ConfigError(f"{self._where(kind)}: duration must be > 0")
         self.segments.append({"type": kind, "start_s": self.t, "end_s": self.t + duration})
+        self._labels.append(self._where(kind))
         self.t += duration
         self._pos = None
         return self
@@ -510,8 +516,45 @@ class SegmentTrajectory:
         v_grid, v_half = v_all[:n], v_all[n:]
 
         _rk4_lla(y, v_grid, v_half, h)
+        self._check_position(tg, y, v_grid)
         dy = rhs(tg, y)
         self._pos = _UniformHermite(h, y, dy)
+
+    def segment_at(self, t) -> str:
+        """What the messages call the segment under way at time ``t`` [s]."""
+        for seg, label in zip(self.segments, self._labels):
+            if t <= seg["end_s"]:
+                return label
+        return self._labels[-1] if self._labels else "the trajectory"
+
+    def _check_position(self, tg, y, v_grid):
+        """Refuse a trajectory whose integrated position (``y``: latitude,
+        longitude, height on the grid ``tg``) is no position inskit can use:
+        over a pole, or moving within :data:`POLE_MARGIN_RAD` of one (the
+        latitude-longitude integration is singular there: the latitude went
+        past 90 deg, the longitude to 1e10 rad, and the truth was refused as
+        'degrees where radians are expected?'), or a height beyond
+        +-:data:`inskit.units.MAX_HEIGHT_M` (a descent into the Earth wrote a
+        truth file that inskit's readers refuse)."""
+        from ..units import MAX_HEIGHT_M
+
+        inside = tg <= self.duration + 1e-9
+        lat, hgt = y[inside, 0], y[inside, 2]
+        moving = np.hypot(v_grid[inside, 0], v_grid[inside, 1]) > 0.0
+        pole = ~(np.abs(lat) < 0.5 * np.pi - POLE_MARGIN_RAD) & moving
+        if pole.any():
+            k = int(np.argmax(pole))
+            which = "north" if lat[k] > 0 else "south"
+            raise ConfigError(f"{self.segment_at(tg[k])}: the trajectory reaches the {which} pole at t = {tg[k]:.2f} s "
+                              "while moving; the simulation integrates latitude and longitude, which cannot pass "
+                              "over a pole: start further from it or head away from it")
+        far = ~(np.abs(hgt) <= MAX_HEIGHT_M)
+        if far.any():
+            k = int(np.argmax(far))
+            raise ConfigError(f"{self.segment_at(tg[k])}: the trajectory's height reaches {hgt[k]:,.0f} m at t = "
+                              f"{tg[k]:.2f} s, beyond +-{MAX_HEIGHT_M / 1000:g} km of the ellipsoid (where inskit's "
+                              "readers stop: the truth file would be refused); a shallower or shorter climb or "
+                              "descent")
 
     def _state(self, t, second=False):
         """Position, NED velocity and acceleration, Euler angles and rates
@@ -544,6 +587,7 @@ class SegmentTrajectory:
                 drpy[:, j] += dx
                 if second:
                     ddrpy[:, j] += ddx
+        _wrap_longitude(lla)
         if second:
             return t, lla, v_n, a_n, rpy, drpy, ddrpy
         return t, lla, v_n, a_n, rpy, drpy
@@ -657,10 +701,25 @@ class SegmentTrajectory:
                 for f in pending:
                     f.result()
         res = {k: outs[k] for k in want}
+        if "lla" in res:
+            _wrap_longitude(res["lla"])
         if order is not None:
             for o in res.values():
                 o[order] = o.copy()
         return t, res
+
+
+def _wrap_longitude(lla):
+    """Wrap, in place, the longitudes of ``lla`` (n, 3) that lie outside
+    (-pi, pi] into it (a vehicle circling a pole, or the globe, went past a
+    full turn and was refused as 'degrees where radians are expected?');
+    those inside are left to the bit."""
+    lon = lla[:, 1]
+    out = ~((lon > -np.pi) & (lon <= np.pi))
+    if out.any():
+        from ..rotations import wrap_angle
+
+        lon[out] = wrap_angle(lon[out])
 
 
 #: below this many times one thread evaluates the trajectory (a thread's start costs more than it saves)
