@@ -184,6 +184,34 @@ def test_streaming_rejects_overlap_and_bad_options():
         mechanize(imu, truth_solution(traj, t[:1]).state(0), frame="body")
 
 
+@pytest.mark.parametrize("args, options, said", [
+    ((), {"foo": 1}, r"^'foo': not an option of the ned mechanization, which takes coning, height, "
+                     r"height_time_constant, gravity$"),
+    ((), {"frame": "wander", "height": "hold"}, r"^'height': not an option of the wander mechanization, which "
+                                                r"takes coning, alpha0, gravity; height and height_time_constant "
+                                                r"are the NED frame's"),
+    ((), {"coning": "no"}, r"^`coning` must be True or False, got str 'no'$"),
+    ((), {"height_ref": 100.0}, r"^`height_ref` would be ignored: .* \(the height here is 'free'\)$"),
+    ((), {"frame": "ecef", "height_ref": 100.0}, r"^`height_ref` would be ignored: .* \(the frame here is 'ecef'\)$"),
+    ((), {"height": "aid", "height_ref": 1.0, "height_time_constant": "10"},
+     r"^`height_time_constant` must be a finite number > 0 \[s\], got '10'$"),
+    ((), {"frame": "wander", "alpha0": float("nan")}, r"^`alpha0` must be a finite wander angle \[rad\], got nan$"),
+    ((), {"chunk_size": 0}, r"^`chunk_size` must be an integer >= 1 \(rows per compiled call\), got 0$"),
+    (("imu.csv",), {}, r"^`imu` must be an ImuData \(a file: read it first, inskit\.read_imu\(path\)\), got str "
+                       r"'imu\.csv'$"),
+])
+def test_mechanize_refuses_arguments_it_would_ignore_or_misread(args, options, said):
+    """inskit.mechanize(imu, init, foo=1) and frame='wander' with height='hold' were TypeErrors out of the
+    integrators, a file name for imu an AttributeError ('str' object has no attribute 'slice'); coning='no'
+    compensated (a non-empty string is true) and a height_ref with height='free' or in another frame was
+    ignored without a word."""
+    traj = StationaryTrajectory((LAT45, 0.0, 0.0))
+    t = np.arange(0.0, 1.0, 0.01)
+    imu = args[0] if args else ideal_imu(traj, t, nodes=1)
+    with pytest.raises(InputError, match=said):
+        mechanize(imu, truth_solution(traj, t[:1]).state(0), **options)
+
+
 def test_ned_refuses_the_poles_and_wander_carries_on():
     """Issue 12: mechanize from lat 90 wrote latitudes above 90 deg."""
     tr = StationaryTrajectory((np.radians(89.95), 0.3, 10.0))

@@ -25,6 +25,8 @@ Groves 2013 ch. 5.
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 
 from .. import earth
@@ -63,12 +65,21 @@ def _qz(angle):
     return np.stack([np.cos(0.5 * angle), z, z, np.sin(0.5 * angle)], -1)
 
 
+def _is_number(x) -> bool:
+    """A real number (an int or a float, numpy's too), not a bool or a string."""
+    import numbers
+
+    return isinstance(x, numbers.Real) and not isinstance(x, (bool, np.bool_))
+
+
 class _Integrator:
     """Common streaming logic: carried state, chunk bookkeeping."""
 
     def __init__(self, initial: NavState, *, coning: bool = True, gravity="normal"):
         if not isinstance(initial, NavState):
             raise InputError("`initial` must be a NavState")
+        if not isinstance(coning, (bool, np.bool_)):  # coning="no" is a non-empty string: it compensated
+            raise InputError(f"`coning` must be True or False, got {type(coning).__name__} {coning!r}")
         self.initial = initial
         self.coning = bool(coning)
         #: code of the gravity model (:data:`inskit.earth.GRAVITY_MODELS`) and its name
@@ -129,8 +140,8 @@ class NedIntegrator(_Integrator):
         super().__init__(initial, coning=coning, gravity=gravity)
         if height not in _HEIGHT_MODES:
             raise InputError(f"`height` must be one of {sorted(_HEIGHT_MODES)}, got {height!r}")
-        if not height_time_constant > 0:
-            raise InputError(f"`height_time_constant` must be > 0 s, got {height_time_constant}")
+        if not (_is_number(height_time_constant) and 0 < height_time_constant < np.inf):
+            raise InputError(f"`height_time_constant` must be a finite number > 0 [s], got {height_time_constant!r}")
         self.height_mode = _HEIGHT_MODES[height]
         tau = float(height_time_constant)
         self._gains = np.array([2.0 / tau, 1.0 / tau**2])
@@ -201,6 +212,8 @@ class WanderIntegrator(_Integrator):
 
     def __init__(self, initial, *, coning=True, alpha0=0.0, gravity="normal"):
         super().__init__(initial, coning=coning, gravity=gravity)
+        if not (_is_number(alpha0) and np.isfinite(alpha0)):
+            raise InputError(f"`alpha0` must be a finite wander angle [rad], got {alpha0!r}")
         lat, lon, h = initial.lla
         C_ew = earth.dcm_en(lat, lon) @ rot.dcm_from_quat(_qz(alpha0))
         self._q_ew = rot.quat_from_dcm(C_ew)
@@ -331,9 +344,36 @@ def mechanize(imu: ImuData, initial: NavState, *, frame="ned", chunk_size=1_000_
     Returns
     -------
     NavSolution
+
+    Raises
+    ------
+    InputError
+        ``imu`` not an ImuData (a file name: read it first with
+        :func:`inskit.read_imu`), an option the frame's integrator does not
+        take (``height`` outside ``frame="ned"``), a ``height_ref`` that
+        would be ignored (another frame, or ``height="free"``), a
+        ``chunk_size`` below 1.
     """
+    import inspect
+
     if frame not in FRAMES:
         raise InputError(f"`frame` must be one of {sorted(FRAMES)}, got {frame!r}")
+    if not isinstance(imu, ImuData):
+        hint = " (a file: read it first, inskit.read_imu(path))" if isinstance(imu, (str, os.PathLike)) else ""
+        raise InputError(f"`imu` must be an ImuData{hint}, got {type(imu).__name__} {imu!r}"[:300])
+    takes = [k for k in inspect.signature(FRAMES[frame].__init__).parameters if k not in ("self", "initial")]
+    unknown = [k for k in options if k not in takes]
+    if unknown:
+        note = "; height and height_time_constant are the NED frame's (frame='ned')" if (
+            frame != "ned" and {"height", "height_time_constant"} & set(unknown)) else ""
+        raise InputError(f"{', '.join(map(repr, unknown))}: not an option of the {frame} mechanization, which "
+                         f"takes {', '.join(takes)}{note}")
+    if height_ref is not None and (frame != "ned" or options.get("height", "free") == "free"):
+        raise InputError("`height_ref` would be ignored: it is the external height of frame='ned' with "
+                         "height='hold' or 'aid'" + (f" (the height here is {options.get('height', 'free')!r})"
+                                                     if frame == "ned" else f" (the frame here is {frame!r})"))
+    if isinstance(chunk_size, (bool, np.bool_)) or not isinstance(chunk_size, (int, np.integer)) or chunk_size < 1:
+        raise InputError(f"`chunk_size` must be an integer >= 1 (rows per compiled call), got {chunk_size!r}")
     integ = FRAMES[frame](initial, **options)
     parts = []
     n = len(imu)
