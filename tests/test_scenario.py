@@ -387,7 +387,8 @@ def test_outages_over_the_whole_scenario_are_refused_by_simulate(tmp_path, capsy
         main(["simulate", str(p), "--out", str(tmp_path / "o"), "--no-plot"])
     err = capsys.readouterr().err
     assert exc.value.code == 2 and len(err.strip().splitlines()) == 1, err
-    assert err.startswith("inskit: error: field 'gnss.outages_s': the outages [[0.0, 100.0]] remove every GNSS fix")
+    assert err.startswith(f"inskit: error: {p}: field 'gnss.outages_s': the outages [[0.0, 100.0]] remove every GNSS "
+                          "fix")
     assert not (tmp_path / "o").exists()
 
 
@@ -410,12 +411,14 @@ def test_imu_and_truth_rates_are_capped_and_so_is_the_sample_count(tmp_path):
     with pytest.raises(ConfigError, match=r"^the truth rate must be within \(0, 10000\] Hz, got 1000000.0$"):
         simulate(sc, truth_rate_hz=1e6)
     long = sc.model_copy(update={"segment": [sc.segment[0].model_copy(update={"duration_s": 1001.0})]})
-    with pytest.raises(ConfigError, match=r"^the scenario lasts 1001 s: 10,010,000 truth rows at the truth rate "
+    with pytest.raises(ConfigError, match=rf"^{re.escape(str(p))}: the scenario lasts 1001 s: 10,010,000 truth rows at "
+                                          r"the truth rate "
                                           r"\(simulate --truth-rate\) 10000 Hz, more than the 10,000,000 one "
                                           r"simulation holds"):
         simulate(long, truth_rate_hz=1e4)
     fast = long.model_copy(update={"imu": long.imu.model_copy(update={"rate_hz": 1e4})})
-    with pytest.raises(ConfigError, match=r"^the scenario lasts 1001 s: 10,010,000 IMU samples at field "
+    with pytest.raises(ConfigError, match=rf"^{re.escape(str(p))}: the scenario lasts 1001 s: 10,010,000 IMU samples at "
+                                          r"field "
                                           r"'imu\.rate_hz' = 10000 Hz, more than"):
         simulate(fast)
     with warnings.catch_warnings(), np.errstate(), pytest.raises(SystemExit) as exc:  # main() silences both
@@ -461,3 +464,23 @@ def test_sensor_overrides_are_checked_when_the_scenario_is_read(tmp_path):
                              'accel = { noise = 0, turn_on_bias = 0, bias_instability = 0 }'))
     sim = simulate(load_scenario(p), 1)
     np.testing.assert_allclose(sim.draws["gyro_bias"][1:, 0], np.radians(10 / 3600), rtol=0.3)
+
+
+@pytest.mark.parametrize("gnss, segment, said", [
+    ("latency_s = 1000", "duration_s = 10.0",
+     r"field 'gnss\.latency_s': 1000 s is not shorter than the run \(10 s\): every fix, stamped t, would describe "
+     r"the antenna at t - latency, before the start"),
+    ("latency_s = 10", "duration_s = 10.0", r"field 'gnss\.latency_s': 10 s is not shorter than the run"),
+    ("rate_hz = 1", "duration_s = 0.005", r"the scenario lasts 0\.005 s, shorter than one IMU sample at field "
+                                          r"'imu\.rate_hz' = 100 Hz \(0\.01 s\)$"),
+])
+def test_a_run_too_short_for_its_gnss_latency_or_its_imu_rate_is_refused_naming_the_file(tmp_path, gnss, segment,
+                                                                                           said):
+    """[gnss] latency_s = 1000 on a 10 s run was simulated: every fix clipped to the start's position without a
+    word; a run shorter than one IMU sample was 'the scenario is shorter than one IMU sample', naming neither the
+    file nor the key."""
+    p = tmp_path / "s.toml"
+    p.write_text(f"name = \"s\"\n[start]\nlat_deg = 45\nlon_deg = 7\n[imu]\nrate_hz = 100\n[gnss]\n{gnss}\n"
+                 f"[[segment]]\ntype = \"static\"\n{segment}\n")
+    with pytest.raises(ConfigError, match=rf"^{re.escape(str(p))}: {said}"):
+        simulate(load_scenario(p))

@@ -91,7 +91,8 @@ SCENARIO_MEANINGS = {
     "GnssSpec.velocity_sigma_m_s": "white velocity noise per axis; 0 writes no velocity",
     "GnssSpec.lever_arm_b_m": "antenna position relative to the trajectory point in body axes (forward, right, "
                               "down); also the antenna of [raw_gnss]",
-    "GnssSpec.latency_s": "a fix stamped t describes the antenna at t - latency",
+    "GnssSpec.latency_s": "a fix stamped t describes the antenna at t - latency (those of the first latency_s "
+                          "seconds the start); shorter than the run",
     "GnssSpec.outages_s": "[start, end] windows with no fixes [s of scenario time]",
     "GnssSpec.outlier_probability": "probability that a fix is an outlier",
     "GnssSpec.outlier_sigma_m": "sigma of the error added to an outlier fix per axis",

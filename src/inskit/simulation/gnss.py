@@ -90,8 +90,15 @@ def simulate_gnss(trajectory, t_start, t_end, errors: GnssErrors, rng):
         When the outages leave no fix between ``t_start`` and ``t_end``: an
         empty GNSS file no consumer can use (``navigate`` needs two fixes
         outside its outages), named as the scenario key the outages come
-        from (``[gnss] outages_s``).
+        from (``[gnss] outages_s``); when the latency is as long as the run
+        (``[gnss] latency_s``).  The fixes stamped within ``latency_s`` of
+        ``t_start`` describe ``t_start``: the trajectory has no earlier
+        position.
     """
+    if not errors.latency_s < t_end - t_start:  # every fix would describe the start (clipped there)
+        raise ConfigError(f"field 'gnss.latency_s': {errors.latency_s:g} s is not shorter than the run "
+                          f"({t_end - t_start:g} s): every fix, stamped t, would describe the antenna at t - latency, "
+                          "before the start, and be the start's position; a latency below the run's length")
     t, keep = _fix_grid(t_start, t_end, errors)
     if not keep.any():
         shown = [[float(a), float(b)] for a, b in errors.outages]

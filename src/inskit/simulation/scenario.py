@@ -672,20 +672,26 @@ def simulate(sc: Scenario, seed=0, *, truth_rate_hz=None, progress=None) -> Simu
     for what, rate in (("IMU samples at field 'imu.rate_hz' =", sc.imu.rate_hz),
                        ("truth rows at the truth rate (simulate --truth-rate)", truth_rate_hz)):
         if rate is not None and tr.duration * rate > MAX_SAMPLES:  # refused before any array is made
-            raise ConfigError(f"the scenario lasts {tr.duration:g} s: {tr.duration * rate:,.0f} {what} {rate:g} "
-                              f"Hz, more than the {MAX_SAMPLES:,} one simulation holds; lower the rate or shorten "
-                              "the scenario (duration_limit_s)")
+            raise ConfigError(f"{_where(sc)}the scenario lasts {tr.duration:g} s: {tr.duration * rate:,.0f} {what} "
+                              f"{rate:g} Hz, more than the {MAX_SAMPLES:,} one simulation holds; lower the rate or "
+                              "shorten the scenario (duration_limit_s)")
     dt = 1.0 / sc.imu.rate_hz
     t = np.arange(0.0, tr.duration + 1e-9, dt)
     if len(t) < 2:
-        raise ConfigError("the scenario is shorter than one IMU sample")
+        raise ConfigError(f"{_where(sc)}the scenario lasts {tr.duration:g} s, shorter than one IMU sample at field "
+                          f"'imu.rate_hz' = {sc.imu.rate_hz:g} Hz ({dt:g} s)"
+                          + (" (cut by field 'duration_limit_s')" if sc.duration_limit_s is not None
+                             and sc.duration_limit_s < tr.t else ""))
     ideal = mounted_imu(ideal_imu(tr, t, nodes=sc.imu.quadrature_nodes, lever_arm_b=sc.imu.lever_arm_b_m,
                                   gravity=sc.earth.gravity),
                         sc.imu.mount_rpy_deg)
     if progress:
         progress("ideal IMU")
     imu, draws = apply_imu_errors(ideal, imu_errors(sc), rng)
-    gnss, gerr = simulate_gnss(tr, 0.0, tr.duration, gnss_errors(sc), rng)
+    try:
+        gnss, gerr = simulate_gnss(tr, 0.0, tr.duration, gnss_errors(sc), rng)
+    except ConfigError as exc:  # a [gnss] key (outages_s, latency_s): said of the file
+        raise ConfigError(f"{_where(sc)}{exc}") from None
     draws["gnss_position_errors"] = gerr
     tt = t if truth_rate_hz is None else np.arange(0.0, tr.duration + 1e-9, 1.0 / truth_rate_hz)
     truth = truth_solution(tr, tt, with_rates=True, gravity=sc.earth.gravity)
