@@ -591,3 +591,14 @@ def test_simulate_verify_runs_before_the_files_are_written(capsys, tmp_path, mon
                                     "--verify", "--json")
     assert code == 130 and stdout == "" and "aborted" in err and "Traceback" not in err
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+@pytest.mark.parametrize("flags, given", [(["--quick"], "--quick"), (["--no-cli"], "--no-cli"),
+                                          (["--quick", "--no-cli"], "--quick and --no-cli")])
+def test_bench_long_refuses_the_flags_it_would_ignore(flags, given):
+    """`inskit bench --quick --long` ran the long benchmark (minutes, 2.4 GB of cached drives) without a word
+    that --quick was ignored; now one line and exit 2 before any work."""
+    r = inskit("bench", "--long", *flags, "--json")
+    assert r.returncode == 2 and r.stdout == ""
+    assert r.stderr.strip() == (f"inskit: error: --long runs only the long navigate figures (whole commands, "
+                                f"minutes): {given} would be ignored; give --long alone, or {given} without it")

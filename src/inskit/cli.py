@@ -276,6 +276,10 @@ def bench(quick, no_cli, long_runs, as_json):
     """Throughput of the compiled kernels (epochs per second, one core) and of
     the user commands end to end (navigate, simulate, mechanize on a simulated
     hour of car: wall time, peak memory)."""
+    if long_runs and (quick or no_cli):  # --long runs minutes and caches 2.4 GB: not what --quick asked for
+        given = " and ".join(o for o, on in (("--quick", quick), ("--no-cli", no_cli)) if on)
+        raise InputError(f"--long runs only the long navigate figures (whole commands, minutes): {given} would be "
+                         f"ignored; give --long alone, or {given} without it")
     if long_runs:
         from .jobs.bench_cli import long_benchmarks
 
