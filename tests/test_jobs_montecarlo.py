@@ -300,3 +300,19 @@ def test_consistency_runs_are_bounded_as_a_studys(runs, match):
 
     with pytest.raises(InputError, match=match):
         consistency_study(load_scenario(EXAMPLES / "car.toml"), "tactical", runs, 2.0)
+
+
+def test_schemes_near_a_pole_are_refused_naming_the_scenario_not_an_option_it_lacks():
+    """`inskit schemes` of a scenario at 89.95 deg said 'use the wander-azimuth or ECEF frame (--frame
+    wander|ecef)', an option schemes has not (the uncoupled INS's words); at 90 deg 'degrees where radians are
+    expected?'.  Now the job says where the scenario comes near the pole and why its schemes cannot run there."""
+    from inskit.errors import InputError
+
+    sc = load_scenario(EXAMPLES / "static.toml")
+    for lat, shown in ((89.95, "89.9500"), (-90.0, "-90.0000")):
+        near = sc.model_copy(update={"start": sc.start.model_copy(update={"lat_deg": lat})})
+        which = "north" if lat > 0 else "south"
+        with pytest.raises(InputError, match=rf"^scenario 'static' comes within 0\.1 deg of the {which} pole "
+                                             rf"\(latitude {shown} deg at t = 0 s\), where the three schemes' NED "
+                                             r"mechanization and filters are singular$"):
+            compare_schemes(near, (20.0, 30.0))

@@ -2,6 +2,7 @@
 object on stdout, the reproduction's entries and figures."""
 
 import json
+import re
 
 import pytest
 from click.testing import CliRunner
@@ -284,3 +285,20 @@ def test_integrate_computes_its_whole_summary_before_the_files(scenario, tmp_pat
                                       "--no-plots", "--force"])
     assert r.exit_code != 0 and "the summary failed" in str(r.exception)
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
+
+
+@pytest.mark.parametrize("command", ["simulate", "integrate"])
+@pytest.mark.parametrize("lat, shown", [(89.95, "89.9500"), (90.0, "90.0000")])
+def test_a_scenario_near_a_pole_is_refused_naming_the_file(tmp_path, command, lat, shown):
+    """A scenario at rest on the pole: 'platform integrate' said "`lla` holds a latitude of 1.5707964 rad at row 0
+    (90 deg), beyond +-90 deg: degrees where radians are expected? (np.radians)"; 0.05 deg from it, where the
+    north-pointing platform's azimuth rate grows with tan(lat), it ran.  Now both are refused before any file,
+    as NED navigation is within 0.1 deg of a pole."""
+    p = tmp_path / "pole.toml"
+    p.write_text(f"name = \"pole\"\n[start]\nlat_deg = {lat}\nlon_deg = 10\n[imu]\ngrade = \"navigation\"\n"
+                 "[[segment]]\ntype = \"static\"\nduration_s = 60\n")
+    with pytest.raises(InputError, match=rf"^{re.escape(str(p))}: the trajectory comes within 0\.1 deg of the north "
+                                         rf"pole \(latitude {shown} deg at t = 0 s\), where a platform INS, whose "
+                                         r"axes point north, east and down, is singular$"):
+        run(platform, [command, p, "--out", tmp_path / "o", "--no-plots"])
+    assert not (tmp_path / "o").exists()

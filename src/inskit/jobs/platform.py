@@ -561,7 +561,10 @@ def _scenario_setup(scenario_file, *, dt, earth_model, seed, gyro_drift_deg_h=No
     if T / dt > MAX_SAMPLES:  # before any array is made
         raise InputError(f"--dt {dt:g} s over {T:g} s: {T / dt:,.0f} epochs, more than the {MAX_SAMPLES:,} one "
                          "simulation holds; use a longer --dt or a shorter --duration")
-    truth = platform_truth(traj, T, dt, earth_model=earth_model)
+    try:
+        truth = platform_truth(traj, T, dt, earth_model=earth_model)
+    except InputError as exc:  # the track near a pole: said of the file
+        raise InputError(f"{scenario_file}: {exc}") from None
     ie = imu_errors(sc)
     g, a = ie.gyro, ie.accel
     drift = np.asarray(g.fixed_bias) + rng.standard_normal(3) * g.turn_on_bias_sigma

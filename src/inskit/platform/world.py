@@ -27,6 +27,7 @@ import numpy as np
 from .. import earth
 from .. import rotations as rot
 from ..errors import ConfigError, InputError
+from ..strapdown import check_track_off_pole
 from ..types import NavSolution
 from . import _kernels as K
 
@@ -130,6 +131,14 @@ def platform_truth(trajectory, duration, dt, *, earth_model="wgs84", t0=0.0) -> 
     Returns
     -------
     PlatformTruth
+
+    Raises
+    ------
+    ConfigError
+        A step or a duration that is no step.
+    InputError
+        A track within 0.1 deg of a pole
+        (:func:`inskit.strapdown.check_track_off_pole`).
     """
     model_code(earth_model)
     if not (dt > 0 and np.isfinite(dt)):
@@ -153,6 +162,10 @@ def platform_truth(trajectory, duration, dt, *, earth_model="wgs84", t0=0.0) -> 
                            lat, lon)
         lla = np.column_stack([lat, lon, kin.lla[::2, 2]])
         v_n, a_n, C_nb = kin.v_n[::2], kin.a_n[::2], kin.C_nb[::2]
+    # the platform's axes point north, east and down: singular at a pole (a track on it was refused as
+    # "`lla` holds a latitude of 1.5707964 rad ... degrees where radians are expected?")
+    check_track_off_pole(t0 + np.arange(len(lla)) * (0.5 * dt), lla[:, 0], "the trajectory",
+                         "a platform INS, whose axes point north, east and down, is singular")
     f_n = _specific_force(lla, v_n, a_n, earth_model)
     return PlatformTruth(time, float(dt), earth_model, np.ascontiguousarray(lla), np.ascontiguousarray(v_n),
                          np.ascontiguousarray(f_n), rot.quat_from_dcm(C_nb))

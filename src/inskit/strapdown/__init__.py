@@ -41,6 +41,7 @@ __all__ = [
     "NedIntegrator",
     "WanderIntegrator",
     "mechanize",
+    "check_track_off_pole",
     "FRAMES",
 ]
 
@@ -55,7 +56,31 @@ POLE_LIMIT = np.radians(89.9)
 def _check_off_pole(lat, what):
     if not abs(lat) < POLE_LIMIT:
         raise InputError(f"{what} is at latitude {np.degrees(lat):.4f} deg, within 0.1 deg of a pole, where the "
-                         "NED mechanization is singular: use the wander-azimuth or ECEF frame (--frame wander|ecef)")
+                         "NED mechanization is singular: use the wander-azimuth or ECEF frame (frame='wander' or "
+                         "'ecef'; --frame wander|ecef on the command line)")
+
+
+def check_track_off_pole(time, lat, what, why):
+    """Refuse a track that comes within 0.1 deg of a pole (:data:`POLE_LIMIT`),
+    for work that has no frame to choose (a NED filter, a north-pointing
+    platform): an InputError naming ``what`` (the track: ``"scenario 'x'"``),
+    where and when it comes closest, and ``why`` the work is singular there.
+
+    Parameters
+    ----------
+    time : (n,) array_like
+        [s].
+    lat : (n,) array_like
+        Latitude [rad] at those times.
+    what, why : str
+    """
+    lat = np.asarray(lat, float)
+    near = ~(np.abs(lat) < POLE_LIMIT)
+    if near.any():
+        k = int(np.argmax(near))
+        which = "north" if lat[k] > 0 else "south"
+        raise InputError(f"{what} comes within 0.1 deg of the {which} pole (latitude {np.degrees(lat[k]):.4f} deg at "
+                         f"t = {float(np.asarray(time)[k]):g} s), where {why}")
 
 
 def _qz(angle):
