@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from inskit.analysis.allan import allan_deviation, allan_imu, fit_allan, gm_avar
+from inskit.errors import InputError
 from inskit.simulation.sensors import ImuErrors, apply_imu_errors, triad_from_datasheet
 from inskit.types import ImuData
 from inskit.units import DEG, DEG_PER_HOUR, MICRO_G
@@ -180,6 +181,44 @@ def test_fit_allan_refuses_a_zero_curve():
     tau = np.logspace(-2, 2, 30)
     with pytest.raises(InputError, match="a constant signal has none: its deviation is zero"):
         fit_allan(tau, np.zeros_like(tau))
+
+
+@pytest.mark.parametrize("args, kwargs, said", [
+    ((1000, 0.01), {"min_clusters": 0}, r"^min_clusters must be an integer >= 1 \(the fewest clusters the longest "
+                                        r"cluster time rests on\), got 0$"),
+    ((1000, 0.01), {"min_clusters": -1}, r"^min_clusters must be an integer >= 1 .*, got -1$"),
+    ((1000, 0.01), {"min_clusters": 1.5}, r"^min_clusters must be an integer >= 1 .*, got 1\.5$"),
+    ((1000, 0.01), {"min_clusters": 500}, r"^1000 samples are too few for an Allan deviation with min_clusters = "
+                                          r"500 \(at least 3 x 500 = 1500\)$"),
+    ((1000, 0.01), {"taus_per_decade": -3}, r"^taus_per_decade must be a finite number > 0, got -3$"),
+    ((1000, 0.0), {}, r"^dt must be the sample interval, a finite number > 0 \[s\], got 0\.0$"),
+    ((1000, -0.01), {}, r"^dt must be the sample interval, .* got -0\.01$"),
+    ((1000, float("nan")), {}, r"^dt must be the sample interval, .* got nan$"),
+    (("nan", 0.01), {}, r"^increments hold a NaN or infinite value \(row 500\): an Allan deviation of it is NaN$"),
+    (("3d", 0.01), {}, r"^increments must have shape \(n,\) or \(n, k\), got \(250, 2, 2\)$"),
+])
+def test_allan_deviation_refuses_arguments_that_are_no_curve(args, kwargs, said):
+    """min_clusters = 0 was a ZeroDivisionError, taus_per_decade = -3 numpy's 'Number of samples, -4, must be
+    non-negative', a 3-D array a vstack error; min_clusters = -1, dt <= 0 or NaN and a NaN increment gave a curve
+    (negative cluster times, NaN) without a word; too short a log for the clusters asked did not say which."""
+    x = np.random.default_rng(0).standard_normal(1000) * 1e-3
+    data, dt = args
+    if data == "nan":
+        x[500] = np.nan
+    elif data == "3d":
+        x = x.reshape(-1, 2, 2)
+    with pytest.raises(InputError, match=said):
+        allan_deviation(x, dt, **kwargs)
+
+
+def test_fit_allan_refuses_curves_of_two_lengths_or_bad_cluster_times():
+    """fit_allan(tau, adev[:-1]) was numpy's 'distances must match the length of the corresponding dimension'."""
+    tau, adev = allan_deviation(np.random.default_rng(0).standard_normal(1000) * 1e-3, 0.01)
+    with pytest.raises(InputError, match=r"^tau and adev must be two \(m,\) arrays of the same length .* got "
+                                         r"shapes \(15,\) and \(14,\)$"):
+        fit_allan(tau, adev[:-1])
+    with pytest.raises(InputError, match=r"^tau must be the cluster times \[s\]: finite, > 0 and increasing$"):
+        fit_allan(-tau, adev)
 
 
 def test_plot_names_the_fitted_terms_in_both_panels(monkeypatch, tmp_path):

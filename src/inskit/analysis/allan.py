@@ -40,9 +40,15 @@ def allan_deviation(increments, dt, taus_per_decade=10, min_clusters=9):
     Parameters
     ----------
     increments : (n,) or (n, k) ndarray
-        Angle or velocity increments per sample.
+        Angle or velocity increments per sample, finite.
     dt : float
-        Sample interval [s].
+        Sample interval [s], > 0.
+    taus_per_decade : float
+        Cluster times per decade, > 0.
+    min_clusters : int
+        Fewest clusters (``n - 2 m``) the longest cluster time rests on,
+        >= 1: the curve reaches ``m = (n - 1) / (2 min_clusters)`` samples;
+        the log must hold ``3 min_clusters`` increments at least.
 
     Returns
     -------
@@ -50,14 +56,43 @@ def allan_deviation(increments, dt, taus_per_decade=10, min_clusters=9):
         Cluster times [s].
     adev : (m,) or (m, k) ndarray
         Allan deviation in rate units (increment units per second).
+
+    Raises
+    ------
+    InputError
+        Increments that are not a finite (n,) or (n, k) array, a ``dt``
+        that is no interval, ``taus_per_decade`` or ``min_clusters`` out of
+        their ranges (``min_clusters = 0`` was a ZeroDivisionError, a
+        negative one or ``dt <= 0`` a curve without a word), or a log too
+        short for the clusters asked.
     """
-    x = np.asarray(increments, float)
+    import numbers
+
+    try:
+        x = np.asarray(increments, float)
+    except (TypeError, ValueError):
+        raise InputError(f"increments must be an (n,) or (n, k) array of numbers, got "
+                         f"{type(increments).__name__}") from None
+    if x.ndim not in (1, 2):
+        raise InputError(f"increments must have shape (n,) or (n, k), got {x.shape}")
+    if not np.isfinite(x).all():
+        i = int(np.argmax((~np.isfinite(x)).reshape(len(x), -1).any(axis=1)))
+        raise InputError(f"increments hold a NaN or infinite value (row {i}): an Allan deviation of it is NaN")
+    if isinstance(dt, bool) or not isinstance(dt, numbers.Real) or not (0 < dt < np.inf):
+        raise InputError(f"dt must be the sample interval, a finite number > 0 [s], got {dt!r}")
+    if isinstance(taus_per_decade, bool) or not isinstance(taus_per_decade, numbers.Real) or not (
+            0 < taus_per_decade < np.inf):
+        raise InputError(f"taus_per_decade must be a finite number > 0, got {taus_per_decade!r}")
+    if isinstance(min_clusters, bool) or not isinstance(min_clusters, numbers.Integral) or min_clusters < 1:
+        raise InputError(f"min_clusters must be an integer >= 1 (the fewest clusters the longest cluster time "
+                         f"rests on), got {min_clusters!r}")
     one = x.ndim == 1
     if one:
         x = x[:, None]
     n = len(x)
     if n < 3 * min_clusters:
-        raise InputError(f"{n} samples are too few for an Allan deviation (at least {3 * min_clusters})")
+        raise InputError(f"{n} samples are too few for an Allan deviation with min_clusters = {min_clusters} (at "
+                         f"least 3 x {min_clusters} = {3 * min_clusters})")
     theta = np.vstack([np.zeros((1, x.shape[1])), np.cumsum(x, axis=0)])
     m_max = (n - 1) // min_clusters // 2 * 1
     ms = np.unique(np.round(np.logspace(0, np.log10(max(m_max, 1)), int(taus_per_decade * np.log10(max(m_max, 10))) + 1)).astype(int))
@@ -177,6 +212,11 @@ def fit_allan(tau, adev, duration_s=None):
 
     tau = np.asarray(tau, float)
     a = np.asarray(adev, float)
+    if tau.ndim != 1 or a.shape != tau.shape:
+        raise InputError(f"tau and adev must be two (m,) arrays of the same length (one axis: adev[:, j]), got "
+                         f"shapes {tau.shape} and {a.shape}")
+    if not (np.isfinite(tau).all() and (tau > 0).all() and (np.diff(tau) > 0).all()):
+        raise InputError("tau must be the cluster times [s]: finite, > 0 and increasing")
     if len(a) < 2 or not (np.isfinite(a).all() and (a > 0).all()):
         raise InputError("the Allan deviation must be positive and finite at two or more cluster times to fit "
                          "noise terms (a constant signal has none: its deviation is zero)")
