@@ -271,3 +271,19 @@ def test_a_turn_gets_no_latitude_hint():
     dth[1:, 2] += 1.0 * DEG * np.diff(t)
     with pytest.raises(InputError, match=r"give --gyro-bias-deg-h\)$"):
         align_imu(ImuData(t, dth, ideal.dv_b), lat, method="accel", t_end=30.0, gyro_bias_sigma=1.0 * DEG_PER_HOUR)
+
+
+@pytest.mark.parametrize("kwargs, said", [
+    ({"m": 2.0}, r"^`m`, the blending gain, must be within \[0, 1\], got 2\.0$"),
+    ({"m": -0.1}, r"^`m`, the blending gain, must be within \[0, 1\], got -0\.1$"),
+    ({"m": 0.5, "method": "accel"}, r"^`m` 0\.5 would be ignored: it is the blending gain of method 'blend', and "
+                                    r"method 'accel' blends nothing$"),
+    ({"lat": 45.0}, r"^--lat must be within \(-90, 90\) deg .*, got 2578\.31 \(`lat` is 45 rad here: degrees where "
+                    r"radians are expected\? np\.radians\)$"),
+])
+def test_align_refuses_a_gain_it_would_ignore_or_misuse(static_log, kwargs, said):
+    """align_static(path, lat, m=2.0) (the command line allows [0, 1]) aligned a static IMU to a pitch of 8.5 deg,
+    and m with method 'accel' was ignored, both without a word; a latitude in degrees said 'got 2578.31' alone."""
+    lat = kwargs.pop("lat", np.radians(45.0))
+    with pytest.raises(InputError, match=said):
+        align_static(static_log, lat, **kwargs)

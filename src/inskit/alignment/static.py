@@ -397,8 +397,16 @@ def align_imu(imu: ImuData, lat, *, method="blend", m=None, t_start=None, t_end=
     if method not in METHODS:
         raise InputError(f"`method` must be one of {', '.join(METHODS)}, got {method!r}")
     if not (np.isfinite(lat) and abs(lat) < np.pi / 2):
+        hint = (f" (`lat` is {float(lat):g} rad here: degrees where radians are expected? np.radians)"
+                if np.isfinite(lat) and abs(lat) <= 90 else "")
         raise InputError(f"--lat must be within (-90, 90) deg (at a pole north is undefined), got "
-                         f"{np.degrees(float(lat)):g}")
+                         f"{np.degrees(float(lat)):g}{hint}")
+    if m is not None:  # the command line checked these; a call did not (m = 2 gave a pitch of 8.5 deg at rest)
+        if method != "blend":
+            raise InputError(f"`m` {m!r} would be ignored: it is the blending gain of method 'blend', and method "
+                             f"{method!r} blends nothing")
+        if isinstance(m, bool) or not isinstance(m, (int, float, np.integer, np.floating)) or not 0.0 <= m <= 1.0:
+            raise InputError(f"`m`, the blending gain, must be within [0, 1], got {m!r}")
     prior = bias_prior(accel_bias_sigma, gyro_bias_sigma, grade)
     t0, t1 = float(imu.time[0]), float(imu.time[-1])
     span = f"the log spans {t0:.3f}..{t1:.3f} s"
