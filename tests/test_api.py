@@ -224,3 +224,16 @@ def test_a_generator_seed_is_drawn_from_and_spawns_the_raw_gnss_child(tmp_path):
     with pytest.raises(InputError, match=r"^seed must be an integer >= 0 or a numpy\.random\.Generator, got "
                                          r"SeedSequence"):
         inskit.simulate(sc, np.random.SeedSequence(3))
+
+
+def test_navigate_into_a_file_is_refused_before_the_run(tmp_path):
+    """navigate(cfg, out_dir=<a file>) raised NotADirectoryError ('[Errno 20] Not a directory'), not an inskit
+    error; now the InputError that names the file, before the filter runs."""
+    f = tmp_path / "results"
+    f.write_text("mine\n")
+    with pytest.raises(InputError, match=rf"^{re.escape(str(f))}: is a file; expected an output folder$"):
+        inskit.navigate(ROOT / "examples" / "drive_0708.toml", out_dir=f)
+    with pytest.raises(InputError, match=rf"^{re.escape(str(f))}: is a file; expected an output folder \(so "
+                                         rf"{re.escape(str(f / 'run'))} cannot be made\)$"):
+        inskit.navigate(ROOT / "examples" / "drive_0708.toml", out_dir=f / "run")
+    assert f.read_text() == "mine\n"

@@ -194,9 +194,9 @@ def navigate(config, *, smooth=False, truth=None, out_dir=None, overwrite=False,
             target = cfg.resolve(cfg.output.dir) if cfg.output.dir else Path("out") / cfg.name
         else:
             target = out_dir
-        if target.exists() and any(target.iterdir()) and not overwrite:
+        if target.is_dir() and any(target.iterdir()) and not overwrite:
             raise InputError(f"{target}: already holds results; refusing to overwrite them (overwrite=True)")
-        check_folder_writable(target)  # before the computation, not after it
+        check_folder_writable(target)  # before the computation, not after it; a file there: 'is a file; ...'
     if truth is not None and not isinstance(truth, NavSolution):
         truth = io.read_solution(truth)
     cfg, extra = N.calibrated_config(cfg, log=log)  # [imu] time_offset_search = "calibrate"
