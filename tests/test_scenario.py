@@ -484,3 +484,32 @@ def test_a_run_too_short_for_its_gnss_latency_or_its_imu_rate_is_refused_naming_
                  f"[[segment]]\ntype = \"static\"\n{segment}\n")
     with pytest.raises(ConfigError, match=rf"^{re.escape(str(p))}: {said}"):
         simulate(load_scenario(p))
+
+
+RAW_HEAD = ("name = \"r\"\n[start]\nlat_deg = 45.0\nlon_deg = 10.0\n[imu]\nrate_hz = 10.0\n[[segment]]\n"
+            "type = \"static\"\nduration_s = 30.0\n[raw_gnss]\n")
+
+
+@pytest.mark.parametrize("raw, said", [
+    ("[[raw_gnss.blockage]]\nstart_s = 5\nend_s = 10\nkeep = 2\nsats = [\"G01\"]",
+     r"field 'raw_gnss\.blockage\.0': give keep or sats, not both \(keep = 2 would be ignored"),
+    ("cn0_zenith_dbhz = 30\ncn0_horizon_dbhz = 50",
+     r"field 'raw_gnss': cn0_horizon_dbhz \(50\) is above cn0_zenith_dbhz \(30\): a signal is strongest at the "
+     r"zenith \(swapped\?\)"),
+    ("mask_deg = 89", r"field 'raw_gnss\.mask_deg': no satellite is in view at any epoch \(above the 89 deg mask, "
+                      r"outside the blockage windows\): the observation file would be empty"),
+    ("clock_bias_us = -1e6", r"field 'raw_gnss\.clock_bias_us': the receiver clock offset reaches -1 s at t = 0 s "
+                             r".*beyond \+-0\.5 s: .* clock_jumps = true steps it back\)$"),
+    ("constellation = \"nav:.\"", r"/.*: is a folder; expected a RINEX navigation file$"),
+    ("[[raw_gnss.blockage]]\nstart_s = 5\nend_s = 10\nsats = [\"X99\"]",
+     r"blockage window 5\.0\.\.10\.0 s names satellites not in the constellation: \['X99'\]$"),
+])
+def test_raw_gnss_settings_that_would_be_ignored_or_unwritable_are_refused_naming_the_file(tmp_path, raw, said):
+    """keep with sats ignored keep, a C/N0 stronger at the horizon than at the zenith was simulated, a mask above
+    every satellite ended in '`obs` holds no observation at all: nothing to write', a clock offset of -1 s in
+    "obs['L1C']: np.float64(-1447061628.12) does not fit the RINEX field F14.3", 'nav:.' said 'no such navigation
+    file' of a folder, and the run-time refusals named no file."""
+    p = tmp_path / "r.toml"
+    p.write_text(RAW_HEAD + raw + "\n")
+    with pytest.raises(ConfigError, match=rf"^{re.escape(str(p))}: {said}"):
+        simulate(load_scenario(p))

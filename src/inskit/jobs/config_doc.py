@@ -122,8 +122,10 @@ SECTION_RULES = {
                    + f"; {r.takes}): {r.meaning}" for k, r in TRIAD_TERMS.items()) + ".",
     "RawGnssSection": "Rules: give start_utc, or start_gps_week with start_sow_s, or neither (default: GPS week "
                       "2374, 243240 s of week, the day of the drive_0708 log); the scenario must end inside that "
-                      "GPS week.",
-    "BlockageSpec": "Rules: end_s after start_s.",
+                      "GPS week. cn0_horizon_dbhz is at most cn0_zenith_dbhz. Some satellite must be in view at "
+                      "some epoch, and the receiver clock offset must stay within +-0.5 s over the run (clock_jumps "
+                      "keeps it within a millisecond).",
+    "BlockageSpec": "Rules: end_s after start_s; keep or sats, not both.",
     "GnssSpec": "Rules: every outages_s window [start, end] has 0 <= start < end.",
     "VibrationSpec": "Rules: a sinusoidal vibration takes frequency_hz, a random one frequency_hz or band_hz "
                      "(0 < low < high), not both. Its highest frequency (a random one's top of the band) must be "

@@ -267,6 +267,8 @@ def constellation_from_nav(nav_path, t_start=None, t_end=None, *, systems=("G", 
     from ..gnss.time import week_sow
 
     nav_path = Path(nav_path)
+    if nav_path.is_dir():  # 'nav:.' or 'nav:data/': it said 'no such navigation file' of a folder that exists
+        raise ConfigError(f"{nav_path}: is a folder; expected a RINEX navigation file")
     if not nav_path.is_file():
         raise ConfigError(f"{nav_path}: no such navigation file")
     nav = read_nav(nav_path)

@@ -215,6 +215,9 @@ class BlockageSpec(_S):
     def _order(self):
         if not self.end_s > self.start_s:
             raise ValueError(f"end_s ({self.end_s}) must come after start_s ({self.start_s})")
+        if self.sats and "keep" in self.model_fields_set:  # the named satellites won: keep was ignored
+            raise ValueError(f"give keep or sats, not both (keep = {self.keep} would be ignored: sats names the "
+                             "satellites left in view)")
         return self
 
 
@@ -255,6 +258,9 @@ class RawGnssSection(_S):
             raise ValueError("give start_utc or start_gps_week + start_sow_s, not both")
         if (self.start_gps_week is None) != (self.start_sow_s is None):
             raise ValueError("start_gps_week and start_sow_s go together")
+        if self.cn0_horizon_dbhz > self.cn0_zenith_dbhz:
+            raise ValueError(f"cn0_horizon_dbhz ({self.cn0_horizon_dbhz:g}) is above cn0_zenith_dbhz "
+                             f"({self.cn0_zenith_dbhz:g}): a signal is strongest at the zenith (swapped?)")
         if not (self.constellation in ("walker-gps", "walker-galileo", "walker-gps+galileo")
                 or self.constellation.startswith("nav:")):
             raise ValueError(f"constellation {self.constellation!r}: use 'walker-gps', 'walker-galileo', "
@@ -604,7 +610,24 @@ def simulate_raw_gnss(sc: Scenario, trajectory, seed):
         nav.iono_beta if nav.iono_beta is not None else KLOBUCHAR_DEFAULT_BETA)
     spec = dataclasses.replace(raw_gnss_spec(sc), iono_alpha=tuple(iono_precision(alpha)),
                                iono_beta=tuple(iono_precision(beta)))
-    return simulate_raw(trajectory, t_sim, t0_gps=t0, nav=nav, spec=spec, rng=rng)
+    raw = simulate_raw(trajectory, t_sim, t0_gps=t0, nav=nav, spec=spec, rng=rng)
+    if not np.any(raw.n_visible > 0):  # it was '`obs` holds no observation at all: nothing to write'
+        raise ConfigError(f"field 'raw_gnss.mask_deg': no satellite is in view at any epoch (above the "
+                          f"{r.mask_deg:g} deg mask, outside the blockage windows): the observation file would be "
+                          "empty; lower the mask")
+    worst = int(np.argmax(np.abs(raw.clock_bias_s)))
+    if abs(raw.clock_bias_s[worst]) > MAX_CLOCK_OFFSET_S:  # it was 'obs['L1C']: ... does not fit the RINEX field'
+        raise ConfigError(f"field 'raw_gnss.clock_bias_us': the receiver clock offset reaches "
+                          f"{raw.clock_bias_s[worst]:.3g} s at t = {t_sim[worst]:g} s (clock_bias_us, "
+                          f"clock_drift_ppm and the clock's noise over the run), beyond +-{MAX_CLOCK_OFFSET_S:g} s: "
+                          "carrier phases that far off do not fit RINEX's fields (a receiver keeps its clock within "
+                          "a millisecond: clock_jumps = true steps it back)")
+    return raw
+
+
+#: the largest receiver clock offset [s] a simulation keeps: RINEX's F14.3 carrier-phase field holds down to about
+#: -0.7 s of offset (L1 cycles of a range of 20,000 km less 0.7 light-seconds)
+MAX_CLOCK_OFFSET_S = 0.5
 
 
 @dataclass
@@ -697,5 +720,8 @@ def simulate(sc: Scenario, seed=0, *, truth_rate_hz=None, progress=None) -> Simu
     truth = truth_solution(tr, tt, with_rates=True, gravity=sc.earth.gravity)
     raw = None
     if sc.raw_gnss is not None and sc.raw_gnss.enabled:
-        raw = simulate_raw_gnss(sc, tr, seed)
+        try:
+            raw = simulate_raw_gnss(sc, tr, seed)
+        except ConfigError as exc:  # a [raw_gnss] key, its nav file, a blockage's satellites: said of the file
+            raise ConfigError(f"{_where(sc)}{exc}") from None
     return Simulation(sc, tr, truth, ideal, imu, gnss, draws, raw)
