@@ -536,3 +536,15 @@ def test_a_trajectory_beyond_100_km_of_height_is_refused(tmp_path, start, seg, w
     with pytest.raises(ConfigError, match=rf"^{re.escape(str(p))}: {re.escape(where)}: the trajectory's height "
                                           rf"reaches {said}, beyond \+-100 km"):
         simulate_scenario(load_scenario(p))
+
+
+def test_a_down_vibration_beyond_100_km_is_refused_naming_the_file(tmp_path):
+    """[[vibration]] target = "down", amplitude = 2e5 (metres: a unit slipped) wrote a truth file of heights to
+    -190 km that inskit's reader refused."""
+    p = _scenario(tmp_path, "lat_deg = 45\nlon_deg = 10", "[[vibration]]\ntarget = \"down\"\namplitude = 2e5\n"
+                  "frequency_hz = 0.01\n[[segment]]\ntype = \"static\"\nduration_s = 30.0\n")
+    with pytest.raises(ConfigError, match=rf"^{re.escape(str(p))}: \[\[vibration\]\]: the 'down' vibration \(200,000 m "
+                                          r"of amplitude\) takes the height beyond \+-100 km of the ellipsoid"):
+        simulate_scenario(load_scenario(p))
+    p.write_text(p.read_text().replace("amplitude = 2e5", "amplitude = 0.5"))
+    assert np.ptp(simulate_scenario(load_scenario(p)).truth.lla[:, 2]) == pytest.approx(0.5, abs=0.01)  # 30 s of 100 s

@@ -433,6 +433,7 @@ def build_trajectory(sc: Scenario, rng=None) -> SegmentTrajectory:
     s = sc.start
     tr = SegmentTrajectory((s.lat_deg * DEG, s.lon_deg * DEG, s.height_m), s.yaw_deg * DEG, s.speed_m_s,
                            s.transition_s)
+    tr.source = sc._source
     for i, seg in enumerate(sc.segment, start=1):
         t = seg.type
         for r in range(1, seg.repeat + 1):

@@ -348,6 +348,10 @@ class SegmentTrajectory:
         scenario sets it to its own ``"FILE: segment N (type)"`` before each
         ``[[segment]]`` (a figure eight adds two turns, a repeated segment
         several), so that a refusal names the table of the file.
+    source : str or None
+        What the messages call the whole trajectory's description (a
+        scenario sets its file): the start of a refusal that is no one
+        segment's (a vibration's).
     """
 
     def __init__(self, lla0, yaw0=0.0, speed0=0.0, transition_s=2.0):
@@ -364,6 +368,7 @@ class SegmentTrajectory:
         self.t = 0.0
         self.segments: list[dict] = []
         self.label: str | None = None
+        self.source: str | None = None
         self._labels: list[str] = []  # what the messages call each entry of ``segments``
         self._pos = None
 
@@ -555,6 +560,13 @@ class SegmentTrajectory:
                               f"{tg[k]:.2f} s, beyond +-{MAX_HEIGHT_M / 1000:g} km of the ellipsoid (where inskit's "
                               "readers stop: the truth file would be refused); a shallower or shorter climb or "
                               "descent")
+        heave = sum(abs(o.amplitude) for o in self.osc if o.target == "down")  # on top of the segments' height
+        if heave and not np.abs(hgt).max() + heave <= MAX_HEIGHT_M:
+            where = f"{self.source}: " if self.source else ""
+            raise ConfigError(f"{where}[[vibration]]: the 'down' vibration ({heave:,.0f} m of amplitude) takes the "
+                              f"height beyond +-{MAX_HEIGHT_M / 1000:g} km of the ellipsoid (the segments reach "
+                              f"{np.abs(hgt).max():,.0f} m), where inskit's readers stop: the truth file would be "
+                              "refused; its amplitude is in metres")
 
     def _state(self, t, second=False):
         """Position, NED velocity and acceleration, Euler angles and rates
