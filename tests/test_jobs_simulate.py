@@ -63,3 +63,19 @@ def test_scenario_track_is_drawn_over_thinned_fixes_with_a_legend(tmp_path, monk
     assert labels == ["truth", f"GNSS fixes ({len(many.lla)}, every 10th drawn)"]
     for ax in (track, fig.axes[3]):  # below the frame, over no line
         assert ax.get_legend().get_window_extent().y1 <= ax.get_window_extent().y0
+
+
+def test_verify_at_rest_on_a_pole_mechanizes_in_the_wander_frame(tmp_path):
+    """`inskit simulate --verify` of a log at rest on the north pole said 'use the wander-azimuth or ECEF frame
+    (--frame wander|ecef)', an option simulate has not (and the truth at twice the rate was refused: its latitude
+    interpolated to pi/2 + 2 ulp); near a pole the self-check now mechanizes in the wander-azimuth frame, elsewhere
+    in NED as before."""
+    from inskit.simulation.scenario import load_scenario
+
+    p = tmp_path / "pole.toml"
+    p.write_text("name = \"pole\"\n[start]\nlat_deg = 90\nlon_deg = 10\n[imu]\nrate_hz = 100\n[[segment]]\n"
+                 "type = \"static\"\nduration_s = 10\n")
+    v = JS.verify_ideal(load_scenario(p))
+    assert list(v["frames"]) == ["wander"] and v["frames"]["wander"]["horizontal_max_m"] < 1e-6
+    p.write_text(p.read_text().replace("lat_deg = 90", "lat_deg = 45"))
+    assert list(JS.verify_ideal(load_scenario(p))["frames"]) == ["ned"]

@@ -507,7 +507,9 @@ def test_at_rest_on_the_pole_and_circling_it_past_a_full_turn_simulate(tmp_path)
     reproduces the truth."""
     tr = build_trajectory(load_scenario(_scenario(tmp_path, "lat_deg = 90\nlon_deg = 10",
                                                   "[[segment]]\ntype = \"static\"\nduration_s = 5.0\n")))
-    assert truth_solution(tr, np.arange(0.0, 5.0, 0.05)).lla[:, 0] == pytest.approx(np.pi / 2)
+    # at 200 Hz the interpolated latitude was pi/2 + 2 ulp at some rows, refused as 'degrees where radians ...'
+    lat = truth_solution(tr, np.arange(0.0, 5.0, 0.005)).lla[:, 0]
+    assert np.all(lat <= np.pi / 2) and lat == pytest.approx(np.pi / 2, abs=1e-12)
     # 89.999 deg: a circle of 700 m, 70 s at 10 m/s: 200 s is nearly three full turns of longitude
     tr = build_trajectory(load_scenario(_scenario(tmp_path, "lat_deg = 89.999\nlon_deg = 170\nyaw_deg = 90\n"
                                                   "speed_m_s = 10", "[[segment]]\ntype = \"cruise\"\n"

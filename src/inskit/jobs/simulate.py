@@ -174,14 +174,23 @@ def _plot(sim, path):
     return path
 
 
-def verify_ideal(sc: Scenario, frames=("ned",)):
+def verify_ideal(sc: Scenario, frames=None):
     """Mechanize the scenario's ideal IMU at its rate and at twice its rate and
     report how closely each reproduces the truth (the simulator's self-check),
-    simulation and mechanization with the scenario's gravity model."""
+    simulation and mechanization with the scenario's gravity model.
+
+    ``frames`` default: ``("ned",)``, or ``("wander",)`` for a scenario that
+    comes within 0.1 deg of a pole, where the NED mechanization is singular
+    (``simulate --verify`` of a log at rest on the pole said 'use the
+    wander-azimuth or ECEF frame (... --frame wander|ecef ...)', an option
+    simulate has not)."""
     from .. import earth
-    from ..strapdown import mechanize
+    from ..strapdown import POLE_LIMIT, mechanize
 
     tr = build_trajectory(sc, np.random.default_rng(0))
+    if frames is None:
+        lat = tr.navigation(np.arange(0.0, tr.duration, 1.0))[1][:, 0]
+        frames = ("ned",) if np.all(np.abs(lat) < POLE_LIMIT) else ("wander",)
     out = {}
     for frame in frames:
         errs = []

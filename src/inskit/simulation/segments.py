@@ -725,7 +725,11 @@ def _wrap_longitude(lla):
     """Wrap, in place, the longitudes of ``lla`` (n, 3) that lie outside
     (-pi, pi] into it (a vehicle circling a pole, or the globe, went past a
     full turn and was refused as 'degrees where radians are expected?');
-    those inside are left to the bit."""
+    those inside are left to the bit.  Latitudes past +-pi/2 by rounding
+    (the interpolation of a trajectory at rest on a pole gave pi/2 + 2 ulp at
+    some times, refused the same way) are set to +-pi/2: the trajectory
+    itself never passes a pole (:meth:`SegmentTrajectory._check_position`)."""
+    np.clip(lla[:, 0], -0.5 * np.pi, 0.5 * np.pi, out=lla[:, 0])
     lon = lla[:, 1]
     out = ~((lon > -np.pi) & (lon <= np.pi))
     if out.any():
