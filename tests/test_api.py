@@ -237,3 +237,13 @@ def test_navigate_into_a_file_is_refused_before_the_run(tmp_path):
                                          rf"{re.escape(str(f / 'run'))} cannot be made\)$"):
         inskit.navigate(ROOT / "examples" / "drive_0708.toml", out_dir=f / "run")
     assert f.read_text() == "mine\n"
+
+
+def test_simulate_refuses_file_options_without_a_folder(tmp_path):
+    """simulate(sc, plot=True) or overwrite=True without out_dir wrote nothing and said nothing."""
+    sc = tmp_path / "still.toml"
+    sc.write_text(SCENARIO)
+    for name in ("plot", "overwrite"):
+        with pytest.raises(InputError, match=rf"^{name}=True would be ignored: without out_dir nothing is written"):
+            inskit.simulate(sc, **{name: True})
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["still.toml"]

@@ -250,6 +250,11 @@ def simulate(scenario, seed=0, *, truth_rate_hz=None, out_dir=None, overwrite=Fa
     overwrite, plot = _check_flag("overwrite", overwrite), _check_flag("plot", plot)
     if out_dir is not None:
         out_dir = _check_path("out_dir", out_dir, " or None")
+    else:  # both were ignored without a word: nothing is written without out_dir
+        for name, on in (("plot", plot), ("overwrite", overwrite)):
+            if on:
+                raise InputError(f"{name}=True would be ignored: without out_dir nothing is written (give "
+                                 "out_dir=FOLDER for the files)")
     if truth_rate_hz is not None and (isinstance(truth_rate_hz, bool) or not isinstance(truth_rate_hz, numbers.Real)):
         raise InputError(f"truth_rate_hz must be a number [Hz] (or None), got {type(truth_rate_hz).__name__} "
                          f"{truth_rate_hz!r}")
