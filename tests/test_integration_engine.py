@@ -14,7 +14,7 @@ from inskit.jobs.config import load_config
 from inskit.jobs.navigate import navigate
 from inskit.io.rtklib import read_pos
 from inskit.simulation import StationaryTrajectory, ideal_imu, truth_solution
-from inskit.types import GnssData, ImuData
+from inskit.types import GnssData, ImuData, NavState
 
 ROOT = Path(__file__).resolve().parents[1]
 POS = ROOT / "data" / "drive_0708" / "gnss_1934_sf.pos.gz"
@@ -368,3 +368,67 @@ def test_lost_note_names_a_lost_filter_and_the_constraint_that_broke_it():
     assert "[constraints] nhc = false" in note
     # a healthy record adds nothing
     assert lost_note(names, rec_m, rec_t, np.ones(110, bool)) == ""
+
+
+@pytest.fixture(scope="module")
+def tilted_car():
+    """A 110 s car (20 s at rest, then a drive with turns) with an
+    industrial MEMS IMU and 1 Hz fixes, started 10 deg off in roll and
+    -8 deg in pitch with a 0.5 deg sigma: the tilt leaks 2.2 m/s^2 of
+    gravity into the horizontal channels and every fix is refused from the
+    second second on."""
+    from inskit.simulation.gnss import GnssErrors, simulate_gnss
+    from inskit.simulation.segments import SegmentTrajectory
+    from inskit.simulation.sensors import apply_imu_errors, preset
+
+    tr = SegmentTrajectory((np.radians(40), np.radians(-105), 1600.0), yaw0=0.4)
+    tr.static(20).accelerate(12, 8).cruise(15).turn(np.radians(90), rate=np.radians(9)).cruise(20)
+    tr.turn(np.radians(-60), rate=np.radians(6)).cruise(27)
+    t = np.arange(0.0, tr.duration, 0.01)
+    rng = np.random.default_rng(5)
+    imu, _ = apply_imu_errors(ideal_imu(tr, t, nodes=3), preset("industrial-mems"), rng)
+    g, _ = simulate_gnss(tr, t[0], t[-1], GnssErrors(rate_hz=1.0, white_h_m=0.5, white_v_m=1.0), rng)
+    truth = truth_solution(tr, t)
+    s0 = truth.state(0)
+    start = NavState.from_euler(s0.time, s0.lla, s0.v_n, s0.euler + np.radians([10.0, -8.0, 0.0]))
+    return imu, truth, g, start
+
+
+@pytest.mark.parametrize("compiled", [True, False])
+@pytest.mark.parametrize("constraints", [False, True])
+def test_a_tilt_lost_filter_recovers_on_the_fixes(tilted_car, compiled, constraints):
+    """A tilt-lost filter's fixes drift away with the square of time (its
+    velocity error grows at g tan(tilt)), faster than its own velocity
+    sigma allowed the rejections to 'agree', so the recovery never fired
+    and the run stayed lost to its end, kilometres off.  Now the smooth
+    drift is evidence of a lost state: 15 s after the first refused fix the
+    filter is re-initialised on the fixes (the drift says a tilt beyond the
+    error model's small angles), the record says how far it had drifted
+    and the tilt that shows, and every later fix is used.  With the
+    constraints, their own recoveries no longer widen the covariance while
+    the fixes are refused (that let the car's yaw wander 80 deg at rest,
+    and the fixes' recovery came only after a minute)."""
+    from inskit.analysis import nav_error
+    from inskit.integration import InitialUncertainty, NonHolonomic, ZeroVelocity
+
+    imu, truth, g, start = tilted_car
+    meas = [GnssPosition(g)]
+    if constraints:
+        meas += [ZeroVelocity([(imu.time[0], 19.5)], 10.0, 0.02),
+                 NonHolonomic([(imu.time[0], imu.time[-1])], 10.0, 0.1)]
+    noise = SensorNoise(np.radians(0.3) / 60, 0.1 / 60, np.radians(50 / 3600), 1e-2, bias_tau_s=300.0)
+    settings = FilterSettings.standard(noise, InitialUncertainty(roll_pitch_rad=np.radians(0.5)),
+                                       compiled_updates=compiled)
+    out = run_filter(imu, start, meas, settings)
+    inn = out.innovations["gnss_pos"]
+    first_refused = float(inn["t"][~inn["accepted"]][0])
+    assert [r["measurement"] for r in out.recoveries] == ["gnss_pos"], out.recoveries
+    r = out.recoveries[0]
+    assert r["fixes_position"] and first_refused + 15.0 <= r["t"] <= first_refused + 16.0, (first_refused, r)
+    assert 7.0 < np.degrees(r["tilt_rad"]) < 20.0 and r["reinitialised"], r  # the tilt was 12.8 deg
+    assert r["position_offset_m"] > 100.0 and r["drift_velocity_m_s"] > 10.0 and r["covariance_scale"] is None, r
+    assert inn["accepted"][inn["t"] > r["t"]].all()
+    e = nav_error(out.nav, truth)
+    end = e.time > e.time[-1] - 10.0
+    assert np.abs(np.degrees(e.att_rpy[end, :2])).max() < 0.5
+    assert e.horizontal[end].max() < 3.0

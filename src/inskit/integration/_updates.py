@@ -663,6 +663,7 @@ def inflate_to_pass(P, nu, H, R, k, thr, Pa, S, L, w):
     for i in range(n):
         for j in range(n):
             P[i, j] = Pa[i, j]
+    return alpha
 
 
 @njit(cache=True, error_model="numpy")
@@ -695,6 +696,290 @@ def consistent(rej_t, rej_k, rej_nu, rej_rd, count, t, nu, rd, k, P):
                 if (na - nb) ** 2 > tol2:
                     return False
     return True
+
+
+#: a drift of the rejected innovations is tested on this many of them at least (:func:`drift`: one degree of
+#: freedom per row beyond its three coefficients)
+DRIFT_MIN_POINTS = 4
+#: ... and on the newest this many at most (a few seconds of fixes: the recovery's evidence, whatever
+#: ``gate_max_consecutive`` holds)
+DRIFT_MAX_POINTS = 8
+#: a measurement fixes the position (its recovery re-initialises the filter, :func:`recover`) when its rows'
+#: position columns ``Hp`` give a ``Hp^T W Hp`` whose determinant is at least this fraction of the product of
+#: its diagonal (1 for a GNSS fix; a height, or a constraint without position columns, gives 0)
+POSITION_RANK_RATIO = 1e-3
+#: gravity [m/s^2] by which a drift's horizontal acceleration is read as a tilt error (``atan(a_h / g)``)
+TILT_GRAVITY = earth.GAMMA_E
+
+
+@njit(cache=True, error_model="numpy")
+def _solve_small(A, b, m, x):
+    """Solve the leading ``m x m`` (m <= 3) system ``A x = b`` by Gaussian
+    elimination with partial pivoting (A and b are overwritten); False when
+    it is singular."""
+    for c in range(m):
+        p = c
+        for r in range(c + 1, m):
+            if abs(A[r, c]) > abs(A[p, c]):
+                p = r
+        if not abs(A[p, c]) > 0.0:
+            return False
+        if p != c:
+            for j in range(m):
+                A[c, j], A[p, j] = A[p, j], A[c, j]
+            b[c], b[p] = b[p], b[c]
+        for r in range(c + 1, m):
+            f = A[r, c] / A[c, c]
+            for j in range(c, m):
+                A[r, j] -= f * A[c, j]
+            b[r] -= f * b[c]
+    for c in range(m - 1, -1, -1):
+        acc = b[c]
+        for j in range(c + 1, m):
+            acc -= A[c, j] * x[j]
+        x[c] = acc / A[c, c]
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def drift(rej_t, rej_k, rej_nu, rej_rd, count, t, nu, rd, k, thr_fit, rate, accel, g):
+    """:func:`.engine._drift` over the last ``count`` rejections held and the
+    current innovation ``(t, nu, rd)`` of k rows (the newest
+    :data:`DRIFT_MAX_POINTS` of them): writes the rate and
+    acceleration of each row into ``rate`` and ``accel`` and the variance
+    of a row's rate per unit noise variance into ``g[0]``; returns -1 when
+    the rejections differ in length (or their times coincide), 1 when they
+    follow one smooth drift (``thr_fit[n - 3]`` the gate of the residual
+    sum of squares of each row, ``n = count + 1 >= DRIFT_MIN_POINTS``),
+    else 0."""
+    nh = rej_t.shape[0]
+    count = min(count, DRIFT_MAX_POINTS - 1)
+    n = count + 1
+    if n < 2:
+        return -1
+    first = nh - count
+    for a in range(count):
+        if rej_k[first + a] != k:
+            return -1
+    m = min(3, n)
+    smooth = n >= DRIFT_MIN_POINTS
+    A = np.zeros((3, 3))
+    b = np.zeros(3)
+    c = np.zeros(3)
+    base = np.empty(3)
+    for a in range(n):  # (B^T B)^-1 [1, 1]: solve B^T B c = e_1
+        tau = (rej_t[first + a] if a < count else t) - t
+        base[0], base[1], base[2] = 1.0, tau, 0.5 * tau * tau
+        for i in range(m):
+            for j in range(m):
+                A[i, j] += base[i] * base[j]
+    b[1] = 1.0
+    if not _solve_small(A, b, m, c):
+        return -1
+    g[0] = c[1]
+    for r in range(k):
+        for i in range(3):
+            b[i] = 0.0
+            for j in range(3):
+                A[i, j] = 0.0
+        for a in range(n):
+            ta = rej_t[first + a] if a < count else t
+            y = rej_nu[first + a, r] if a < count else nu[r]
+            w = 1.0 / (rej_rd[first + a, r] if a < count else rd[r])
+            tau = ta - t
+            base[0], base[1], base[2] = 1.0, tau, 0.5 * tau * tau
+            for i in range(m):
+                b[i] += w * base[i] * y
+                for j in range(m):
+                    A[i, j] += w * base[i] * base[j]
+        c[2] = 0.0
+        if not _solve_small(A, b, m, c):
+            return -1
+        if smooth:
+            ss = 0.0
+            for a in range(n):
+                ta = rej_t[first + a] if a < count else t
+                y = rej_nu[first + a, r] if a < count else nu[r]
+                w = 1.0 / (rej_rd[first + a, r] if a < count else rd[r])
+                tau = ta - t
+                e = y - (c[0] + c[1] * tau + c[2] * 0.5 * tau * tau)
+                ss += w * e * e
+            smooth = ss <= thr_fit[n - 3]
+        rate[r] = c[1]
+        accel[r] = c[2] if m == 3 else 0.0
+    return 1 if smooth else 0
+
+
+@njit(cache=True, error_model="numpy")
+def _position_normal(H, rd, k, G):
+    """``G = Hp^T W Hp`` (3, 3) of the rows' position columns ``Hp``,
+    ``W = diag(1 / rd)``; True when they fix all three axes
+    (:data:`POSITION_RANK_RATIO`)."""
+    for i in range(3):
+        for j in range(3):
+            G[i, j] = 0.0
+    for r in range(k):
+        w = 1.0 / rd[r]
+        for i in range(3):
+            for j in range(3):
+                G[i, j] += H[r, i] * w * H[r, j]
+    d0, d1, d2 = G[0, 0], G[1, 1], G[2, 2]
+    if not (d0 > 0.0 and d1 > 0.0 and d2 > 0.0):
+        return False
+    det = (G[0, 0] * (G[1, 1] * G[2, 2] - G[1, 2] * G[2, 1]) - G[0, 1] * (G[1, 0] * G[2, 2] - G[1, 2] * G[2, 0])
+           + G[0, 2] * (G[1, 0] * G[2, 1] - G[1, 1] * G[2, 0]))
+    return det >= POSITION_RANK_RATIO * d0 * d1 * d2
+
+
+@njit(cache=True, error_model="numpy")
+def fixes_position(H, rd, k):
+    """:func:`.engine._to_ned` is not None: the measurement's rows fix the
+    position in all three axes."""
+    return _position_normal(H, rd, k, np.empty((3, 3)))
+
+
+@njit(cache=True, error_model="numpy")
+def _to_ned(H, rd, k, y, out):
+    """:func:`.engine._to_ned` applied to ``y`` (k,), into ``out`` (3,);
+    False when the measurement does not fix all three axes."""
+    G = np.empty((3, 3))
+    if not _position_normal(H, rd, k, G):
+        return False
+    g = np.zeros(3)
+    for r in range(k):
+        w = 1.0 / rd[r]
+        for i in range(3):
+            g[i] += H[r, i] * w * y[r]
+    return _solve_small(G, g, 3, out)
+
+
+#: a drift whose horizontal acceleration says a tilt beyond this [rad] (``atan(a / g)``, 1.2 m/s^2) re-initialises
+#: the filter (:func:`recover`); below it the covariance is scaled.  Scaling keeps the correlations the error model
+#: built (a tilt's with the drift it causes, a yaw's with the turns), and a constraint that does not hold cannot
+#: pull a freshly widened attitude away: a car with its IMU pitched 4 deg under the non-holonomic constraint kept
+#: its mounting warning at 3.77 deg (2.94 deg re-initialised) and a car started 90 deg off in yaw recovered twice
+#: (13 times re-initialised from 5 deg up).  Near the small-angle limit (10 deg, the yaw bank's) scaling fails: a
+#: car started 10 deg off in roll came back only in part and was lost twice more in 90 s, and the drift's tilt
+#: is estimated within about 3 deg from 1 Hz fixes of 0.5 m (12.8 deg read as 9.8 deg)
+REINIT_ABOVE_TILT = math.radians(7.0)
+#: a re-initialised filter takes the drift's velocity with this many times its fit sigma as uncertainty
+REINIT_SIGMAS = 4.0
+
+
+@njit(cache=True, error_model="numpy")
+def recover(P, nu, H, R, rd, k, rej_t, rej_k, rej_nu, rej_rd, count, t, thr_k, thr_fit, nav_floor, fix_refused,
+            Pa, S, L, w, dxr, info):
+    """:func:`.engine._recovery`: True when the rejections held and the
+    current innovation are evidence of a lost state.  P is then inflated in
+    place for it to pass (:func:`inflate_to_pass`), or the filter is
+    re-initialised (:func:`.engine._reinitialise`: ``dxr`` (n,) the
+    correction to feed back, ``nu`` made the innovation left); ``info``
+    (7,): whether the measurement fixes the position (1.0 or 0.0), the
+    position offset [m], the drift's velocity [m/s] and horizontal
+    acceleration [m/s^2], the tilt it says [rad] (NaN each when it does not
+    fix the position), the covariance's scale and whether re-initialised
+    (1.0 or 0.0).  ``fix_refused``: per measurement, whether it fixes the
+    position and its latest update was refused."""
+    G = np.empty((3, 3))
+    fixes = _position_normal(H, rd, k, G)
+    linear = consistent(rej_t, rej_k, rej_nu, rej_rd, count, t, nu, rd, k, P)
+    for q in range(7):
+        info[q] = math.nan
+    info[6] = 0.0
+    if not fixes:
+        if not linear:
+            return False
+        for q in range(fix_refused.shape[0]):
+            if fix_refused[q]:
+                return False
+        info[0] = 0.0
+        info[5] = inflate_to_pass(P, nu, H, R, k, thr_k, Pa, S, L, w)
+        return True
+    rate = np.empty(k)
+    accel = np.empty(k)
+    g = np.empty(1)
+    code = drift(rej_t, rej_k, rej_nu, rej_rd, count, t, nu, rd, k, thr_fit, rate, accel, g)
+    if code < 0 or not (linear or code == 1):
+        return False
+    dp = np.empty(3)
+    dv = np.empty(3)
+    da = np.empty(3)
+    _to_ned(H, rd, k, nu, dp)
+    _to_ned(H, rd, k, rate, dv)
+    _to_ned(H, rd, k, accel, da)
+    a_h = math.hypot(da[0], da[1])
+    tilt = math.atan2(a_h, TILT_GRAVITY)
+    info[0] = 1.0
+    info[1] = math.sqrt(dp[0] * dp[0] + dp[1] * dp[1] + dp[2] * dp[2])
+    info[2] = math.sqrt(dv[0] * dv[0] + dv[1] * dv[1] + dv[2] * dv[2])
+    info[3] = a_h
+    info[4] = tilt
+    if not tilt > REINIT_ABOVE_TILT:
+        info[5] = inflate_to_pass(P, nu, H, R, k, thr_k, Pa, S, L, w)
+        return True
+    info[6] = 1.0
+    cov = np.empty(3)  # (Hp^T W Hp)^-1's diagonal
+    e = np.empty(3)
+    col = np.empty(3)
+    Gc = np.empty((3, 3))
+    for q in range(3):
+        for i in range(3):
+            e[i] = 1.0 if i == q else 0.0
+            for j in range(3):
+                Gc[i, j] = G[i, j]
+        _solve_small(Gc, e, 3, col)
+        cov[q] = col[q]
+    var = np.empty(9)
+    for i in range(9):
+        if i < 3:
+            add = 0.0
+        elif i < 6:
+            add = REINIT_SIGMAS * REINIT_SIGMAS * g[0] * cov[i - 3]
+        else:
+            add = tilt * tilt
+        var[i] = max(P[i, i], nav_floor[i]) + add
+    n = P.shape[0]
+    for i in range(9):
+        for j in range(n):
+            P[i, j] = 0.0
+            P[j, i] = 0.0
+    for i in range(9):
+        P[i, i] = var[i]
+    for i in range(n):
+        dxr[i] = 0.0
+    for i in range(3):
+        dxr[i] = dp[i]
+        dxr[3 + i] = dv[i]
+    for r in range(k):
+        acc = 0.0
+        for i in range(6):
+            acc += H[r, i] * dxr[i]
+        nu[r] = nu[r] - acc
+    scale = 1.0
+    while scale < 1e16:
+        if _nis_full(P, nu, H, R, k, S, L, w) <= thr_k:
+            break
+        for i in range(3):
+            P[i, i] *= 4.0
+        scale *= 4.0
+    return True
+
+
+@njit(cache=True, error_model="numpy")
+def _nis_full(P, nu, H, R, k, S, L, w):
+    """``nu^T (H P H^T + R)^-1 nu`` (NaN when not positive definite)."""
+    n = P.shape[0]
+    for r in range(k):
+        for s in range(k):
+            acc = 0.0
+            for i in range(n):
+                hi = H[r, i]
+                if hi != 0.0:
+                    for j in range(n):
+                        acc += hi * P[i, j] * H[s, j]
+            S[r, s] = acc + R[r, s]
+    ok, v = _cholesky_nis(S, nu, k, L, w)
+    return v if ok else math.nan
 
 
 @njit(cache=True, error_model="numpy")
@@ -835,21 +1120,29 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
         by row.
     lidx : (8,) int64
         :func:`layout_index`.
-    gate : tuple ``(gpar, thr)``
+    gate : tuple ``(gpar, thr, thr_fit, nav_floor)``
         ``gpar = [gate on, max consecutive (-1: no recovery), recovery after
         s]``; ``thr[k]`` the chi-square gate of k rows, up to the most rows
-        of any update (which sizes the scratch).
-    rstate : tuple ``(streak, first, rej_t, rej_k, rej_nu, rej_rd, rej_n)``
-        Per measurement: its run of rejections (count, time of the first)
-        and the newest ones held (times, rows, innovations, noise variances).
+        of any update (which sizes the scratch); ``thr_fit[d]`` the gate of
+        a drift's residuals with d degrees of freedom (:func:`drift`);
+        ``nav_floor`` the initial variances of the navigation states
+        (:func:`recover`).
+    rstate : tuple ``(streak, first, rej_t, rej_k, rej_nu, rej_rd, rej_n, fix_refused, recovered_t)``
+        Per measurement: its run of rejections (count, time of the first),
+        the newest ones held (times, rows, innovations, noise variances) and
+        whether it fixes the position and its latest update was refused;
+        then the time of the latest recovery on a measurement that fixes
+        the position ((1,): a run of rejections begun before it is
+        dropped).  The last two are shared with Python's path.
     recs : tuple ``(m, item, t, nis, accepted, k, off, nu, sigma, status)``
         Innovation records from ``ctl[C_NREC]`` on; record j's ``k`` rows of
         innovation, sigma and status (int8: accepted 0, refused by the row's
         own gate 1, refused with the whole update 2, as
         :data:`.engine.ROW_STATUS`) start at ``off[j]`` of the flat ``nu``,
         ``sigma`` and ``status`` (filled from ``ctl[C_NFLAT]`` on).
-    recov : tuple ``(m, item, t, after, rejected_for)``
-        Recoveries, from ``ctl[C_NRECOV]`` on.
+    recov : tuple ``(m, item, t, after, rejected_for, info)``
+        Recoveries, from ``ctl[C_NRECOV]`` on; ``info`` (T, 7):
+        :func:`recover`'s figures.
     counts : (M, N_COUNTS) int64
         used, rejected, skipped, rows, rows rejected, row-gated updates.
     store : tuple ``(k, P_minus, P_plus, Phi, dx, base)``
@@ -881,10 +1174,12 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
     P, aux = filt[1], filt[2]
     it_k, it_t, it_m, it_row, en_k, en_var = items
     kinds, mk, d_off, d_w, data, p_off, par, i_off, index, per_row = meas
-    gpar, thr = gate
-    streak, first_rej, rej_t, rej_k, rej_nu, rej_rd, rej_n = rstate
+    gpar, thr, thr_fit, nav_floor = gate
+    streak, first_rej, rej_t, rej_k, rej_nu, rej_rd, rej_n, fix_refused, recovered_t = rstate
     rec_m, rec_i, rec_t, rec_nis, rec_acc, rec_k, rec_off, rec_nu, rec_sig, rec_st = recs
-    rv_m, rv_i, rv_t, rv_after, rv_for = recov
+    rv_m, rv_i, rv_t, rv_after, rv_for, rv_info = recov
+    rinfo = np.empty(7)
+    dxr = np.empty(P.shape[0])
     st_dx = store[4]
     def_aux, def_x = fb
     t_imu = imu[0]
@@ -965,14 +1260,29 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
                     if nz:
                         cols[nc] = j
                         nc += 1
+                fixes = 1 if gate_on and gmc >= 0 and fixes_position(H, rd, k) else 0
                 st = streak[m]
                 held = rej_n[m]
+                if st and first_rej[m] <= recovered_t[0]:  # refused by the state before a recovery on the fixes
+                    st = streak[m] = 0
+                    held = rej_n[m] = 0
+                    fix_refused[m] = 0
                 if (gate_on and gmc >= 0 and st >= gmc and tm - first_rej[m] >= recovery_after
-                        and consistent(rej_t[m], rej_k[m], rej_nu[m], rej_rd[m], held if gmc == 0 else
-                                       min(gmc, held), tm, nu, rd, k, P)):
-                    inflate_to_pass(P, nu, H, R, k, thr[k], Aw, S, L, wv)
+                        and recover(P, nu, H, R, rd, k, rej_t[m], rej_k[m], rej_nu[m], rej_rd[m],
+                                    held if gmc == 0 else min(gmc, held), tm, thr[k], thr_fit, nav_floor, fix_refused,
+                                    Aw, S, L, wv, dxr, rinfo)):
+                    if rinfo[6] != 0.0:  # re-initialised: position and velocity reset (nu is what is left)
+                        K.apply_correction(lla, v_n, q_nb, dxr, 1.0, lla, v_n, q_nb)
+                        if want_store:
+                            node = ctl[C_NODE] - store[5][0]
+                            for e in range(n):
+                                st_dx[node, e] += dxr[e]
+                    if rinfo[0] != 0.0:
+                        recovered_t[0] = tm
                     j = ctl[C_NRECOV]
                     rv_m[j], rv_i[j], rv_t[j], rv_after[j], rv_for[j] = m, i, tm, st, tm - first_rej[m]
+                    for q in range(7):
+                        rv_info[j, q] = rinfo[q]
                     ctl[C_NRECOV] = j + 1
                 # the record: the whole innovation, with the sigmas of the rows' own gate when rows were refused
                 jr = ctl[C_NREC]
@@ -1017,6 +1327,7 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
                             rec_nis[jr], rec_acc[jr] = nis, False
                             _hold_rejection(m, tm, nu, rd, k, streak, first_rej, rej_t, rej_k, rej_nu, rej_rd,
                                             rej_n)
+                            fix_refused[m] = fixes
                             i += 1
                             continue
                         # keep the rows that pass, in order
@@ -1053,11 +1364,13 @@ def run_nodes(imu, nav, filt, model, outs, flags, items, meas, lidx, gate, rstat
                     for r in range(k):  # a vector gate (no row refused alone): every row goes with the update
                         rec_st[o + r] = 2
                     _hold_rejection(m, tm, nu, rd, k, streak, first_rej, rej_t, rej_k, rej_nu, rej_rd, rej_n)
+                    fix_refused[m] = fixes
                     counts[m, N_REJECTED] += 1
                     i += 1
                     continue
                 streak[m] = 0
                 rej_n[m] = 0
+                fix_refused[m] = 0
                 counts[m, N_USED] += 1
                 _joseph(P, nu, S, k, PHt, L, Kg, AHt, y, dx, KT, HP)
                 K.apply_correction(lla, v_n, q_nb, dx, 1.0, lla, v_n, q_nb)

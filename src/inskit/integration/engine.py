@@ -105,14 +105,25 @@ class FilterSettings:
         Chi-square gate of the innovations (None: no gating).
     gate_max_consecutive : int or None
         Recovery from a lost filter (say after an outage with too small a
-        covariance) needs consistent evidence: at least this many consecutive
-        rejections of one measurement, spanning at least ``recovery_after_s``,
-        whose innovations agree with each other (each pair within 4 sigma of
-        their noise and of the velocity uncertainty over the time between
-        them).  Then the navigation blocks' covariance is inflated just enough
-        for the newest measurement to pass the gate, and it is applied.  A
-        burst of outliers shorter than ``recovery_after_s``, or outliers that
-        disagree with each other, are never accepted.  ``None``: no recovery.
+        covariance, or from a wrong initial tilt) needs consistent evidence:
+        at least this many consecutive rejections of one measurement,
+        spanning at least ``recovery_after_s``, whose innovations agree with
+        each other (each pair within 4 sigma of their noise and of the
+        velocity uncertainty over the time between them) or, for a
+        measurement that fixes the position (a GNSS fix, pseudoranges),
+        follow one smooth drift (a quadratic in time, as a tilt-lost
+        filter's do: :func:`_drift`).  Then the navigation blocks'
+        covariance is inflated just enough for the newest measurement to
+        pass the gate, and it is applied; when the drift says a tilt
+        beyond ``REINIT_ABOVE_TILT`` (7 deg), the filter is re-initialised
+        on it instead (position and velocity reset, the navigation
+        covariance decorrelated and widened).  A constraint (no position) does
+        not recover while a measurement that fixes the position is being
+        refused (the filter is lost against the fixes), and after a
+        recovery on the fixes the other measurements' runs of rejections
+        start again.  A burst of outliers shorter than
+        ``recovery_after_s``, or outliers that disagree with each other,
+        are never accepted.  ``None``: no recovery.
     recovery_after_s : float
         See ``gate_max_consecutive`` [s].
     coning : bool
@@ -269,7 +280,13 @@ class FilterOutput(Track):
     store : SmootherStore or None
     recoveries : list of dict
         Each recovery from a lost state: ``measurement``, ``t``,
-        ``after_rejections``, ``rejected_for_s``.
+        ``after_rejections``, ``rejected_for_s``, ``fixes_position``,
+        ``reinitialised``, ``covariance_scale`` (None when re-initialised)
+        and, for a measurement that fixes the position (else None), what
+        the drift of its refused updates said:
+        ``position_offset_m``, ``drift_velocity_m_s``, ``drift_accel_m_s2``
+        (horizontal) and ``tilt_rad`` (the tilt error that acceleration
+        says, ``atan(a / g)``): :func:`_recovery`.
     """
 
     def __init__(self, nav, aux, sigma, layout, counts=None, innovations=None, settings=None, store=None):
@@ -535,6 +552,10 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
         """The last row + 1 a node of the current segment may end at."""
         return ((k_done - 1) // S + 1) * S + 1
 
+    nav_floor = P.diagonal()[:9].copy()  # a re-initialised filter is at least as uncertain as at its start
+    # per measurement: it fixes the position and its latest update was refused (both paths keep it: _recovery)
+    fix_refused = np.zeros(len(measurements), np.int64)
+    recovered_t = np.full(1, -np.inf)  # time of the latest recovery on a measurement that fixes the position
     write_row(0)
     counts = {m.name: {"used": 0, "rejected": 0, "skipped": skipped[m.name]} for m in measurements}
     innov = {m.name: {"t": [], "nu": [], "sigma": [], "nis": [], "accepted": [], "status": [], "update_row": []}
@@ -567,15 +588,33 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             return C_nb
         nu, H, R = lin
         gate = settings.gate_probability
+        mi = m_list[idx]
+        fixes = int(gate is not None and settings.gate_max_consecutive is not None and _to_ned(H, R) is not None)
         streak = rejected_streak.get(meas.name, 0)
         rej = rejected_recent.setdefault(meas.name, [])
+        if streak and first_rejection[meas.name] <= recovered_t[0]:  # refused by the state before a recovery
+            streak = rejected_streak[meas.name] = 0
+            rej.clear()
+            fix_refused[mi] = 0
         if (gate is not None and settings.gate_max_consecutive is not None
                 and streak >= settings.gate_max_consecutive
-                and tm - first_rejection[meas.name] >= settings.recovery_after_s
-                and _consistent(rej[-settings.gate_max_consecutive:] + [(tm, nu, R)], P)):
-            P[...] = _inflate_to_pass(P, nu, H, R, gate)
-            recoveries.append({"measurement": meas.name, "t": float(tm), "after_rejections": streak,
-                               "rejected_for_s": float(tm - first_rejection[meas.name]), "_item": idx})
+                and tm - first_rejection[meas.name] >= settings.recovery_after_s):
+            held = rej[-settings.gate_max_consecutive:] + [(tm, nu, R)]
+            found = _recovery(P, nu, H, R, held, gate, nav_floor, bool(fix_refused.any()))
+            if found is not None:
+                P[...], dx_reset, info = found
+                if dx_reset is not None:  # re-initialised: position and velocity reset, the innovation left
+                    if open_loop:
+                        x[:] += dx_reset
+                    else:
+                        K.apply_correction(lla, v_n, q_nb, dx_reset, 1.0, lla, v_n, q_nb)
+                        if want_store:
+                            st_dx[ctl[U.C_NODE] - nbase[0]] += dx_reset
+                    nu = nu - H @ dx_reset
+                if info["fixes_position"]:  # the other measurements' refusals were of the state before it
+                    recovered_t[0] = tm
+                recoveries.append({"measurement": meas.name, "t": float(tm), "after_rejections": streak,
+                                   "rejected_for_s": float(tm - first_rejection[meas.name]), **info, "_item": idx})
         rec = innov[meas.name]
         nu_all = s_all = None
         if gate is not None and getattr(meas, "gating", "vector") == "row":
@@ -592,6 +631,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
                         first_rejection[meas.name] = tm
                     rej.append((tm, nu, R))
                     del rej[:-n_held]
+                    fix_refused[mi] = fixes
                     rec["t"].append(tm)
                     rec["nu"].append(nu)
                     rec["sigma"].append(np.sqrt(s_rows))
@@ -605,6 +645,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             gate = None
         res = joseph_update(P, nu, H, R, gate_probability=gate)
         rejected_streak[meas.name] = 0 if res.accepted else streak + 1
+        fix_refused[mi] = 0 if res.accepted else fixes
         if res.accepted:
             rej.clear()
         else:
@@ -689,14 +730,18 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
                          float(settings.recovery_after_s)])
         thr = np.array([np.inf] + [0.0 if gate_p is None else chi2_threshold(k, gate_p)
                                    for k in range(1, k_most + 1)])
+        thr_fit = np.array([np.inf] + [np.inf if gate_p is None else chi2_threshold(d, gate_p)
+                                       for d in range(1, DRIFT_MAX_POINTS - 2)])  # a drift's residual dof
         rstate = (np.zeros(M, np.int64), np.zeros(M), np.zeros((M, n_held)), np.zeros((M, n_held), np.int64),
-                  np.zeros((M, n_held, k_most)), np.zeros((M, n_held, k_most)), np.zeros(M, np.int64))
+                  np.zeros((M, n_held, k_most)), np.zeros((M, n_held, k_most)), np.zeros(M, np.int64), fix_refused,
+                  recovered_t)
         T = max(int(compiled_m[it_m[it_m >= 0]].sum()), 1)
         T_flat = max(int(rows_of.sum()), 1)
         recs = (np.zeros(T, np.int64), np.zeros(T, np.int64), np.zeros(T), np.zeros(T), np.zeros(T, np.bool_),
                 np.zeros(T, np.int64), np.zeros(T, np.int64), np.zeros(T_flat), np.zeros(T_flat),
                 np.zeros(T_flat, np.int8))
-        recov = (np.zeros(T, np.int64), np.zeros(T, np.int64), np.zeros(T), np.zeros(T, np.int64), np.zeros(T))
+        recov = (np.zeros(T, np.int64), np.zeros(T, np.int64), np.zeros(T), np.zeros(T, np.int64), np.zeros(T),
+                 np.zeros((T, 7)))
         counts = np.zeros((M, U.N_COUNTS), np.int64)
         store = (st_k, st_Pm, st_Pp, st_Phi, st_dx, nbase)
         nodes = (node_rows, node_aux)
@@ -717,7 +762,8 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
                 ctl[U.C_KSTOP] = min((k_list[i] if i < n_items else N) + chunk, N + 1,
                                      segment_stop(int(ctl[U.C_KDONE])))
                 code = U.run_nodes(imu_arrays, nav, filt, model, outs, flags, items, meas, lidx,
-                                   (gpar, thr), rstate, recs, recov, counts, store, nodes, dyn, fb, w_raw, C, ctl)
+                                   (gpar, thr, thr_fit, nav_floor), rstate, recs, recov, counts, store, nodes, dyn, fb,
+                                   w_raw, C, ctl)
                 if progress is not None and ctl[U.C_KDONE] > reported:
                     progress(int(ctl[U.C_KDONE]) - reported)
                     reported = int(ctl[U.C_KDONE])
@@ -787,9 +833,10 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
             return out
 
         nv = int(ctl[U.C_NRECOV])
-        rv_m, rv_i, rv_t, rv_after, rv_for = (a[:nv] for a in recov)
+        rv_m, rv_i, rv_t, rv_after, rv_for, rv_info = (a[:nv] for a in recov)
         found = [{"measurement": measurements[int(rv_m[j])].name, "t": float(rv_t[j]),
-                  "after_rejections": int(rv_after[j]), "rejected_for_s": float(rv_for[j]), "_item": int(rv_i[j])}
+                  "after_rejections": int(rv_after[j]), "rejected_for_s": float(rv_for[j]),
+                  **_recovery_info(rv_info[j]), "_item": int(rv_i[j])}
                  for j in range(nv)]
         return {"records": records, "counts": counts, "recoveries": found}
 
@@ -1012,10 +1059,204 @@ def _consistent(rejected, P):
     return True
 
 
+#: the recovery's constants, one definition for both paths (:mod:`._updates`)
+DRIFT_MIN_POINTS, DRIFT_MAX_POINTS = U.DRIFT_MIN_POINTS, U.DRIFT_MAX_POINTS
+POSITION_RANK_RATIO, TILT_GRAVITY = U.POSITION_RANK_RATIO, U.TILT_GRAVITY
+
+
+def _drift(rejected, probability):
+    """The common drift of the rejected innovations ``[(t, nu, R), ...]``
+    (the current one last; the newest :data:`DRIFT_MAX_POINTS` of them):
+    per row, the weighted least-squares fit
+    ``c0 + c1 tau + c2 tau^2 / 2`` (``tau = t - t_now``; of degree
+    ``n - 1`` below three points), its rate ``c1`` and acceleration ``c2``
+    at the current time.
+
+    A lost filter's innovations follow such a drift: its position error
+    grows with its velocity error, and a tilt error leaks gravity into the
+    horizontal channels (``g tan(tilt)``, 1.7 m/s^2 for 10 deg), so they
+    grow with the square of time, much faster than the filter's own
+    velocity sigma allows for (:func:`_consistent`).  Outliers, or fixes
+    that disagree with their neighbours, do not follow one.
+
+    Returns
+    -------
+    (rate, accel, g_rate, smooth) or None
+        ``rate``, ``accel`` (k,); ``g_rate``: the variance of a row's rate
+        per unit noise variance (``(B^T B)^-1[1, 1]``, B the fit's basis);
+        ``smooth``: at least :data:`DRIFT_MIN_POINTS` rejections, and each
+        row's weighted residual sum of squares within the chi-square gate
+        of ``n - 3`` degrees of freedom at ``probability``.  None when the
+        innovations differ in length or their times coincide.
+    """
+    rejected = rejected[-DRIFT_MAX_POINTS:]
+    n = len(rejected)
+    k = len(rejected[-1][1])
+    if n < 2 or any(len(nu) != k for _, nu, _ in rejected):
+        return None
+    t_now = rejected[-1][0]
+    tau = np.array([t - t_now for t, _, _ in rejected])
+    m = min(3, n)
+    B = np.stack([np.ones(n), tau, 0.5 * tau * tau], axis=1)[:, :m]
+    if not np.linalg.det(B.T @ B) > 0.0:
+        return None
+    g_rate = float(np.linalg.inv(B.T @ B)[1, 1])
+    thr = chi2_threshold(n - 3, probability) if n >= DRIFT_MIN_POINTS else np.inf
+    rate, accel, smooth = np.zeros(k), np.zeros(k), n >= DRIFT_MIN_POINTS
+    for r in range(k):
+        y = np.array([nu[r] for _, nu, _ in rejected], float)
+        w = 1.0 / np.array([R[r, r] for _, _, R in rejected], float)
+        c = np.linalg.solve(B.T @ (w[:, None] * B), B.T @ (w * y))
+        res = y - B @ c
+        smooth = smooth and float(np.sum(w * res * res)) <= thr
+        rate[r] = c[1]
+        if m == 3:
+            accel[r] = c[2]
+    return rate, accel, g_rate, smooth
+
+
+def _to_ned(H, R):
+    """``(3, k)`` map of innovation rows to a NED position error (weighted
+    least squares on H's position columns), or None when the measurement
+    does not fix all three axes (:data:`POSITION_RANK_RATIO`)."""
+    Hp = H[:, 0:3]
+    w = 1.0 / np.diag(R)
+    G = Hp.T @ (w[:, None] * Hp)
+    d = G.diagonal()
+    if not (d > 0.0).all() or not np.linalg.det(G) >= POSITION_RANK_RATIO * float(np.prod(d)):
+        return None
+    return np.linalg.solve(G, Hp.T * w)
+
+
+#: a recovery's drift figures when it has none (a measurement that does not fix the position)
+_NO_DRIFT = {"position_offset_m": None, "drift_velocity_m_s": None, "drift_accel_m_s2": None, "tilt_rad": None}
+#: the recovery's constants, one definition for both paths (:mod:`._updates`)
+REINIT_ABOVE_TILT, REINIT_SIGMAS = U.REINIT_ABOVE_TILT, U.REINIT_SIGMAS
+
+
+def _recovery(P, nu, H, R, held, probability, nav_floor, fix_refused=False):
+    """The recovery from a lost state, when the rejections ``held``
+    (``[(t, nu, R), ...]``, the current one last) are evidence of it.
+
+    * A measurement that fixes the position (a GNSS fix, pseudoranges):
+      its rejections agree with each other (:func:`_consistent`) or follow
+      one smooth drift (:func:`_drift`: a tilt-lost filter's fixes run away
+      with the square of time, which the first test, bounded by the
+      filter's own velocity sigma, never accepted).  When the drift's
+      horizontal acceleration says a tilt beyond
+      :data:`REINIT_ABOVE_TILT` (near the error model's small-angle limit,
+      where the correlations it built no longer bring the filter back), the
+      filter is re-initialised on the measurement (:func:`_reinitialise`);
+      otherwise as below.
+    * The navigation covariance is scaled just enough for the current
+      innovation to pass the gate (:func:`_inflate_to_pass`); the update
+      that follows moves position, velocity and attitude along the
+      correlations the error model built.
+    * A measurement that does not fix the position (a constraint, a
+      velocity) recovers only when its rejections agree with each other and
+      no measurement that fixes the position is being refused
+      (``fix_refused``: its latest update was).  While the fixes are refused
+      too, the filter is lost against them, and a constraint is no ground
+      to recover on: its recoveries widened the covariance of a car
+      standing still with a wrong initial tilt until its yaw wandered
+      80 deg, which no later recovery on the fixes could bring back.
+
+    Returns
+    -------
+    (P_new, dx, info) or None
+        ``dx``: when re-initialised, the correction (position and velocity)
+        to feed back into the navigation state before the update, which
+        then takes ``nu - H dx`` for its innovation; else None.  ``info``:
+        ``fixes_position``, ``reinitialised``, ``covariance_scale`` (the
+        factor of the navigation variances; None when re-initialised) and,
+        for a measurement that fixes the position (else None each), what
+        its drift said: ``position_offset_m`` (the current innovation in
+        NED), ``drift_velocity_m_s`` (its rate: the filter's velocity
+        error), ``drift_accel_m_s2`` (its horizontal acceleration) and
+        ``tilt_rad`` (the tilt error that acceleration says,
+        ``atan(a / g)``).
+    """
+    to_ned = _to_ned(H, R)
+    linear = _consistent(held, P)
+    if to_ned is None:
+        if not linear or fix_refused:
+            return None
+        Pa, alpha = _inflate_to_pass(P, nu, H, R, probability)
+        return Pa, None, {"fixes_position": False, "reinitialised": False, "covariance_scale": alpha, **_NO_DRIFT}
+    fit = _drift(held, probability)
+    if fit is None or not (linear or fit[3]):
+        return None
+    rate, accel, g_rate, _ = fit
+    dp, dv, da = to_ned @ nu, to_ned @ rate, to_ned @ accel
+    a_h = float(np.hypot(da[0], da[1]))
+    tilt = float(np.arctan2(a_h, TILT_GRAVITY))
+    info = {"fixes_position": True, "reinitialised": tilt > REINIT_ABOVE_TILT,
+            "position_offset_m": float(np.linalg.norm(dp)), "drift_velocity_m_s": float(np.linalg.norm(dv)),
+            "drift_accel_m_s2": a_h, "tilt_rad": tilt}
+    if info["reinitialised"]:
+        Pn, dx = _reinitialise(P, nu, H, R, to_ned, dp, dv, tilt, g_rate, nav_floor, probability)
+        return Pn, dx, {**info, "covariance_scale": None}
+    Pa, alpha = _inflate_to_pass(P, nu, H, R, probability)
+    return Pa, None, {**info, "covariance_scale": alpha}
+
+
+def _reinitialise(P, nu, H, R, to_ned, dp, dv, tilt, g_rate, nav_floor, probability):
+    """Re-initialise a lost filter on a measurement that fixes the position:
+    ``(P_new, dx)``.
+
+    The correction ``dx`` resets the position by the innovation in NED
+    ``dp`` and the velocity by the drift's rate ``dv`` (:func:`_recovery`);
+    the caller feeds it back and takes ``nu - H dx`` for the innovation.
+    The navigation blocks (rows and columns 0..8) lose their correlations
+    with each other and with every other block (which keep their own): the
+    error model's correlations, built around an attitude outside its small
+    angles, no longer hold.  They take the variances
+
+    * position: ``max(P, P0)``, scaled by 4 until the innovation left
+      passes the gate;
+    * velocity: ``max(P, P0)`` plus :data:`REINIT_SIGMAS` squared times
+      the fit variance of the rate (``g_rate`` times the measurement's NED
+      variance, ``(Hp^T W Hp)^-1``);
+    * attitude: ``max(P, P0) + tilt^2``.
+
+    ``P0`` is the run's initial covariance (``nav_floor``: its first nine
+    variances).  The attitude is the filter's own: the fixes that follow
+    find it inside the widened covariance.
+    """
+    cov = np.diag(to_ned @ np.diag(np.diag(R)) @ to_ned.T)  # (Hp^T W Hp)^-1's diagonal
+    add = np.concatenate([np.zeros(3), REINIT_SIGMAS ** 2 * g_rate * cov, np.full(3, tilt * tilt)])
+    var = np.maximum(P.diagonal()[:9], nav_floor) + add
+    Pn = P.copy()
+    Pn[:9, :] = 0.0
+    Pn[:, :9] = 0.0
+    Pn[np.arange(9), np.arange(9)] = var
+    dx = np.zeros(P.shape[0])
+    dx[0:3], dx[3:6] = dp, dv
+    nu_left = nu - H @ dx
+    thr = chi2_threshold(len(nu), probability)
+    scale = 1.0
+    while scale < 1e16:
+        if float(nu_left @ np.linalg.solve(H @ Pn @ H.T + R, nu_left)) <= thr:
+            break
+        Pn[np.arange(3), np.arange(3)] *= 4.0
+        scale *= 4.0
+    return Pn, dx
+
+
+def _recovery_info(row):
+    """A recovery's record from the compiled loop's row (:func:`._updates.recover`)."""
+    keys = ("position_offset_m", "drift_velocity_m_s", "drift_accel_m_s2", "tilt_rad")
+    info = {"fixes_position": bool(row[0]), "reinitialised": bool(row[6]),
+            "covariance_scale": None if row[6] else float(row[5])}
+    info.update({k: float(v) if row[0] else None for k, v in zip(keys, row[1:5])})
+    return info
+
+
 def _inflate_to_pass(P, nu, H, R, probability):
     """Scale the navigation blocks' covariance (rows and columns 0..8) by the
     smallest ``alpha`` of 2, 8, 32, ... for which the innovation passes
-    the gate; sensor-error blocks keep their variances."""
+    the gate; sensor-error blocks keep their variances.  Returns
+    ``(P_new, alpha)``."""
     from ..filters.kalman import chi2_threshold
 
     thr = chi2_threshold(len(nu), probability)
@@ -1032,5 +1273,5 @@ def _inflate_to_pass(P, nu, H, R, probability):
     while v > thr and alpha < 1e16:
         alpha *= 4.0
         v, Pa = nis(alpha)
-    return Pa
+    return Pa, alpha
 

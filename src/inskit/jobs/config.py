@@ -527,7 +527,11 @@ class FilterSection(_Strict):
                                            "innovations: the probability that a consistent measurement passes")
     gate_max_consecutive: int | None = Field(3, ge=1, description="recovery of a lost filter: after this many "
                                              "mutually consistent rejections of one measurement (over at least "
-                                             "15 s) the covariance is inflated and the measurement applied")
+                                             "15 s; for the fixes, also a smooth drift away from the INS, as a "
+                                             "wrong tilt makes) the covariance is inflated and the measurement "
+                                             "applied, or, when the fixes' drift says a tilt beyond 7 deg, the "
+                                             "filter re-initialised on them (a constraint not while the fixes are "
+                                             "refused too)")
     smoother_node_s: float = Field(0.25, gt=0, description="spacing of the extra RTS smoother nodes between "
                                    "updates (with --smooth)")
     covariance_step_s: float = Field(0.02, ge=0, le=1, description="interval of the covariance propagation [s]: "

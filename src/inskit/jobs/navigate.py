@@ -954,6 +954,10 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         else:
             out = run_filter(imu, initial, meas, settings, smoother=smooth, progress=progress, extra_noise=extra)
             sm = rts_smooth(out) if smooth else None
+        if log:
+            for r in out.recoveries:
+                if r.get("fixes_position"):
+                    log(f"warning: {recovery_text(r)}")
     fused = not tight  # tight coupling fuses the raw ranges: the fixes file is only a reference
     score_f = score_outages(out.solution, gnss, windows, lever, truth=truth, fused=fused)
     score_s = score_outages(sm.solution, gnss, windows, lever, truth=truth, fused=fused) if sm is not None else None
@@ -1462,6 +1466,7 @@ def summary(res: NavigateResult) -> dict:
         out["truth_file"] = (str(res.config.resolve(res.config.truth.file)) if res.config.truth is not None
                              else "(given to navigate() in Python)")
         out["truth_errors"] = truth_errors(res, res.truth)
+    out["recoveries"] = recoveries_summary(getattr(fw, "recoveries", []))
     out["health"] = health(fw, res.gaps or (), res.rate_changes or ())
     if res.constraint_check:  # the default constraint did not hold: the run was made again without it
         out["constraint_check"] = dict(res.constraint_check)
@@ -1663,8 +1668,7 @@ def health(out, gaps=(), rate_changes=()) -> dict:
                        f"{sp:.3g}{unit}: initial {s0:.3g}{grown})")
                 (reasons if b.name in HEALTH_BIAS_BLOCKS else warnings).append(msg)
     for r in getattr(out, "recoveries", []):
-        reasons.append(f"{r['measurement']}: recovered from a lost state at t = {r['t']:.2f} s after "
-                       f"{r['after_rejections']} consecutive rejections over {r['rejected_for_s']:.1f} s")
+        reasons.append(recovery_text(r))
     for g in gaps:
         reasons.append(f"IMU gap of {g.length_s:.3f} s at t = {g.start_s:.3f} s, bridged on the last rates")
     for c in rate_changes:
@@ -1672,6 +1676,36 @@ def health(out, gaps=(), rate_changes=()) -> dict:
                         f"t = {c.t_s:.3f} s")
     return {"verdict": "unhealthy" if reasons else "healthy", "reasons": reasons, "warnings": warnings,
             "measurements": per}
+
+
+def recovery_text(r: dict) -> str:
+    """A recovery from a lost state (:attr:`.FilterOutput.recoveries`) in
+    words: when, after what, how far the filter had drifted from a
+    measurement that fixes the position, and what was done."""
+    text = (f"{r['measurement']}: recovered from a lost state at t = {r['t']:.2f} s after {r['after_rejections']} "
+            f"consecutive rejections over {r['rejected_for_s']:.1f} s")
+    if r.get("fixes_position"):
+        text += (f": the filter had drifted {r['position_offset_m']:.3g} m from it with a velocity error of "
+                 f"{r['drift_velocity_m_s']:.3g} m/s, growing at {r['drift_accel_m_s2']:.2g} m/s^2 horizontally (a "
+                 f"tilt error of about {np.degrees(r['tilt_rad']):.1f} deg)")
+        if r.get("reinitialised"):
+            return text + ("; it was re-initialised on it: position and velocity reset, the navigation covariance "
+                           "decorrelated and widened (the attitude's by that tilt)")
+    if r.get("covariance_scale") is not None:
+        text += f"; the navigation covariance was scaled by {r['covariance_scale']:.3g} for it to pass"
+    return text
+
+
+def recoveries_summary(recoveries) -> list[dict]:
+    """The summary's ``recoveries``: each recovery's record with its tilt in
+    degrees (``tilt_deg``) instead of radians."""
+    out = []
+    for r in recoveries:
+        d = {k: v for k, v in r.items() if k != "tilt_rad"}
+        if "tilt_rad" in r:
+            d["tilt_deg"] = None if r["tilt_rad"] is None else float(np.degrees(r["tilt_rad"]))
+        out.append(d)
+    return out
 
 
 def fmt_or_na(x, fmt=".3f"):
