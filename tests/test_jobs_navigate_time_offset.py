@@ -195,3 +195,73 @@ def test_an_imu_log_in_utc_beside_fixes_in_gps_time_is_told_the_leap_seconds(dri
     assert rec["found"] and rec["gps_utc_shift_s"] == -18.0 and abs(rec["best_s"]) < 0.01, rec
     first = s["health"]["reasons"][0]
     assert "seem off by GPS time - UTC (18 s" in first and "set [imu] time_offset_s = " in first, first
+
+
+def test_a_lost_filter_is_not_searched_and_the_verdict_says_it_was_lost(drive, monkeypatch):
+    """A filter lost for another reason (started 10 deg off in roll, its
+    recovery held off by ``gate_max_consecutive``) refused every fix; the
+    check searched IMU time offsets over +-0.5 s and +-18 s (57 runs of the
+    filter for the tilted car of test_jobs_navigate.py) and named the
+    'best' (before the lost-filter recovery, examples/car.toml so started
+    was told of -0.091 s that 'fits the fixes better').  A lost filter is no evidence
+    of a time offset: nothing is searched, and the verdict's first reason
+    says the filter was lost, to the end of the run."""
+    import inskit.jobs.navigate as N
+
+    cfg = config(drive, 0.0)
+    cfg = cfg.model_copy(update={
+        "init": cfg.init.model_copy(update={"mode": "given", "lat_deg": 40.0966, "lon_deg": -105.1474,
+                                            "height_m": 1600.0, "rpy_deg": (10.0, -8.0, 0.0),
+                                            "sigma_roll_pitch_deg": 0.5}),
+        "filter": cfg.filter.model_copy(update={"gate_max_consecutive": 1000})})
+    s = summary(navigate(cfg))
+    assert gnss_updates_unhealthy(s["health"], cfg) == "gnss_pos", s["health"]  # the premise
+    searched = []
+    monkeypatch.setattr(N, "search_time_offset", lambda *a, **kw: searched.append(a) or (0.0, [(0.0, 1.0)]))
+    rec = check_time_offset(cfg, s)
+    assert not searched and rec is s["time_offset_check"] and not rec["searched"] and not rec["found"], rec
+    first = s["health"]["reasons"][0]
+    assert first.startswith("gnss_pos: the filter was lost: ") and "none was searched" in first, first
+    assert "still lost at the end of the run" in first and first == rec["not_searched_because"]
+    m = s["health"]["measurements"]["gnss_pos"]
+    assert len(m["lost_stretches"]) == 1 and not m["lost_stretches"][0]["recovered"], m
+    assert not any("time offset of" in w for w in s["health"]["warnings"])
+    assert any("consecutive updates rejected" in r and "to the end of the run: the filter lost" in r
+               for r in s["health"]["reasons"]), s["health"]["reasons"]
+
+
+def test_the_runs_that_name_an_offset_have_their_evidence_outside_the_lost_stretches(late):
+    """0.3 s late: one stretch of 15 refusals (a recovery), and outside it
+    about a quarter of the fixes still refused: evidence about timing."""
+    from inskit.jobs.navigate import timing_evidence
+
+    s, rec = late
+    m = s["health"]["measurements"]["gnss_pos"]
+    assert m["lost_stretches"] and m["outside_lost"]["rejected_fraction"] > 0.15, m
+    assert timing_evidence(m) and rec["searched"] and rec["found"]
+
+
+def test_lost_stretches_and_the_figures_outside_them():
+    """Runs of refusals lasting the recovery's 15 s or more are lost
+    stretches (to the update that ended them, or to the last refusal);
+    shorter runs are not; the figures outside them judge the timing."""
+    from inskit.jobs.navigate import lost_stretches, outside_lost, timing_evidence
+
+    t = np.arange(100.0)
+    acc = np.ones(100, bool)
+    acc[10:14] = False   # 4 s: a burst, not lost
+    acc[30:46] = False   # refused 30..45, accepted at 46: lost 16 s
+    acc[80:] = False     # refused from 80 to the end: lost 19 s
+    lost = lost_stretches(t, acc, 15.0)
+    assert lost == [{"start_s": 30.0, "end_s": 46.0, "updates": 16, "recovered": True},
+                    {"start_s": 80.0, "end_s": 99.0, "updates": 20, "recovered": False}]
+    nis = np.where(acc, 2.0, 500.0)
+    out = outside_lost(t, acc, nis, lost, 2)
+    assert out["updates"] == 64 and out["rejected_fraction"] == pytest.approx(4 / 64)
+    assert out["mean_nis_per_dof"] == pytest.approx((60 * 2.0 + 4 * 500.0) / 64 / 2)
+    m = {"lost_stretches": lost, "outside_lost": out}
+    assert timing_evidence(m)  # the 4 refused outside: 6 %, above the 5 % limit
+    acc[10:14] = True
+    out = outside_lost(t, acc, np.where(acc, 2.0, 500.0), lost, 2)
+    assert out["rejected_fraction"] == 0.0 and not timing_evidence({"lost_stretches": lost, "outside_lost": out})
+    assert timing_evidence({"lost_stretches": [], "outside_lost": None})  # never lost: the figures speak as before

@@ -76,7 +76,9 @@ class ImuSection(_Strict):
                                  "offset; `inskit navigate --calibrate-time-offset` finds it)")
     time_offset_search: Literal["check", "calibrate", "off"] = Field(
         "check", description="'check': when the run's GNSS updates are unhealthy (mean NIS above 3 per degree of "
-        "freedom or more than 5 % rejected), search the IMU time offset within time_offset_s +- 0.5 s that fits the "
+        "freedom or more than 5 % rejected) outside the stretches where the filter was lost (15 s or more of "
+        "refusals in a row: a lost filter is no evidence of a time offset, and the verdict then says it was lost), "
+        "search the IMU time offset within time_offset_s +- 0.5 s that fits the "
         "fixes best (when none fits, also 18 s either way: GPS time - UTC, one log in UTC) and name it in the health "
         "verdict (late or early IMU time tags are a common cause that the "
         "files do not show); 'calibrate': search it before the run (within -0.5 .. 0.2 s) and use it, as "

@@ -1212,8 +1212,20 @@ def check_time_offset(cfg: NavigateConfig, s: dict, log=None) -> dict | None:
     none does otherwise).  IMU time tags late or early by a fraction of a
     second (a logger's buffering, UTC against GPS time) make the filter
     reject fixes and lose its way while every file reads well; the verdict
-    alone did not name the cause.  Returns the record put into
-    ``s["time_offset_check"]`` (None when nothing was searched)."""
+    alone did not name the cause.
+
+    A lost filter is no evidence of a time offset: when the updates are
+    unhealthy only over the stretches where it was lost
+    (:func:`timing_evidence`), nothing is searched; the verdict's first
+    reason says so and names what the run shows of the cause
+    (:func:`lost_reason`).  A lost filter's mean NIS (thousands) made any
+    run of the search that happened to recover 'fit the fixes better': a
+    car started 10 deg off in roll was told of an IMU time offset of
+    -0.091 s.
+
+    Returns the record put into ``s["time_offset_check"]`` (``searched``
+    False, with ``not_searched_because``, when the filter was lost), or
+    None when the GNSS updates are healthy or the check is off."""
     h = s["health"]
     key = gnss_updates_unhealthy(h, cfg)
     if key is None or cfg.imu.time_offset_search != "check" or cfg.filter.scheme == "uncoupled":
@@ -1221,6 +1233,15 @@ def check_time_offset(cfg: NavigateConfig, s: dict, log=None) -> dict | None:
     m = h["measurements"][key]
     now = m["mean_nis"] / m["dof"]
     given = float(cfg.imu.time_offset_s)
+    if not timing_evidence(m):  # unhealthy only where the filter was lost: its cause, not a search
+        why = lost_reason(key, m, s)
+        if log:
+            log(f"health: the {key} updates are unhealthy only where the filter was lost: no IMU time offset "
+                "searched (a lost filter is no evidence of one)")
+        h["reasons"].insert(0, why)
+        s["time_offset_check"] = {"measurement": key, "given_s": given, "searched": False, "found": False,
+                                  "better": False, "not_searched_because": why}
+        return s["time_offset_check"]
     if log:
         log(f"health: the {key} updates are unhealthy (mean NIS {now:.2f} per degree of freedom): searching an IMU "
             f"time offset within {given:+g} +- {TIME_OFFSET_CHECK_SPAN_S:g} s that fits them "
@@ -1230,7 +1251,7 @@ def check_time_offset(cfg: NavigateConfig, s: dict, log=None) -> dict | None:
     except Exception as exc:  # a diagnosis of a finished run: its failure is said, the run's results stand
         msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
         h["warnings"].append(f"{key}: the search for an IMU time offset that fits the fixes could not run: {msg}")
-        s["time_offset_check"] = {"measurement": key, "given_s": given, "error": msg}
+        s["time_offset_check"] = {"measurement": key, "given_s": given, "searched": True, "error": msg}
         return s["time_offset_check"]
     best_nis = min(v for _, v in evals)
     at_given = [v for o, v in evals if abs(o - given) < 1e-9]
@@ -1251,7 +1272,7 @@ def check_time_offset(cfg: NavigateConfig, s: dict, log=None) -> dict | None:
             if n2 <= HEALTH_MAX_MEAN_NIS_PER_DOF and n2 < best_nis:
                 best, best_nis, leap = b2, n2, c - given
                 break
-    rec = {"measurement": key, "given_s": given, "best_s": round(best, 4), "mean_nis_per_dof_given":
+    rec = {"measurement": key, "given_s": given, "searched": True, "best_s": round(best, 4), "mean_nis_per_dof_given":
            at_given[0] if at_given else now, "mean_nis_per_dof_best": best_nis,
            "evaluations": [list(e) for e in sorted(evals)], "gps_utc_shift_s": leap}
     better = abs(best - given) >= TIME_OFFSET_CHECK_MIN_S and best_nis < 0.5 * rec["mean_nis_per_dof_given"]
@@ -1280,6 +1301,73 @@ def check_time_offset(cfg: NavigateConfig, s: dict, log=None) -> dict | None:
             "explain them (look first at what the other reasons and warnings name)")
     s["time_offset_check"] = rec
     return rec
+
+
+#: the updates outside the lost stretches the time-offset check needs to judge them (fewer: no evidence)
+TIME_OFFSET_EVIDENCE_MIN_UPDATES = 10
+
+
+def timing_evidence(m: dict) -> bool:
+    """Whether a GNSS measurement's health figures (``m``, an entry of
+    :func:`health`'s ``measurements``) are evidence that may concern
+    timing: unhealthy (:func:`gnss_updates_unhealthy`'s limits) outside
+    the stretches where the filter was lost (``lost_stretches``,
+    ``outside_lost``) over at least
+    :data:`TIME_OFFSET_EVIDENCE_MIN_UPDATES` updates; any unhealthy
+    measurement that never lost the filter.
+
+    An IMU time offset displaces every fix by the vehicle's motion over it,
+    lost or not: its fixes are refused or fit badly wherever the vehicle
+    moves (0.3 s late on a short car: 26 % refused outside the one lost
+    stretch).  A filter lost for another reason (a wrong tilt, a constraint
+    that does not hold) refuses the fixes only while lost, and fits them
+    outside."""
+    out = m.get("outside_lost")
+    if not m.get("lost_stretches") or out is None:
+        return True
+    if out["updates"] < TIME_OFFSET_EVIDENCE_MIN_UPDATES:
+        return False
+    frac = out["rejected_fraction"]
+    nis = out["mean_nis_per_dof"] or 0.0
+    return frac > HEALTH_MAX_REJECTED_FRACTION or nis > HEALTH_MAX_MEAN_NIS_PER_DOF
+
+
+def lost_reason(key: str, m: dict, s: dict) -> str:
+    """The verdict's reason for GNSS updates unhealthy only where the filter
+    was lost (:func:`timing_evidence` False): how much was refused while
+    lost, how the fixes fit outside, and what the run shows of the cause
+    (the tilt the fixes' drift showed at its recoveries, a constraint
+    refused in most of its updates, a loss that lasted to the end)."""
+    lost = m["lost_stretches"]
+    n_lost = sum(x["updates"] for x in lost)
+    shown = ", ".join(f"{x['start_s']:.1f}..{x['end_s']:.1f} s" for x in lost[:3]) + (
+        f" and {len(lost) - 3} more" if len(lost) > 3 else "")
+    out = m["outside_lost"]
+    if out["updates"] >= TIME_OFFSET_EVIDENCE_MIN_UPDATES:
+        outside = (f"outside them {out['rejected_fraction']:.0%} of {out['updates']} were refused"
+                   + (f" and the mean NIS was {out['mean_nis_per_dof']:.2f} per degree of freedom"
+                      if out["mean_nis_per_dof"] is not None else "") + ", within the health limits")
+    else:
+        outside = f"{'only ' + str(out['updates']) if out['updates'] else 'none'} lay outside them"
+    text = (f"{key}: the filter was lost: {n_lost} of {m['updates']} updates were refused over {len(lost)} "
+            f"stretch{'es' if len(lost) > 1 else ''} of refusals in a row ({shown}); {outside}: a lost filter is "
+            "no evidence of an IMU time offset, and none was searched")
+    causes = []
+    drifts = [r for r in s.get("recoveries") or () if r.get("measurement") == key and r.get("fixes_position")]
+    if drifts:
+        worst = max(drifts, key=lambda r: r["drift_accel_m_s2"])
+        causes.append(f"at its recoveries the fixes drifted from the INS at up to {worst['drift_accel_m_s2']:.2g} "
+                      f"m/s^2 horizontally, a tilt error of about {worst['tilt_deg']:.1f} deg: the attitude diverged "
+                      "(a wrong initial roll or pitch, a wrong IMU axis or mounting, or a constraint that does not "
+                      "hold)")
+    nhc = (s.get("health") or {}).get("measurements", {}).get("nhc")
+    if nhc and nhc.get("updates") and nhc["rejected_fraction"] > NHC_BROKEN_FRACTION:
+        causes.append(f"the non-holonomic constraint was refused in {nhc['rejected_fraction']:.0%} of its updates "
+                      "(it does not hold for this vehicle or its mounting: [constraints] nhc = false, or mounting "
+                      "= true)")
+    if not lost[-1]["recovered"]:
+        causes.append(f"it was still lost at the end of the run (from t = {lost[-1]['start_s']:.1f} s)")
+    return "; ".join([text] + causes)
 
 
 #: fixes reaching further than this [s] beyond the IMU log's ends are worth a warning
@@ -1552,6 +1640,59 @@ def summary(res: NavigateResult) -> dict:
     return out
 
 
+def lost_stretches(t, accepted, min_span_s) -> list[dict]:
+    """The stretches over which a measurement's updates were refused one
+    after the other for at least ``min_span_s`` (the filter's recovery
+    wait, ``FilterSettings.recovery_after_s``): a lost filter (or input bad
+    for that long), each as ``{"start_s", "end_s", "updates", "recovered"}``
+    (from the first refused update to the next accepted one, or to the last
+    refused when none followed: ``recovered`` False).
+
+    Parameters
+    ----------
+    t : (m,) array
+        Times of the updates [s].
+    accepted : (m,) bool array
+    min_span_s : float
+        [s].
+
+    Returns
+    -------
+    list of dict
+    """
+    t = np.asarray(t, float)
+    acc = np.asarray(accepted, bool)
+    edges = np.diff(np.r_[0, (~acc).astype(np.int8), 0])
+    out = []
+    for a, b in zip(np.nonzero(edges == 1)[0], np.nonzero(edges == -1)[0]):
+        recovered = b < len(t)
+        end = float(t[b] if recovered else t[b - 1])
+        if end - float(t[a]) >= min_span_s:
+            out.append({"start_s": float(t[a]), "end_s": end, "updates": int(b - a), "recovered": bool(recovered)})
+    return out
+
+
+def outside_lost(t, accepted, nis, stretches, dof) -> dict:
+    """The figures of a measurement's updates outside its lost stretches
+    (:func:`lost_stretches`, each from its first refused update to the
+    update that ended it, exclusive): ``updates``, ``rejected_fraction``
+    and ``mean_nis`` (None without updates), the figures
+    :func:`gnss_updates_unhealthy` judges, without the stretches where the
+    filter was lost.  ``dof``: the measurement's degrees of freedom per
+    update (``mean_nis_per_dof`` divides by it)."""
+    t = np.asarray(t, float)
+    inside = np.zeros(len(t), bool)
+    for x in stretches:
+        inside |= (t >= x["start_s"]) & ((t < x["end_s"]) if x["recovered"] else (t <= x["end_s"]))
+    keep = ~inside
+    n = int(keep.sum())
+    acc = np.asarray(accepted, bool)[keep]
+    nis = np.asarray(nis, float)[keep] if len(nis) == len(t) else np.zeros(0)
+    mean = float(nis.mean()) if len(nis) else None
+    return {"updates": n, "rejected_fraction": float((~acc).sum() / n) if n else 0.0, "mean_nis": mean,
+            "mean_nis_per_dof": None if mean is None or not dof else mean / dof}
+
+
 #: the health verdict's limits (docs in :func:`health`)
 HEALTH_MAX_REJECTED_FRACTION = 0.05
 HEALTH_MAX_MEAN_NIS_PER_DOF = 3.0
@@ -1572,7 +1713,11 @@ def health(out, gaps=(), rate_changes=()) -> dict:
     * more than 5 % of a measurement's updates rejected (of its rows, for a
       measurement gated row by row, such as one row per satellite);
     * 4 or more consecutive updates of a measurement rejected (a burst of
-      bad input: the filter survived it, the data are still suspect);
+      bad input: the filter survived it, the data are still suspect; or,
+      over the recovery's 15 s or more, the filter lost: each such stretch
+      is listed in ``measurements[name]["lost_stretches"]``
+      (:func:`lost_stretches`), with the figures of the updates outside
+      them in ``outside_lost``, :func:`outside_lost`);
     * a measurement's mean NIS over its accepted updates above 3 times its
       degrees of freedom (the filter is overconfident by more than sqrt(3)
       in sigma; a consistent filter averages 1 per degree of freedom; the
@@ -1599,6 +1744,9 @@ def health(out, gaps=(), rate_changes=()) -> dict:
     aiding log that made no update (:func:`aiding_warnings`).
     """
     reasons, warnings, per = [], [], {}
+    settings = getattr(out, "settings", None)
+    lost_span = getattr(settings, "recovery_after_s", None)
+    lost_span = float(FilterSettings.recovery_after_s if lost_span is None else lost_span)
     if not any(len(v.get("nis", [])) for v in out.innovations.values()):
         warnings.append("no filter statistics to judge (the uncoupled scheme, or no measurement used): the "
                         "verdict covers only what follows")
@@ -1633,6 +1781,10 @@ def health(out, gaps=(), rate_changes=()) -> dict:
                         "= false")
             reasons.append(f"{name}: {c['rejected']} of {n_upd} updates rejected ({frac:.0%}){hint}")
         acc = np.asarray(inn.get("accepted", []), bool)
+        t_inn = np.asarray(inn.get("t", []), float)
+        lost = lost_stretches(t_inn, acc, lost_span) if len(acc) == len(t_inn) else []
+        per[name]["lost_stretches"] = lost
+        per[name]["outside_lost"] = outside_lost(t_inn, acc, nis, lost, dof) if lost else None
         if len(acc):  # the longest run of consecutive rejections: a burst of bad input, even when survived
             edges = np.diff(np.r_[0, (~acc).astype(np.int8), 0])
             starts, ends = np.nonzero(edges == 1)[0], np.nonzero(edges == -1)[0]
@@ -1640,9 +1792,12 @@ def health(out, gaps=(), rate_changes=()) -> dict:
                 j = int(np.argmax(ends - starts))
                 run = int(ends[j] - starts[j])
                 per[name]["longest_rejection_run"] = run
+                t0 = float(np.asarray(inn['t'])[starts[j]])
+                long = [x for x in lost if x["start_s"] == t0]
                 if run >= HEALTH_MAX_REJECTION_RUN:
-                    reasons.append(f"{name}: {run} consecutive updates rejected from t = "
-                                   f"{float(np.asarray(inn['t'])[starts[j]]):.2f} s (a burst of bad input)")
+                    reasons.append(f"{name}: {run} consecutive updates rejected from t = {t0:.2f} s " + (
+                        f"(for {long[0]['end_s'] - t0:.1f} s{'' if long[0]['recovered'] else ', to the end of the run'}"
+                        ": the filter lost, or the input bad for that long)" if long else "(a burst of bad input)"))
         if mean_used is not None and dof:
             of = "" if len(used_nis) == len(nis) else f" of the {len(used_nis)} accepted updates"
             if mean_used > HEALTH_MAX_MEAN_NIS_PER_DOF * dof:
