@@ -636,17 +636,7 @@ def _nis_inflated(P, nu, H, R, k, alpha, Pa, S, L, w):
         for j in range(n):
             dj = sa if j < 9 else 1.0
             Pa[i, j] = P[i, j] * di * dj
-    for r in range(k):
-        for s in range(k):
-            acc = 0.0
-            for i in range(n):
-                hi = H[r, i]
-                if hi != 0.0:
-                    for j in range(n):
-                        acc += hi * Pa[i, j] * H[s, j]
-            S[r, s] = acc + R[r, s]
-    ok, v = _cholesky_nis(S, nu, k, L, w)  # S is positive definite: P and R are
-    return v if ok else math.nan
+    return _nis_full(Pa, nu, H, R, k, S, L, w)  # S is positive definite: P and R are
 
 
 @njit(cache=True, error_model="numpy")
