@@ -432,3 +432,16 @@ def test_a_tilt_lost_filter_recovers_on_the_fixes(tilted_car, compiled, constrai
     end = e.time > e.time[-1] - 10.0
     assert np.abs(np.degrees(e.att_rpy[end, :2])).max() < 0.5
     assert e.horizontal[end].max() < 3.0
+
+
+def test_nis_dof_leaves_out_the_rows_refused_by_their_own_gate():
+    """An update that went on without a refused satellite has a NIS over the rows it used: its degrees of
+    freedom are those rows (a mean NIS per dof over all rows read a partly refused tight epoch as more
+    consistent than it was); a whole update refused keeps all its rows."""
+    from inskit.integration.engine import ROW_ACCEPTED as A, ROW_REFUSED_ROW as R, ROW_REFUSED_UPDATE as U
+    from inskit.integration.engine import nis_dof
+
+    dof = np.array([3, 5, 2, 4])
+    status = np.array([A, A, A, A, R, A, R, A, U, U, A, A, A, A], np.int8)
+    assert nis_dof(dof, status).tolist() == [3, 3, 2, 4]
+    assert nis_dof(np.zeros(0, np.int64), np.zeros(0, np.int8)).tolist() == []

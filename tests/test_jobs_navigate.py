@@ -1022,6 +1022,9 @@ def test_tight_innovation_file_says_per_satellite_row_what_the_gate_did(tmp_path
     c = s["measurements"]["pseudorange"]
     refused = pr[pr.status == "refused_row_gate"]
     assert len(refused) == c["rows_rejected"] >= 15 and len(pr) == c["rows"]
+    inn = res.forward.innovations["pseudorange"]  # each NIS's degrees of freedom: the rows it used
+    k_used = pr.groupby("t", sort=False).status.apply(lambda x: int((x != "refused_row_gate").sum())).to_numpy()
+    assert inn["nis_dof"].tolist() == k_used.tolist() and inn["nis_dof"].sum() == c["rows"] - c["rows_rejected"]
     assert (pr.accepted == (pr.status == "accepted")).all()
     assert pr.groupby("t").accepted.min().eq(0).sum() == c["rejected"]
     assert pr.groupby("t").accepted.max().eq(1).sum() == c["used"]

@@ -374,7 +374,7 @@ def yaw_bank(imu: ImuData, at_yaw, yaw0, measurements, settings, *, n=12, span_s
             inn = out.innovations.get(name)
             if inn is not None and len(inn["nis"]):
                 nis += float(np.sum(inn["nis"]))
-                dof += float(np.sum(inn["dof"]))
+                dof += float(np.sum(inn.get("nis_dof", inn["dof"])))  # the rows each NIS covers
         if dof > 0 and np.isfinite(nis):
             scores[j] = nis / dof
     if not np.isfinite(scores).any():

@@ -821,6 +821,7 @@ def run_filter(imu: ImuData, initial: NavState, measurements, settings: FilterSe
                    "update_row": it_row[rec_i[sel]]}
             at_rows = np.repeat(rec_off[sel] - (np.cumsum(dof) - dof), dof) + np.arange(int(dof.sum()))
             out["status"] = rec_st[at_rows]
+            out["nis_dof"] = nis_dof(dof, out["status"])
             if (dof == dof[0]).all():
                 at = rec_off[sel][:, None] + np.arange(dof[0])
                 out["nu"], out["sigma"] = rec_nu[at], rec_sig[at]
@@ -1014,17 +1015,33 @@ def _check_rows(t, a, lla, v, q):
                          f"{t[a + near[0]]:.3f} s, within 0.1 deg of a pole, where the NED filter is singular")
 
 
+def nis_dof(dof, status):
+    """The degrees of freedom of each update's NIS: its rows (``dof``) less
+    those refused by their own gate (``status`` flat, :data:`ROW_STATUS`),
+    which the NIS of an update that went on with the others leaves out.  A
+    mean NIS per degree of freedom divides by these: by all the rows, a
+    partly refused tight-coupling epoch read as more consistent than it was."""
+    dof = np.asarray(dof, np.int64)
+    if not len(dof):
+        return dof.copy()
+    refused = np.bincount(np.repeat(np.arange(len(dof)), dof), weights=(np.asarray(status) == ROW_REFUSED_ROW),
+                          minlength=len(dof))
+    return dof - refused.astype(np.int64)
+
+
 def _innovation_arrays(rec):
     """A measurement's innovation record as arrays: ``nu`` and ``sigma`` are
     (m, k) when every update has k rows, else object arrays of (k_i,) arrays
     (one row per satellite in view, say); ``dof`` holds each update's k,
-    ``status`` every row's code (:data:`ROW_STATUS`), flat."""
+    ``nis_dof`` the rows its NIS covers (:func:`nis_dof`), ``status`` every
+    row's code (:data:`ROW_STATUS`), flat."""
     out = {kk: np.asarray(rec[kk]) for kk in ("t", "nis", "accepted")}
     out["accepted"] = out["accepted"].astype(bool)
     dof = np.array([len(v) for v in rec["nu"]], dtype=np.int64)
     out["dof"] = dof
     out["update_row"] = np.asarray(rec["update_row"], np.int64)
     out["status"] = (np.concatenate(rec["status"]).astype(np.int8) if rec["status"] else np.empty(0, np.int8))
+    out["nis_dof"] = nis_dof(dof, out["status"])
     for kk in ("nu", "sigma"):
         if len(dof) and (dof == dof[0]).all():
             out[kk] = np.asarray(rec[kk])

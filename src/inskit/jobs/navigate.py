@@ -1116,7 +1116,7 @@ def _offset_objective(cfg: NavigateConfig, lo: float, hi: float, log=None, max_s
         k1 = None if max_s is None else int(np.searchsorted(imu.time, imu.time[min(k0, len(imu) - 1)] + max_s))
         res = navigate(cfg, inputs=(imu.slice(k0, k1), gnss, raw))
         inn = res.forward.innovations[key]
-        v = float(np.sum(inn["nis"]) / max(np.sum(inn["dof"]), 1))
+        v = float(np.sum(inn["nis"]) / max(np.sum(inn.get("nis_dof", inn["dof"])), 1))
         evals.append((float(off), v))
         if log:
             log(f"calibrate: offset {off:+.4f} s -> mean NIS {v:.3f}")
@@ -1755,7 +1755,7 @@ def health(out, gaps=(), rate_changes=()) -> dict:
         nis = np.asarray(inn.get("nis", []), float)
         n_upd = c["used"] + c["rejected"]
         # degrees of freedom per update (the mean when the number of rows varies, e.g. satellites in view)
-        dofs = np.asarray(inn.get("dof", []), float)
+        dofs = np.asarray(inn.get("nis_dof", inn.get("dof", [])), float)  # the rows each NIS covers
         dof = (float(dofs.mean()) if len(dofs) else None) if len(nis) else None
         if dof is not None and dof.is_integer():
             dof = int(dof)
