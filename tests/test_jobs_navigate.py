@@ -1038,6 +1038,8 @@ def test_tight_innovation_file_says_per_satellite_row_what_the_gate_did(tmp_path
     assert (both[both.label == bad_sat].status == "refused_row_gate").sum() >= 15
     assert set(pr.label) <= set(sats)
     assert (df[df.measurement == "nhc"].label.isin(["lateral (body y)", "vertical (body z)"])).all()
+
+
 def test_time_unit_hint_speaks_only_for_spans_a_thousand_times_apart():
     from inskit.jobs.navigate import time_unit_hint
 
@@ -1047,6 +1049,8 @@ def test_time_unit_hint_speaks_only_for_spans_a_thousand_times_apart():
     assert "is the fixes' time column in milliseconds" in time_unit_hint(np.arange(0.0, 600.0) * 1000.0, imu)
     assert "is the IMU log's time column in milliseconds" in time_unit_hint(np.arange(0.0, 600.0), imu * 1000.0)
     assert time_unit_hint(np.array([5.0]), imu) == ""  # one fix: no span
+
+
 TILT_CAR = {"name": "tilted car", "start": {"lat_deg": 40.0966, "lon_deg": -105.1474, "height_m": 1600.0},
             "imu": {"rate_hz": 100.0, "grade": "industrial-mems"},
             "gnss": {"rate_hz": 1.0, "white_h_m": 0.5, "white_v_m": 1.0, "velocity_sigma_m_s": 0.0,
