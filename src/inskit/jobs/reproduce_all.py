@@ -235,7 +235,7 @@ def _exp_filters(out, log):
     q.append(published("Kalman best on horizontal tilt (1 = yes)", better_t, 1.0, 0.0, shown="yes"))
     c = r["compute"]
     q.append(info("compute time, Kalman / 1st order (whole closed-loop run)", c["kalman_over_first_order"],
-                  unit="ratio", shown="2.33 (source); README 4.3",
+                  unit="ratio", shown="2.33 (source); README 4.5-4.9",
                   note="machine- and load-dependent timing: not judged"))
     for o in r["outage"]:
         q.append(info(f"30 min outage, {ESTIMATOR_NAMES[o['filter']]} {o['scheme']} loop: horizontal error growth",
