@@ -117,3 +117,98 @@ def test_the_local_line_is_scipys_order_one_savitzky_golay(n, w):
 
     x = np.cumsum(0.01 + np.random.default_rng(n).uniform(-1e-3, 1e-3, n))
     assert np.allclose(_local_line(x, w), savgol_filter(x, w, 1, mode="interp"), rtol=0, atol=1e-12)
+
+
+def _two_rates(seed=0):
+    """30 s at 100 Hz, then 30 s at 200 Hz with no gap between (row 3000 is
+    the first 200 Hz sample), read by the logger of :func:`_polled`."""
+    tau = np.r_[1000.0 + 0.010 * np.arange(3000), 1030.0 + 0.005 * np.arange(6000)]
+    late = np.random.default_rng(seed).uniform(0.0, 1.5e-3, len(tau))
+    return tau, np.floor((tau + late) * 1e3) / 1e3
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_a_rate_change_splits_the_stretch_and_the_tags_are_not_bent_across_it(seed):
+    from inskit.io.time_tags import _local_line
+
+    tau, tags = _two_rates(seed)
+    info = {}
+    out = smooth_time_tags("imu.csv", tags, 11, info=info)
+    err, logged = out - tau, tags - tau
+    # against the sensor's times the smoothed tags err by no more than the logged ones (their read jitter and
+    # millisecond counter: -1 .. +1.5 ms, 0.67 ms from their mean at most), the mean lateness aside
+    assert np.max(np.abs(err - err.mean())) <= np.max(np.abs(logged - logged.mean())) + 1e-9
+    # one line through both rates bends the tags across the change by dT h (h + 1) / (2 N) = 6.8 ms
+    bent = tags[0] + _local_line(tags - tags[0], 11) - tau
+    assert np.max(np.abs(bent - bent.mean())) > 6e-3
+    (change,) = info["time_tag_rate_changes"]
+    assert change["row"] in (3000, 3001)  # row 3000 lies on both lines
+    assert change["rate_before_hz"] == pytest.approx(100.0, rel=1e-3)
+    assert change["rate_after_hz"] == pytest.approx(200.0, rel=2e-3)
+    assert info["time_tags_beyond_jitter"] == []
+
+
+def test_the_split_row_is_the_change_and_one_rate_is_not_split():
+    from inskit.io.time_tags import rate_change_rows, split_row
+
+    tau, tags = _two_rates()
+    rows, before, after = rate_change_rows(tags)
+    assert len(rows) == 1 and abs(rows[0] - 3000) <= 64  # the detection sees it within its block
+    assert before[0] == pytest.approx(0.010) and after[0] == pytest.approx(0.005)
+    k, dt_a, dt_b = split_row(tau, 2900, 3100)
+    assert k in (3000, 3001) and dt_a == pytest.approx(0.010) and dt_b == pytest.approx(0.005)
+    assert split_row(tags, 100, 356) is None  # one rate in the window
+    assert split_row(tags, 100, 105) is None  # too few rows
+
+
+def _drifting(n=6000, seed=1):
+    """A sensor clock whose interval drifts from 10 to 10.3 ms over a minute
+    (3 %: an RC oscillator warming), read by the logger of :func:`_polled`."""
+    i = np.arange(n)
+    tau = 500.0 + 0.010 * i + 0.5 * 5e-8 * i**2
+    return tau, np.floor((tau + np.random.default_rng(seed).uniform(0.0, 1.5e-3, n)) * 1e3) / 1e3
+
+
+def test_a_window_too_long_for_a_drifting_clock_is_named_and_a_short_one_is_not():
+    from inskit.io.time_tags import MOVED_MAX_FACTOR, MOVED_RMS_FACTOR
+
+    tau, tags = _drifting()
+    info = {}
+    out = smooth_time_tags("imu.csv", tags, 11, info=info)
+    assert info["time_tags_beyond_jitter"] == [] and np.ptp(out - tau) < 1.5e-3
+    assert 0.4e-3 < info["time_tag_jitter_s"] < 0.6e-3  # uniform lateness over 1.5 ms and the counter: 0.53 ms
+    info = {}
+    out = smooth_time_tags("imu.csv", tags, 1001, info=info)  # 10 s: the line cannot follow the drift
+    assert np.ptp(out - tau) > 5e-3
+    found = {b["key"]: b for b in info["time_tags_beyond_jitter"]}
+    assert set(found) == {"time_tags_moved_net_rms_s", "time_tags_moved_net_max_s"}
+    s = info["time_tag_jitter_s"]
+    assert found["time_tags_moved_net_rms_s"]["limit_s"] == pytest.approx(MOVED_RMS_FACTOR * s)
+    assert found["time_tags_moved_net_max_s"]["value_s"] > MOVED_MAX_FACTOR * s
+    worst = found["time_tags_moved_net_max_s"]
+    assert worst["t_s"] == tags[worst["row"]] and worst["row"] > 5000  # the end fit, where the drift is fastest
+
+
+@pytest.mark.parametrize("w", [5, 11, 101, 1001])
+def test_a_steady_clock_raises_no_alarm_however_long_the_window(w):
+    _, tags = _polled(20000, seed=w)
+    info = {}
+    smooth_time_tags("imu.csv", tags, w, info=info)
+    assert info["time_tags_beyond_jitter"] == [] and info["time_tag_rate_changes"] == []
+    assert info["time_tags_moved_net_rms_s"] < 1.05 * info["time_tag_jitter_s"]  # white jitter: at most s
+    assert info["time_tags_left_out_spread_max_s"] < 1e-9
+
+
+def test_a_clock_jump_of_whole_intervals_is_named_where_it_is():
+    _, tags = _polled(3000)
+    tags[1500:] += 0.030  # the logger's clock steps 30 ms (under the 50 ms that end a stretch)
+    info = {}
+    smooth_time_tags("imu.csv", tags, 11, info=info)
+    (found,) = info["time_tags_beyond_jitter"]
+    assert found["key"] == "time_tags_left_out_spread_max_s" and abs(found["row"] - 1500) <= 1
+    assert found["value_s"] > 0.010 and found["limit_s"] == pytest.approx(0.005)
+    one = _polled(3000)[1].copy()
+    one[1500:] += 0.010  # one row left out (or a jump of one interval): spread by under half an interval
+    info = {}
+    smooth_time_tags("imu.csv", one, 11, info=info)
+    assert info["time_tags_beyond_jitter"] == [] and 4e-3 < info["time_tags_left_out_spread_max_s"] < 5e-3

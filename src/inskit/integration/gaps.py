@@ -59,25 +59,14 @@ def local_interval(dt, block=RATE_BLOCK):
 
 def find_rate_changes(imu: ImuData, tolerance=0.2, block=RATE_BLOCK):
     """Where the sampling rate changes by more than ``tolerance`` (relative)
-    between consecutive blocks and stays changed over the next block."""
-    dt = np.diff(imu.time)
-    n = len(dt)
-    if n < 3 * block:
-        return []
-    nb = n // block
-    med = np.median(dt[: nb * block].reshape(nb, block), axis=1)
-    out = []
-    level = med[0]  # the interval of the current steady run of blocks
-    for b in range(1, nb):
-        c = med[b]
-        if abs(c - level) <= tolerance * level:
-            continue
-        if b + 1 < nb and abs(med[b + 1] - c) > tolerance * c:
-            continue  # a block straddling the change (or a burst): wait for the new steady rate
-        k = b * block + 1
-        out.append(RateChange(int(k), float(imu.time[k]), float(1.0 / level), float(1.0 / c)))
-        level = c
-    return out
+    between consecutive blocks and stays changed over the next block
+    (:func:`inskit.io.time_tags.rate_change_rows` on the log's times: the
+    reader's time-tag smoothing splits its stretches at the same changes)."""
+    from ..io.time_tags import rate_change_rows
+
+    rows, before, after = rate_change_rows(imu.time, tolerance, block)
+    return [RateChange(int(k), float(imu.time[k]), float(1.0 / a), float(1.0 / b))
+            for k, a, b in zip(rows, before, after)]
 
 
 def find_gaps(imu: ImuData, factor=5.0):
