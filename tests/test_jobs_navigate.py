@@ -521,6 +521,49 @@ def test_jittery_imu_time_tags_are_reported_and_warned_of_when_kept(result):
     assert "time_tags_moved_rms_s" not in kept["imu_time_tags"]
 
 
+def test_the_drives_smoothed_time_tags_move_no_more_than_their_jitter_explains(result):
+    """No false alarm: drive_0708's tags, smoothed over 11 rows, move 0.6 ms RMS net of its 1138 rows left out
+    (each spread over the window by under half an interval) for a jitter of 0.39 ms RMS, one rate all along."""
+    tags = summary(result)["imu_time_tags"]
+    assert tags["time_tags_beyond_jitter"] == [] and tags["time_tag_rate_changes"] == []
+    assert 0.35e-3 < tags["time_tag_jitter_s"] < 0.45e-3
+    assert tags["time_tags_moved_net_rms_s"] < 2 * tags["time_tag_jitter_s"]
+    assert tags["time_tags_moved_net_max_s"] < 6 * tags["time_tag_jitter_s"]
+    assert 4e-3 < tags["time_tags_left_out_spread_max_s"] < 5e-3
+    assert not [w for w in summary(result)["health"]["warnings"] if "imu_time_tags." in w]
+
+
+def test_a_window_too_long_for_the_drives_rows_left_out_is_warned_of():
+    """51 rows (half a second) hold several of the drive's rows left out: the smoothing spreads them by 11 ms,
+    over half an interval; the health verdict names the key, the time and row, and what to do."""
+    cfg = load_config(EXAMPLE, {"output": {"plots": False}, "imu": {"time_smoothing_samples": 51}})
+    s = summary(navigate(cfg))
+    (found,) = s["imu_time_tags"]["time_tags_beyond_jitter"]
+    assert found["key"] == "time_tags_left_out_spread_max_s" and found["value_s"] > 0.01
+    warn = [w for w in s["health"]["warnings"] if "imu_time_tags." in w]
+    assert len(warn) == 1 and "imu_time_tags.time_tags_left_out_spread_max_s" in warn[0]
+    assert f"t = {found['t_s'] + 0.26:.3f} s (the file's time; row {found['row']}" in warn[0]
+    assert "time_smoothing_samples = 5" in warn[0] and "or 1" in warn[0]
+
+
+def test_the_time_tag_warning_names_a_drifting_clocks_key_time_and_row():
+    from inskit.io.time_tags import smooth_time_tags
+    from inskit.jobs.navigate import time_tags_warnings
+
+    i = np.arange(6000)
+    tau = 500.0 + 0.010 * i + 0.5 * 5e-8 * i**2  # the interval drifts 3 % over a minute
+    tags = np.floor((tau + np.random.default_rng(1).uniform(0.0, 1.5e-3, len(i))) * 1e3) / 1e3
+    for w, n_warn in ((11, 0), (1001, 2)):
+        notes = {}
+        smooth_time_tags("imu.csv", tags, w, info=notes)
+        warn = time_tags_warnings(notes, time_offset_s=0.5)
+        assert len(warn) == n_warn
+    b = notes["time_tags_beyond_jitter"][1]
+    assert "imu_time_tags.time_tags_moved_net_max_s" in warn[1] and "over 1001 rows" in warn[1]
+    assert f"t = {b['t_s'] - 0.5:.3f} s (the file's time; row {b['row']} " in warn[1]
+    assert "drift or jump of the clock" in warn[1] and "time_smoothing_samples = 5" in warn[1]
+
+
 def test_bias_health_rule_counts_the_in_run_process_noise(drive_inputs):
     """The walk_0827_tight defect: a gyro bias fixed on a short static start
     wandered by its in-run sigma over the walk and was called unhealthy

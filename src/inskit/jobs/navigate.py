@@ -789,7 +789,13 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         if imu_notes.get("time_tags_moved_rms_s") is not None and log:
             log(f"IMU: time tags smoothed over {imu_notes['time_smoothing_samples']} rows ([imu] "
                 f"time_smoothing_samples): moved {imu_notes['time_tags_moved_rms_s'] * 1e3:.2f} ms RMS, "
-                f"{imu_notes['time_tags_moved_max_s'] * 1e3:.2f} ms at most")
+                f"{imu_notes['time_tags_moved_max_s'] * 1e3:.2f} ms at most; net of the rows left out "
+                f"{imu_notes['time_tags_moved_net_rms_s'] * 1e3:.2f} ms RMS for a jitter of "
+                f"{imu_notes['time_tag_jitter_s'] * 1e3:.2f} ms RMS")
+            for c in imu_notes.get("time_tag_rate_changes", ()):
+                log(f"IMU: the time tags smoothed apart on either side of the rate change from "
+                    f"{c['rate_before_hz']:.4g} Hz to {c['rate_after_hz']:.4g} Hz at t = "
+                    f"{c['t_s'] - cfg.imu.time_offset_s:.3f} s (the file's time)")
     else:
         imu, gnss = inputs[:2]
         raw = inputs[2] if len(inputs) > 2 else None
@@ -1597,7 +1603,10 @@ def summary(res: NavigateResult) -> dict:
     if "time_tag_jitter_fraction" in notes:
         out["imu_time_tags"] = {k: notes[k] for k in (
             "time_smoothing_samples", "time_tag_jitter_fraction", "time_tag_interval_min_s", "time_tag_interval_max_s",
-            "time_tag_interval_median_s", "time_tags_moved_rms_s", "time_tags_moved_max_s") if k in notes}
+            "time_tag_interval_median_s", "time_tags_moved_rms_s", "time_tags_moved_max_s", "time_tag_jitter_s",
+            "time_tags_moved_net_rms_s", "time_tags_moved_net_max_s", "time_tags_left_out_spread_max_s",
+            "time_tags_beyond_jitter", "time_tag_rate_changes") if k in notes}
+        out["health"]["warnings"] += time_tags_warnings(notes, res.config.imu.time_offset_s)
         if notes["time_smoothing_samples"] == 1 and notes["time_tag_jitter_fraction"] > JITTER_HINT_FRACTION:
             med = notes["time_tag_interval_median_s"]
             out["health"]["warnings"].append(
@@ -1697,6 +1706,32 @@ def outside_lost(t, accepted, nis, stretches, dof) -> dict:
 HEALTH_MAX_REJECTED_FRACTION = 0.05
 HEALTH_MAX_MEAN_NIS_PER_DOF = 3.0
 HEALTH_MAX_PRIOR_SIGMAS = 5.0
+def time_tags_warnings(notes: dict, time_offset_s=0.0) -> list[str]:
+    """The health warnings on the smoothed IMU time tags: one for each
+    figure of the reader's check beyond its limit
+    (``notes["time_tags_beyond_jitter"]``,
+    :func:`inskit.io.time_tags.smoothing_check`), naming the summary key
+    (under ``imu_time_tags``), the time (the file's: ``time_offset_s`` taken
+    off) and row where the tags moved most, and what to do."""
+    out = []
+    n = notes.get("time_smoothing_samples")
+    for b in notes.get("time_tags_beyond_jitter") or ():
+        where = (f"largest at t = {b['t_s'] - time_offset_s:.3f} s (the file's time; row {b['row']} of the rows read, "
+                 "after repeated_rows)")
+        head = (f"IMU: the time tags smoothed over {n} rows ([imu] time_smoothing_samples) moved more than a steady "
+                f"clock with their jitter ({notes['time_tag_jitter_s'] * 1e3:.3g} ms RMS) explains: imu_time_tags.{b['key']} = "
+                f"{b['value_s'] * 1e3:.3g} ms, over its limit {b['limit_s'] * 1e3:.3g} ms, {where}")
+        if b["key"] == "time_tags_left_out_spread_max_s":
+            why = ("rows left out (intervals of 1.5 sampling intervals or more) are spread over the window by more "
+                   "than half an interval: several left out within one window, or a clock jump of whole intervals")
+        else:
+            why = ("the tags are no steady clock there: a drift or jump of the clock, a rate change under the "
+                   "20 % the smoothing splits at, or a window too long for the clock")
+        out.append(f"{head}; {why}. Use a smaller window (time_smoothing_samples = 5), or 1 to keep the tags as "
+                   "logged (choose with `inskit tune CONFIG --grid imu.time_smoothing_samples=1,5,11`)")
+    return out
+
+
 HEALTH_BIAS_BLOCKS = ("bg", "ba")
 HEALTH_MAX_REJECTION_RUN = 4
 
