@@ -876,7 +876,9 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", 
         poll jitter and millisecond counter:
         :func:`inskit.io.time_tags.smooth_time_tags`).
     info : dict, optional
-        Filled by :func:`repeated_rows` and the smoothing (rate files).
+        Filled by :func:`repeated_rows` and the smoothing (rate files:
+        :func:`inskit.io.time_tags.smooth_time_tags`, its check against the
+        jitter included).
 
     Returns
     -------

@@ -178,7 +178,9 @@ def read_imu(path, format=None, *, check_units=True, sampled=None, first_row=Non
         (:func:`inskit.io.time_tags.smooth_time_tags`).
     info : dict, optional
         Filled with the count of such rows (``repeated_rows``, ...) and how
-        far the smoothing moved the tags (``time_tags_moved_rms_s``, ...).
+        far the smoothing moved the tags (``time_tags_moved_rms_s``, ...),
+        beyond what their jitter explains or not (``time_tags_beyond_jitter``)
+        and the rate changes it smoothed apart (``time_tag_rate_changes``).
 
     Returns
     -------

@@ -457,7 +457,8 @@ def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0
         millisecond counter: :func:`inskit.io.time_tags.smooth_time_tags`).
     info : dict, optional
         Filled with the count of repeated rows (``repeated_rows``, ...) and
-        how far the smoothing moved the tags.
+        how far the smoothing moved the tags, checked against their jitter
+        (:func:`inskit.io.time_tags.smooth_time_tags`).
 
     Returns
     -------

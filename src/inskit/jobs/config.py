@@ -100,10 +100,13 @@ class ImuSection(_Strict):
         "so that the next sample covers the whole span (docs/formats.md)")
     time_smoothing_samples: int = Field(
         1, ge=1, description="rate logs: 1 keeps the time tags as logged; an odd number >= 3 replaces each tag by the "
-        "moving average of that many (after repeated_rows), stretch by stretch between gaps. A logger that polls the "
-        "IMU stamps its own jittery read times (often a millisecond counter: 8-11 ms intervals of a nominal 10), and "
-        "each rate sample is integrated over its interval: the jitter misweighs samples, which a bump turns into "
-        "attitude error. The mean time is kept (time_offset_s unchanged); docs/formats.md")
+        "moving average of that many (after repeated_rows), stretch by stretch between gaps, each side of a change "
+        "of sampling rate apart. A logger that polls the IMU stamps its own jittery read times (often a millisecond "
+        "counter: 8-11 ms intervals of a nominal 10), and each rate sample is integrated over its interval: the "
+        "jitter misweighs samples, which a bump turns into attitude error. The mean time is kept (time_offset_s "
+        "unchanged). Where the tags move more than their jitter explains (a clock that drifts or jumps, a window "
+        "too long for it, rows left out piling up in one window) the health verdict warns "
+        "(imu_time_tags.time_tags_beyond_jitter); docs/formats.md")
     start_s: float | None = Field(None, description="ignore IMU data before this time (IMU time scale, after "
                                   "time_offset_s; default: the first GNSS epoch)")
     gap_factor: float = Field(5.0, gt=1.0, description="an interval longer than this many median intervals is a gap")
