@@ -1706,6 +1706,14 @@ def outside_lost(t, accepted, nis, stretches, dof) -> dict:
 HEALTH_MAX_REJECTED_FRACTION = 0.05
 HEALTH_MAX_MEAN_NIS_PER_DOF = 3.0
 HEALTH_MAX_PRIOR_SIGMAS = 5.0
+HEALTH_BIAS_BLOCKS = ("bg", "ba")
+HEALTH_MAX_REJECTION_RUN = 4
+
+
+#: the non-holonomic constraint refused in more than this fraction of its updates is named as not holding
+NHC_BROKEN_FRACTION = 0.5
+
+
 def time_tags_warnings(notes: dict, time_offset_s=0.0) -> list[str]:
     """The health warnings on the smoothed IMU time tags: one for each
     figure of the reader's check beyond its limit
@@ -1719,7 +1727,8 @@ def time_tags_warnings(notes: dict, time_offset_s=0.0) -> list[str]:
         where = (f"largest at t = {b['t_s'] - time_offset_s:.3f} s (the file's time; row {b['row']} of the rows read, "
                  "after repeated_rows)")
         head = (f"IMU: the time tags smoothed over {n} rows ([imu] time_smoothing_samples) moved more than a steady "
-                f"clock with their jitter ({notes['time_tag_jitter_s'] * 1e3:.3g} ms RMS) explains: imu_time_tags.{b['key']} = "
+                f"clock with their jitter ({notes['time_tag_jitter_s'] * 1e3:.3g} ms RMS) explains: "
+                f"imu_time_tags.{b['key']} = "
                 f"{b['value_s'] * 1e3:.3g} ms, over its limit {b['limit_s'] * 1e3:.3g} ms, {where}")
         if b["key"] == "time_tags_left_out_spread_max_s":
             why = ("rows left out (intervals of 1.5 sampling intervals or more) are spread over the window by more "
@@ -1730,14 +1739,6 @@ def time_tags_warnings(notes: dict, time_offset_s=0.0) -> list[str]:
         out.append(f"{head}; {why}. Use a smaller window (time_smoothing_samples = 5), or 1 to keep the tags as "
                    "logged (choose with `inskit tune CONFIG --grid imu.time_smoothing_samples=1,5,11`)")
     return out
-
-
-HEALTH_BIAS_BLOCKS = ("bg", "ba")
-HEALTH_MAX_REJECTION_RUN = 4
-
-
-#: the non-holonomic constraint refused in more than this fraction of its updates is named as not holding
-NHC_BROKEN_FRACTION = 0.5
 
 
 def health(out, gaps=(), rate_changes=()) -> dict:
