@@ -9,7 +9,7 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "inskit"
 
 #: the layer of every top-level package or module, lowest first (docs/architecture.md)
 LAYERS = {
-    "errors": 0, "units": 0, "_numba_cache": 0, "_numba_blas": 0,
+    "errors": 0, "units": 0, "_numba_cache": 0, "_numba_blas": 0, "_numba_load": 0,
     "earth": 1, "rotations": 1,
     "types": 2, "config_files": 2, "files": 2,
     "filters": 3, "gnss": 3,

@@ -64,6 +64,19 @@ def _install_blas_finder():
 
 _install_blas_finder()
 
+
+def _install_light_cache_loads():
+    """numba's cache loads without its registries' refresh (:mod:`._numba_load`)."""
+    try:
+        from . import _numba_blas, _numba_load
+
+        _numba_load.install(preload_blas=_numba_blas.preload)
+    except Exception:  # noqa: BLE001 (a speed-up only: numba then does as it always did)
+        pass
+
+
+_install_light_cache_loads()
+
 #: public name -> (module, attribute), loaded on first access (PEP 562)
 _LAZY = {
     "navigate": ("inskit.api", "navigate"),
