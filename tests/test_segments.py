@@ -7,11 +7,12 @@ import numpy as np
 import pytest
 
 from inskit import earth
+from inskit import rotations as rot
 from inskit.errors import ConfigError
 from inskit.simulation import ideal_imu, truth_solution
 from inskit.simulation.scenario import build_trajectory, load_scenario
 from inskit.simulation.scenario import simulate as simulate_scenario
-from inskit.simulation.segments import Channel, SegmentTrajectory, smoothstep, smoothstep_integral
+from inskit.simulation.segments import _NO_POSITION, Channel, SegmentTrajectory, smoothstep, smoothstep_integral
 from inskit.strapdown import mechanize
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -235,11 +236,17 @@ def test_fused_kernel_is_the_numpy_state(name):
     t = np.concatenate([np.sort(rng.uniform(-1.0, tr.duration + 1.0, 30000)), [0.0, tr.duration]])
     for times in (t, rng.permutation(t)):
         _, lla, v_n, a_n, rpy, _ = tr._state(times)
-        _, o = tr._fused(times, ("lla", "v_n", "a_n", "rpy"))
+        _, o = tr._fused(times, ("lla", "v_n", "a_n", "q_nb"))
         scale_v = max(1.0, np.abs(v_n).max())
         assert np.abs(o["lla"] - lla).max() < 1e-9  # rad and m: the same spline, at most a height rounding
         assert np.abs(o["v_n"] - v_n).max() < 1e-14 * scale_v
-        assert np.abs(o["a_n"] - a_n).max() < 1e-12 and np.abs(o["rpy"] - rpy).max() < 1e-13
+        # the quaternion of the same angles (half-angle products, scalar part >= 0): rpy to 1e-13 rad
+        assert np.abs(o["a_n"] - a_n).max() < 1e-12 and np.abs(o["q_nb"] - rot.quat_from_euler(rpy)).max() < 1e-13
+        assert np.all(o["q_nb"][:, 0] >= 0.0) and np.abs(np.linalg.norm(o["q_nb"], axis=1) - 1.0).max() < 1e-15
+        # without a spline: the segments' velocity alone, what the position integrates (no oscillation)
+        _, seg = tr._fused(times, ("v_n",), pos=_NO_POSITION)
+        v_seg, _, _ = tr._velocity(times)
+        assert np.abs(seg["v_n"] - v_seg).max() < 1e-14 * scale_v
 
 
 def test_fused_kernel_with_overlapping_steps():
@@ -254,9 +261,9 @@ def test_fused_kernel_with_overlapping_steps():
     tr.rate_bank.add_step(30.0, 4.0, 0.03)
     t = np.linspace(0.0, 60.0, 6001)
     _, lla, v_n, a_n, rpy, _ = tr._state(t)
-    _, o = tr._fused(t, ("lla", "v_n", "a_n", "rpy"))
+    _, o = tr._fused(t, ("lla", "v_n", "a_n", "q_nb"))
     assert np.abs(o["v_n"] - v_n).max() < 1e-13 and np.abs(o["a_n"] - a_n).max() < 1e-13
-    assert np.abs(o["rpy"] - rpy).max() < 1e-13 and np.abs(o["lla"] - lla).max() < 1e-9
+    assert np.abs(o["q_nb"] - rot.quat_from_euler(rpy)).max() < 1e-13 and np.abs(o["lla"] - lla).max() < 1e-9
 
 
 def test_fused_kernel_in_threads_is_bit_identical(monkeypatch):
@@ -268,11 +275,11 @@ def test_fused_kernel_in_threads_is_bit_identical(monkeypatch):
     tr = build_trajectory(load_scenario(root / "examples" / "aircraft.toml"), np.random.default_rng(2))
     t = np.sort(np.random.default_rng(3).uniform(0.0, tr.duration, 50001))
     monkeypatch.setattr(segments, "_PARALLEL_MIN", 10**12)
-    one = tr._fused(t, ("lla", "v_n", "a_n", "rpy", "w_ib", "f_b"))[1]
+    one = tr._fused(t, ("lla", "v_n", "a_n", "q_nb", "w_ib", "f_b"))[1]
     monkeypatch.setattr(segments, "_PARALLEL_MIN", 10)
     monkeypatch.setattr("os.cpu_count", lambda: 3)
     assert len(segments._chunks(len(t))) == 3
-    split = tr._fused(t, ("lla", "v_n", "a_n", "rpy", "w_ib", "f_b"))[1]
+    split = tr._fused(t, ("lla", "v_n", "a_n", "q_nb", "w_ib", "f_b"))[1]
     for k in one:
         assert np.array_equal(one[k], split[k]), k
 

@@ -207,7 +207,7 @@ def _smooth3(x):
 
 
 @njit(cache=True, nogil=True)  # nogil: two threads share a long run (SegmentTrajectory._fused)
-def _state_kernel(t, c0, off, t0, T, A, end, osc, h, y, dy, yaw0, gravity, lla_o, v_o, a_o, rpy_o, w_o, f_o):
+def _state_kernel(t, c0, off, t0, T, A, end, osc, h, y, dy, yaw0, gravity, lla_o, v_o, a_o, q_o, w_o, f_o):
     """:meth:`SegmentTrajectory._state` (and, with ``rates``, :func:`.imu.rates_at`
     on it) at the sorted times ``t`` in one pass, no temporaries: the
     channels' quintic steps swept with one pointer per channel (steps sorted
@@ -217,10 +217,17 @@ def _state_kernel(t, c0, off, t0, T, A, end, osc, h, y, dy, yaw0, gravity, lla_o
     ``(h, y, dy)`` (:func:`_hermite_rows`), the oscillations ``osc`` (rows
     ``target, amplitude, frequency, phase, windowed, w_t0, w_t1, w_ramp``).
 
-    Writes position ``(lat, lon, h)``, NED velocity and acceleration, Euler
-    angles, ``omega_ib_b`` and ``f_b`` (gravity model coded ``gravity``) into
-    those of ``lla_o, v_o, a_o, rpy_o, w_o, f_o`` that have rows (the others
-    are ``(0, 3)``)."""
+    Writes position ``(lat, lon, h)``, NED velocity and acceleration, the
+    attitude quaternion ``q_nb`` of the Euler angles (scalar part >= 0, as
+    :func:`inskit.rotations.quat_from_euler`), ``omega_ib_b`` and ``f_b``
+    (gravity model coded ``gravity``) into those of ``lla_o, v_o, a_o, q_o,
+    w_o, f_o`` that have rows (the others have none).  Without a spline
+    (``y`` of fewer than two rows: the velocity for the position's own
+    integration, :meth:`SegmentTrajectory._integrate_position`) neither the
+    position (zero) nor the oscillations are evaluated: the velocity is the
+    segments' alone, as the position integrates it (a ``down`` oscillation
+    is added to the height afterwards), and the rates may not be asked
+    for."""
     nch = c0.shape[0]
     lo = off[:nch].copy()           # per channel: steps before lo have ended
     after = np.zeros(nch)           # sum of the ended steps' amplitudes
@@ -276,21 +283,24 @@ def _state_kernel(t, c0, off, t0, T, A, end, osc, h, y, dy, yaw0, gravity, lla_o
         ae = dsp * cg * spsi - sp_ * sg * dg * spsi + sp_ * cg * cp * r
         ad = -dsp * sg - sp_ * cg * dg
         # position: the Hermite spline of the integrated (lat, lon, h)
-        i = int(np.floor(tk / h))
-        i = min(max(i, 0), npos - 2)
-        u = (tk - i * h) / h
-        u2 = u * u
-        u3 = u2 * u
-        h00, h10, h01, h11 = 2.0 * u3 - 3.0 * u2 + 1.0, (u3 - 2.0 * u2 + u) * h, -2.0 * u3 + 3.0 * u2, (u3 - u2) * h
-        lat = h00 * y[i, 0] + h10 * dy[i, 0] + h01 * y[i + 1, 0] + h11 * dy[i + 1, 0]
-        lon = h00 * y[i, 1] + h10 * dy[i, 1] + h01 * y[i + 1, 1] + h11 * dy[i + 1, 1]
-        hgt = h00 * y[i, 2] + h10 * dy[i, 2] + h01 * y[i + 1, 2] + h11 * dy[i + 1, 2]
+        lat = lon = hgt = 0.0
+        if npos >= 2:
+            i = int(np.floor(tk / h))
+            i = min(max(i, 0), npos - 2)
+            u = (tk - i * h) / h
+            u2 = u * u
+            u3 = u2 * u
+            h00, h10 = 2.0 * u3 - 3.0 * u2 + 1.0, (u3 - 2.0 * u2 + u) * h
+            h01, h11 = -2.0 * u3 + 3.0 * u2, (u3 - u2) * h
+            lat = h00 * y[i, 0] + h10 * dy[i, 0] + h01 * y[i + 1, 0] + h11 * dy[i + 1, 0]
+            lon = h00 * y[i, 1] + h10 * dy[i, 1] + h01 * y[i + 1, 1] + h11 * dy[i + 1, 1]
+            hgt = h00 * y[i, 2] + h10 * dy[i, 2] + h01 * y[i + 1, 2] + h11 * dy[i + 1, 2]
         q = sp_ * rb / G_COORD
         bank = np.arctan(q)
         dbank = (dsp * rb + sp_ * drb) / G_COORD / (1 + q**2)
         e0, e1, e2 = val[4] + bank, g + val[5], psi
         de0, de1, de2 = der[4] + dbank, dg + der[5], r
-        for o in range(osc.shape[0]):
+        for o in range(osc.shape[0] if npos >= 2 else 0):  # no spline: the segments' velocity alone
             w = 2 * np.pi * osc[o, 2]
             ph = w * tk + osc[o, 3]
             sn, cs = np.sin(ph), np.cos(ph)
@@ -321,8 +331,18 @@ def _state_kernel(t, c0, off, t0, T, A, end, osc, h, y, dy, yaw0, gravity, lla_o
                 lat, hgt, vn, ve, vd, an, ae, ad, e0, e1, e2, de0, de1, de2, gravity)
         if lla_o.shape[0] > 0:
             lla_o[k, 0], lla_o[k, 1], lla_o[k, 2] = lat, lon, hgt
+        if v_o.shape[0] > 0:
             v_o[k, 0], v_o[k, 1], v_o[k, 2] = vn, ve, vd
-            rpy_o[k, 0], rpy_o[k, 1], rpy_o[k, 2] = e0, e1, e2
+        if q_o.shape[0] > 0:  # ZYX half-angle products (quat_from_euler), scalar part >= 0
+            cr, sr = np.cos(0.5 * e0), np.sin(0.5 * e0)
+            cp, sp = np.cos(0.5 * e1), np.sin(0.5 * e1)
+            cy, sy = np.cos(0.5 * e2), np.sin(0.5 * e2)
+            q0 = cr * cp * cy + sr * sp * sy
+            sgn = -1.0 if q0 < 0.0 else 1.0
+            q_o[k, 0] = sgn * q0
+            q_o[k, 1] = sgn * (sr * cp * cy - cr * sp * sy)
+            q_o[k, 2] = sgn * (cr * sp * cy + sr * cp * sy)
+            q_o[k, 3] = sgn * (cr * cp * sy - sr * sp * cy)
         if a_o.shape[0] > 0:
             a_o[k, 0], a_o[k, 1], a_o[k, 2] = an, ae, ad
 
@@ -510,19 +530,18 @@ class SegmentTrajectory:
         y = np.empty((n, 3))
         y[0] = self.lla0
 
-        def rhs(t, yy):
-            v_n, _, _ = self._velocity(np.atleast_1d(t))
-            rn, re = earth.principal_radii(yy[:, 0], yy[:, 2])
-            return np.column_stack([v_n[:, 0] / rn, v_n[:, 1] / (re * np.cos(yy[:, 0])), -v_n[:, 2]])
-
-        # the velocity does not depend on position: evaluate it for all stages at once
-        t_all = np.concatenate([tg, tg + h / 2])
-        v_all, _, _ = self._velocity(t_all)
-        v_grid, v_half = v_all[:n], v_all[n:]
+        # the velocity does not depend on position: evaluate it for all stages at once, by the fused kernel
+        # (sorted: grid points and half-steps interleaved; the NumPy channels took two thirds of this)
+        t_all = np.empty(2 * n)
+        t_all[0::2] = tg
+        t_all[1::2] = tg + h / 2
+        _, o = self._fused(t_all, ("v_n",), pos=_NO_POSITION)
+        v_grid, v_half = o["v_n"][0::2], o["v_n"][1::2]
 
         _rk4_lla(y, v_grid, v_half, h)
         self._check_position(tg, y, v_grid)
-        dy = rhs(tg, y)
+        rn, re = earth.principal_radii(y[:, 0], y[:, 2])
+        dy = np.column_stack([v_grid[:, 0] / rn, v_grid[:, 1] / (re * np.cos(y[:, 0])), -v_grid[:, 2]])
         self._pos = _UniformHermite(h, y, dy)
 
     def segment_at(self, t) -> str:
@@ -636,16 +655,16 @@ class SegmentTrajectory:
         :func:`.imu.truth_solution` takes it when it needs no rates), the
         attitude straight from the Euler angles (scalar part >= 0); by the
         fused kernel (:func:`_state_kernel`, the formulas of :meth:`_state`)."""
-        t, o = self._fused(t, ("lla", "v_n", "rpy"))
-        return t, o["lla"], o["v_n"], _quat(o["rpy"])
+        t, o = self._fused(t, ("lla", "v_n", "q_nb"))
+        return t, o["lla"], o["v_n"], o["q_nb"]
 
     def navigation_and_rates(self, t, gravity="normal"):
         """``(t, lla, v_n, q_nb, a_n, omega_ib_b, f_b)`` at times ``t``:
         :meth:`navigation` with the NED acceleration and the true rates of
         :func:`.imu.ideal_rates` (gravity model ``gravity``), in one pass of
         the fused kernel (a truth file with rates)."""
-        t, o = self._fused(t, ("lla", "v_n", "rpy", "a_n", "w_ib", "f_b"), gravity)
-        return t, o["lla"], o["v_n"], _quat(o["rpy"]), o["a_n"], o["w_ib"], o["f_b"]
+        t, o = self._fused(t, ("lla", "v_n", "q_nb", "a_n", "w_ib", "f_b"), gravity)
+        return t, o["lla"], o["v_n"], o["q_nb"], o["a_n"], o["w_ib"], o["f_b"]
 
     def rates(self, t, gravity="normal"):
         """True ``(omega_ib_b, f_b)`` at times ``t``: the compiled equivalent of
@@ -674,27 +693,29 @@ class SegmentTrajectory:
                 osc[i, 4:] = 1.0, o.window.t0, o.window.t1, o.window.ramp
         return c0, off, t0, T, A, t0 + T, osc
 
-    def _fused(self, t, want, gravity="normal"):
+    def _fused(self, t, want, gravity="normal", pos=None):
         """:func:`_state_kernel` at times ``t`` (any order: sorted for the
         sweep, results in the order given): ``t`` and a dict of the arrays
-        named in ``want`` (a subset of ``lla, v_n, a_n, rpy, w_ib, f_b``;
-        position, velocity and angles come together, as do the two rates)."""
+        named in ``want`` (a subset of ``lla, v_n, a_n, q_nb, w_ib, f_b``;
+        the two rates come together).  ``pos``: the position's spline,
+        by default the trajectory's (integrated on first use);
+        ``_NO_POSITION`` for the velocity alone."""
         from ..earth import gravity_model_code
 
         t = np.atleast_1d(np.asarray(t, dtype=float))
         code = gravity_model_code(gravity)
-        if self._pos is None:
-            self._integrate_position()
+        if pos is None:
+            if self._pos is None:
+                self._integrate_position()
+            pos = self._pos
         order = None
         ts = t
         if len(t) > 1 and np.any(t[1:] < t[:-1]):
             order = np.argsort(t, kind="stable")
             ts = t[order]
-        groups = {"lla": "nav", "v_n": "nav", "rpy": "nav", "a_n": "acc", "w_ib": "rates", "f_b": "rates"}
-        on = {groups[w] for w in want}
-        names = ("lla", "v_n", "a_n", "rpy", "w_ib", "f_b")
-        outs = {k: np.empty((len(ts) if groups[k] in on else 0, 3)) for k in names}
-        pos = self._pos
+        names = ("lla", "v_n", "a_n", "q_nb", "w_ib", "f_b")
+        on = set(want) | ({"w_ib", "f_b"} if {"w_ib", "f_b"} & set(want) else set())
+        outs = {k: np.empty((len(ts) if k in on else 0, 4 if k == "q_nb" else 3)) for k in names}
         ts = np.ascontiguousarray(ts)
         args = (*self._tables(), pos.h, np.ascontiguousarray(pos.y), np.ascontiguousarray(pos.dy), self.yaw0, code)
 
@@ -752,13 +773,6 @@ def _chunks(n):
     return [(int(a), int(b)) for a, b in zip(edges[:-1], edges[1:])]
 
 
-def _quat(rpy):
-    """``q_nb`` of ZYX Euler angles, scalar part >= 0."""
-    from .. import rotations as rot
-
-    return rot.quat_from_euler(rpy)
-
-
 def _kinematics_from_ned(t, lla, v_n, a_n, rpy, drpy, ddrpy=None):
     """Kinematics from position, NED velocity/acceleration and Euler angles
     (with ``ddrpy``, their second derivatives, also the angular acceleration)."""
@@ -804,3 +818,7 @@ def _hermite_rows(h, y, dy, t, out):
         h11 = (s3 - s2) * h
         for j in range(m):
             out[k, j] = h00 * y[i, j] + h10 * dy[i, j] + h01 * y[i + 1, j] + h11 * dy[i + 1, j]
+
+
+#: no position (:meth:`SegmentTrajectory._fused` of the velocity alone: the position's own integration)
+_NO_POSITION = _UniformHermite(1.0, np.zeros((0, 3)), np.zeros((0, 3)))
