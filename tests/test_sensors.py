@@ -166,3 +166,18 @@ def test_compiled_gauss_markov_recursion_equals_scipy_lfilter():
     w = np.random.default_rng(1).standard_normal((20000, 3))
     phi = np.exp(-0.01 / 300.0)
     assert np.array_equal(_ar1(w, phi), lfilter([1.0], [1.0, -phi], w, axis=0))
+
+
+def test_scale_and_misalignment_rows_are_the_matrix_product():
+    """The scale-factor and misalignment matrix applied row by row (three column products, no BLAS) is ``x @ M.T``:
+    to the last bit for a diagonal matrix (scale factors only, the presets), to 2 ulp with misalignment."""
+    from inskit.simulation.sensors import _rows_times
+
+    rng = np.random.default_rng(8)
+    x = rng.standard_normal((1001, 3)) * [1e-3, 1.0, 10.0]
+    diag = np.diag(1.0 + rng.standard_normal(3) * 1e-3)
+    assert np.array_equal(_rows_times(x, diag), x @ diag.T)
+    full = diag + (1 - np.eye(3)) * rng.standard_normal((3, 3)) * 1e-3
+    y = _rows_times(x, full)
+    assert y.shape == (1001, 3)
+    assert np.abs(y - x @ full.T).max() <= 4e-16 * np.abs(x).max(axis=1, keepdims=True).max()

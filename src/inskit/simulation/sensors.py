@@ -277,11 +277,20 @@ def _quantize(inc, lsb):
     return out
 
 
+def _rows_times(x, M):
+    """``x @ M.T`` for ``x`` of shape ``(n, 3)`` and ``M`` of ``(3, 3)``: each
+    row of ``x`` times the matrix, as three column products (not BLAS: its
+    threads took 130 ms for the 360 001 rows of an hour at 100 Hz on a busy
+    two-core machine, where these take 5 ms).  For a diagonal ``M`` (scale
+    factors without misalignment) the very numbers of ``x @ M.T``."""
+    return x[:, 0:1] * M[:, 0] + x[:, 1:2] * M[:, 1] + x[:, 2:3] * M[:, 2]
+
+
 def _triad(x, dt, t, e: TriadErrors, rng, f=None):
     """Measured mean rates of one triad (see module docstring)."""
     n = len(x)
     M = np.eye(3) + np.diag(e.scale_factor) + np.asarray(e.misalignment, float) * (1 - np.eye(3))
-    y = x @ M.T
+    y = _rows_times(x, M)
     bias = np.asarray(e.fixed_bias, float) + rng.standard_normal(3) * e.turn_on_bias_sigma
     series = np.tile(bias, (n, 1))
     if e.bias_instability > 0:
