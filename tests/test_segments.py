@@ -557,3 +557,26 @@ def test_a_down_vibration_beyond_100_km_is_refused_naming_the_file(tmp_path):
         simulate_scenario(load_scenario(p))
     p.write_text(p.read_text().replace("amplitude = 2e5", "amplitude = 0.5"))
     assert np.ptp(simulate_scenario(load_scenario(p)).truth.lla[:, 2]) == pytest.approx(0.5, abs=0.01)  # 30 s of 100 s
+
+
+def test_the_simulation_kernels_load_from_the_cache_without_numbas_array_module():
+    """The compiled kernels of a simulation allocate nothing (the caller passes their work arrays): loaded from
+    the cache, a function that allocates has numba import ``numba.np.arrayobj`` and what it pulls in (40 ms of
+    every ``inskit simulate``). The first run fills the cache if need be; the second loads from it."""
+    import subprocess
+    import sys
+
+    root = Path(__file__).resolve().parents[1]
+    script = (
+        "import sys\n"
+        "import numpy as np\n"
+        "from inskit.simulation.scenario import load_scenario, simulate\n"
+        f"sc = load_scenario({str(root / 'examples' / 'car.toml')!r})\n"
+        "sim = simulate(sc.model_copy(update={'duration_limit_s': 30.0}), seed=1)\n"
+        "assert len(sim.imu) > 100 and np.isfinite(sim.truth.lla).all()\n"
+        "print('arrayobj', 'numba.np.arrayobj' in sys.modules)\n"
+    )
+    for _ in range(2):
+        p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600)
+        assert p.returncode == 0, p.stderr[-2000:]
+    assert p.stdout.split() == ["arrayobj", "False"]

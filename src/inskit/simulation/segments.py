@@ -159,39 +159,37 @@ class Oscillation:
 
 
 @njit(cache=True)
+def _lla_rate(lat, hgt, vn, ve, vd):
+    """``d(lat, lon, h)/dt = (v_N/(R_N+h), v_E/((R_E+h) cos lat), -v_D)``
+    (radii as :func:`inskit.earth.principal_radii`, WGS84)."""
+    sl = np.sin(lat)
+    w = np.sqrt(1.0 - _E2 * sl * sl)
+    rn = _A * (1.0 - _E2) / (w * w * w) + hgt
+    re = _A / w + hgt
+    return vn / rn, ve / (re * np.cos(lat)), -vd
+
+
+@njit(cache=True)
 def _rk4_lla(y, v_grid, v_half, h):
     """RK4 of d(lat, lon, h)/dt = (v_N/(R_N+h), v_E/((R_E+h) cos lat), -v_D)
     on a uniform grid, in place (``y[0]`` given), with the velocity known at
     the grid points and half-steps (it does not depend on position).
     Compiled: a Python loop here was half of ``simulate()`` (issue 13).
-    Radii as :func:`inskit.earth.principal_radii` (WGS84)."""
+    Radii as :func:`inskit.earth.principal_radii` (WGS84).  No array is
+    made inside (the stages are scalars): a compiled function that
+    allocates has numba import its array module (``numba.np.arrayobj``,
+    40 ms) when it is loaded from the cache."""
     n = y.shape[0]
-    k = np.empty((4, 3))
-    yy = np.empty(3)
+    hh = 0.5 * h
     for i in range(n - 1):
-        for st in range(4):
-            if st == 0:
-                for c in range(3):
-                    yy[c] = y[i, c]
-                v = v_grid[i]
-            elif st == 3:
-                for c in range(3):
-                    yy[c] = y[i, c] + h * k[2, c]
-                v = v_grid[i + 1]
-            else:
-                for c in range(3):
-                    yy[c] = y[i, c] + 0.5 * h * k[st - 1, c]
-                v = v_half[i]
-            sl = np.sin(yy[0])
-            w = np.sqrt(1.0 - _E2 * sl * sl)
-            rn = _A * (1.0 - _E2) / (w * w * w) + yy[2]
-            re = _A / w + yy[2]
-            k[st, 0] = v[0] / rn
-            k[st, 1] = v[1] / (re * np.cos(yy[0]))
-            k[st, 2] = -v[2]
-        for c in range(3):
-            y[i + 1, c] = y[i, c] + h / 6.0 * (k[0, c] + 2.0 * k[1, c] + 2.0 * k[2, c] + k[3, c])
-
+        y0, y1, y2 = y[i, 0], y[i, 1], y[i, 2]
+        a0, a1, a2 = _lla_rate(y0, y2, v_grid[i, 0], v_grid[i, 1], v_grid[i, 2])
+        b0, b1, b2 = _lla_rate(y0 + hh * a0, y2 + hh * a2, v_half[i, 0], v_half[i, 1], v_half[i, 2])
+        c0, c1, c2 = _lla_rate(y0 + hh * b0, y2 + hh * b2, v_half[i, 0], v_half[i, 1], v_half[i, 2])
+        d0, d1, d2 = _lla_rate(y0 + h * c0, y2 + h * c2, v_grid[i + 1, 0], v_grid[i + 1, 1], v_grid[i + 1, 2])
+        y[i + 1, 0] = y0 + h / 6.0 * (a0 + 2.0 * b0 + 2.0 * c0 + d0)
+        y[i + 1, 1] = y1 + h / 6.0 * (a1 + 2.0 * b1 + 2.0 * c1 + d1)
+        y[i + 1, 2] = y2 + h / 6.0 * (a2 + 2.0 * b2 + 2.0 * c2 + d2)
 
 
 #: the channels of :class:`SegmentTrajectory`, in the order of the fused kernel's tables
@@ -207,7 +205,8 @@ def _smooth3(x):
 
 
 @njit(cache=True, nogil=True)  # nogil: two threads share a long run (SegmentTrajectory._fused)
-def _state_kernel(t, c0, off, t0, T, A, end, osc, h, y, dy, yaw0, gravity, lla_o, v_o, a_o, q_o, w_o, f_o):
+def _state_kernel(t, c0, off, t0, T, A, end, osc, h, y, dy, yaw0, gravity, lo, acc, lla_o, v_o, a_o, q_o, w_o,
+                  f_o):
     """:meth:`SegmentTrajectory._state` (and, with ``rates``, :func:`.imu.rates_at`
     on it) at the sorted times ``t`` in one pass, no temporaries: the
     channels' quintic steps swept with one pointer per channel (steps sorted
@@ -227,15 +226,18 @@ def _state_kernel(t, c0, off, t0, T, A, end, osc, h, y, dy, yaw0, gravity, lla_o
     position (zero) nor the oscillations are evaluated: the velocity is the
     segments' alone, as the position integrates it (a ``down`` oscillation
     is added to the height afterwards), and the rates may not be asked
-    for."""
+    for.
+
+    The caller gives the sweep's state, as nothing is allocated inside (a
+    compiled function that allocates has numba import its array module,
+    ``numba.np.arrayobj``, 40 ms, when it is loaded from the cache): ``lo``
+    (int64, one per channel) ``off[:-1]``, per channel the first step not
+    yet ended; ``acc`` (float64, ``(6, channels)``) zeros, per channel the
+    sum of the ended steps' amplitudes, the heading integral's slope and
+    intercept of them (``A``, ``-A (t0 + T/2)``), the value, derivative and
+    (heading rates, channels 1 and 2) integral at the time."""
     nch = c0.shape[0]
-    lo = off[:nch].copy()           # per channel: steps before lo have ended
-    after = np.zeros(nch)           # sum of the ended steps' amplitudes
-    slope = np.zeros(nch)           # heading integral: sum A of ended steps
-    icpt = np.zeros(nch)            # ... and sum -A (t0 + T/2)
-    val = np.empty(nch)
-    der = np.empty(nch)
-    integ = np.zeros(nch)          # only the heading rates' (channels 1, 2) are needed
+    AFTER, SLOPE, ICPT, VAL, DER, INTEG = 0, 1, 2, 3, 4, 5
     npos = y.shape[0]
     for k in range(t.shape[0]):
         tk = t[k]
@@ -243,9 +245,9 @@ def _state_kernel(t, c0, off, t0, T, A, end, osc, h, y, dy, yaw0, gravity, lla_o
             hi = off[c + 1]
             while lo[c] < hi and end[lo[c]] <= tk:
                 j = lo[c]
-                after[c] += A[j]
-                slope[c] += A[j]
-                icpt[c] -= A[j] * (t0[j] + 0.5 * T[j])
+                acc[AFTER, c] += A[j]
+                acc[SLOPE, c] += A[j]
+                acc[ICPT, c] -= A[j] * (t0[j] + 0.5 * T[j])
                 lo[c] += 1
             v = 0.0
             d = 0.0
@@ -268,14 +270,14 @@ def _state_kernel(t, c0, off, t0, T, A, end, osc, h, y, dy, yaw0, gravity, lla_o
                         xc = min(max(x, 0.0), 1.0)
                         ii += A[j] * T[j] * (xc**6 - 3 * xc**5 + 2.5 * xc**4)
                 j += 1
-            val[c] = v + (c0[c] + (after[c] + late))
-            der[c] = d
+            acc[VAL, c] = v + (c0[c] + (acc[AFTER, c] + late))
+            acc[DER, c] = d
             if c == 1 or c == 2:
-                integ[c] = c0[c] * tk + ii + ((slope[c] + lslope) * tk + (icpt[c] + licpt))
-        sp_, dsp = val[0], der[0]
-        rf, rb, drb = val[1], val[2], der[2]
-        g, dg = val[3], der[3]
-        psi = yaw0 + integ[1] + integ[2]
+                acc[INTEG, c] = c0[c] * tk + ii + ((acc[SLOPE, c] + lslope) * tk + (acc[ICPT, c] + licpt))
+        sp_, dsp = acc[VAL, 0], acc[DER, 0]
+        rf, rb, drb = acc[VAL, 1], acc[VAL, 2], acc[DER, 2]
+        g, dg = acc[VAL, 3], acc[DER, 3]
+        psi = yaw0 + acc[INTEG, 1] + acc[INTEG, 2]
         r = rf + rb
         cg, sg, cp, spsi = np.cos(g), np.sin(g), np.cos(psi), np.sin(psi)
         vn, ve, vd = sp_ * cg * cp, sp_ * cg * spsi, -sp_ * sg
@@ -298,8 +300,8 @@ def _state_kernel(t, c0, off, t0, T, A, end, osc, h, y, dy, yaw0, gravity, lla_o
         q = sp_ * rb / G_COORD
         bank = np.arctan(q)
         dbank = (dsp * rb + sp_ * drb) / G_COORD / (1 + q**2)
-        e0, e1, e2 = val[4] + bank, g + val[5], psi
-        de0, de1, de2 = der[4] + dbank, dg + der[5], r
+        e0, e1, e2 = acc[VAL, 4] + bank, g + acc[VAL, 5], psi
+        de0, de1, de2 = acc[DER, 4] + dbank, dg + acc[DER, 5], r
         for o in range(osc.shape[0] if npos >= 2 else 0):  # no spline: the segments' velocity alone
             w = 2 * np.pi * osc[o, 2]
             ph = w * tk + osc[o, 3]
@@ -719,8 +721,11 @@ class SegmentTrajectory:
         ts = np.ascontiguousarray(ts)
         args = (*self._tables(), pos.h, np.ascontiguousarray(pos.y), np.ascontiguousarray(pos.dy), self.yaw0, code)
 
+        off = args[1]
+
         def run(a, b):  # rows a:b (each chunk sweeps the steps from the start: exact, whatever the split)
-            _state_kernel(ts[a:b], *args, *(o[a:b] for o in (outs[k] for k in names)))
+            lo, acc = off[:-1].copy(), np.zeros((6, len(off) - 1))  # the sweep's state, its own per chunk
+            _state_kernel(ts[a:b], *args, lo, acc, *(o[a:b] for o in (outs[k] for k in names)))
 
         parts = _chunks(len(ts))
         if len(parts) == 1:

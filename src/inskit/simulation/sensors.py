@@ -252,18 +252,27 @@ def _gauss_markov(n, dt, sigma, tau, rng):
     return _ar1(w, phi)
 
 
-@njit(cache=True)
 def _ar1(w, phi):
     """``y[k] = w[k] + phi y[k-1]``, ``y[0] = w[0]``, along axis 0 (what
     ``scipy.signal.lfilter([1], [1, -phi], w, axis=0)`` gives, compiled:
-    importing scipy.signal alone took 1.7 s of every ``inskit simulate``)."""
+    importing scipy.signal alone took 1.7 s of every ``inskit simulate``),
+    ``w`` of shape ``(n, m)``."""
+    w = np.ascontiguousarray(w, dtype=float)
     y = np.empty_like(w)
+    _ar1_into(w, phi, y)
+    return y
+
+
+@njit(cache=True)
+def _ar1_into(w, phi, y):
+    """:func:`_ar1` into ``y`` (no array made inside: a compiled function
+    that allocates has numba import its array module, 40 ms, when it is
+    loaded from the cache)."""
     for j in range(w.shape[1]):
         y[0, j] = w[0, j]
     for k in range(1, w.shape[0]):
         for j in range(w.shape[1]):
             y[k, j] = w[k, j] + phi * y[k - 1, j]
-    return y
 
 
 def _quantize(inc, lsb):
