@@ -580,3 +580,25 @@ def test_the_simulation_kernels_load_from_the_cache_without_numbas_array_module(
         p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=600)
         assert p.returncode == 0, p.stderr[-2000:]
     assert p.stdout.split() == ["arrayobj", "False"]
+
+
+def test_the_numpy_hermite_is_the_compiled_one_to_the_bit():
+    """Below ``_HERMITE_COMPILED_MIN`` times the position spline runs in NumPy (no cache load for the GNSS
+    fixes' few thousand times): the same numbers as the compiled sweep, inside the grid, on its nodes and
+    beyond its ends (extrapolated end cubics), for a spline that reproduces a cubic exactly."""
+    from inskit.simulation import segments
+
+    h = 0.05
+    tg = np.arange(41) * h
+    y = np.column_stack([0.7 + 1e-6 * tg**3, -1.9 + 2e-6 * tg**2, 1600.0 - 3.0 * tg + 0.5 * tg**3])
+    dy = np.column_stack([3e-6 * tg**2, 4e-6 * tg, -3.0 + 1.5 * tg**2])
+    rng = np.random.default_rng(4)
+    t = np.concatenate([rng.uniform(-0.3, 2.3, 5000), tg, [tg[-1] + 1e-12]])
+    fast = segments._hermite_numpy(h, y, dy, t)
+    slow = np.empty_like(fast)
+    segments._hermite_rows(h, y, dy, t, slow)
+    assert fast.shape == (len(t), 3) and np.array_equal(fast, slow)
+    exact = np.column_stack([0.7 + 1e-6 * t**3, -1.9 + 2e-6 * t**2, 1600.0 - 3.0 * t + 0.5 * t**3])
+    assert np.abs(fast - exact).max() < 1e-12 * 1600.0  # a cubic's Hermite spline is the cubic (to rounding)
+    small = segments._UniformHermite(h, y, dy)(t[:10])
+    assert np.array_equal(small, slow[:10])
