@@ -177,6 +177,7 @@ def test_scale_and_misalignment_rows_are_the_matrix_product():
     x = rng.standard_normal((1001, 3)) * [1e-3, 1.0, 10.0]
     diag = np.diag(1.0 + rng.standard_normal(3) * 1e-3)
     assert np.array_equal(_rows_times(x, diag), x @ diag.T)
+    assert np.array_equal(_rows_times(x, np.eye(3)), x)
     full = diag + (1 - np.eye(3)) * rng.standard_normal((3, 3)) * 1e-3
     y = _rows_times(x, full)
     assert y.shape == (1001, 3)
