@@ -18,6 +18,9 @@ $(STAMP): pyproject.toml | $(BIN)/python
 
 $(WARM): $(STAMP) $(NUMBA_SRC)
 	@echo "building the compile cache of every command and matplotlib's font cache (each command once on small inputs, outputs discarded)"
+	@# byte-code of inskit's modules, written here once: with PYTHONDONTWRITEBYTECODE set, every command
+	@# would otherwise compile some thirty modules from source at its start (~60 ms)
+	$(BIN)/python -m compileall -q src/inskit
 	$(BIN)/python -m inskit.jobs.compile_cache || \
 	  echo "warning: a warm-up command failed (above); the commands it stands for compile at their first run"
 	touch $(WARM)
