@@ -421,3 +421,178 @@ def test_a_parquet_schema_naming_a_column_twice_is_refused_by_every_reader(tmp_p
                             names=list(imu) + ["dv_z_m_s"]), tmp_path / "imu.parquet")
     with pytest.raises(InputError, match=r"imu\.parquet: the Parquet schema names column 'dv_z_m_s' twice"):
         io.read_imu(tmp_path / "imu.parquet")
+
+
+# --- corrupt, truncated and damaged files: refused with the file and what to do, never read as other numbers ---
+
+def _imu(n=6000):
+    """A still IMU at 45 deg latitude, 100 Hz (plausible to every check of read_imu)."""
+    from inskit.simulation import StationaryTrajectory, ideal_imu
+
+    traj = StationaryTrajectory((np.radians(45), 0.1, 50.0), (0.0, 0.0, 0.5))
+    return traj, ideal_imu(traj, 0.01 * np.arange(n), nodes=1)
+
+
+def _flip_in_data_page(path, column):
+    """Invert 4 bytes in the middle of ``column``'s data page (its column chunk in row group 0, located by
+    the file's own metadata), as a disk or a copy would; the bytes it held before."""
+    md = pq.ParquetFile(path).metadata
+    j = md.schema.names.index(column)
+    cc = md.row_group(0).column(j)
+    assert cc.dictionary_page_offset is None  # inskit's writers: no dictionary, the chunk is its data pages
+    mid = cc.data_page_offset + cc.total_compressed_size // 2
+    raw = bytearray(path.read_bytes())
+    before = bytes(raw[mid:mid + 4])
+    raw[mid:mid + 4] = bytes(b ^ 0xFF for b in before)
+    path.write_bytes(bytes(raw))
+    return before
+
+
+CORRUPT = r"corrupt Parquet file: checksum mismatch in a data page .*write it again, or copy it again from its source"
+
+
+@pytest.mark.parametrize("kind", ["imu", "imu-table", "solution", "solution-head", "solution-streamed",
+                                  "columns"])
+def test_a_byte_changed_in_a_data_page_is_refused_by_every_reader(tmp_path, kind):
+    """A byte flipped in a data page was read as other numbers, silently (the page's zstd still decoded);
+    now every writer stores each page's CRC-32 and every reader checks it: an InputError naming the file."""
+    from inskit.io.csv_formats import read_table
+
+    p = tmp_path / "f.parquet"
+    if kind.startswith("imu"):
+        io.write_imu(p, _imu()[1])
+        column = "dv_z_m_s"
+        read = io.read_imu if kind == "imu" else read_table  # the streaming reader, the whole-table reader
+    else:
+        sol = solution()
+        if kind == "solution-streamed":
+            stream = P.SolutionStream(p)
+            stream.write(sol.slice(0, 1000), 0)
+            stream.write(sol.slice(1000), 1000)
+            stream.commit()
+        else:
+            io.write_solution(p, sol)
+        column = "lat_deg"
+        read = {"solution-head": lambda q: io.read_solution(q, until_s=float(sol.time[5])),
+                "columns": P.read_parquet_columns}.get(kind, io.read_solution)
+    whole = pq.read_table(p)
+    _flip_in_data_page(p, column)
+    try:  # what a reader that does not check read: other numbers, no error
+        assert not pq.read_table(p).equals(whole)
+    except OSError:
+        pass
+    with pytest.raises(InputError, match=r"f\.parquet: " + CORRUPT) as e:
+        read(p)
+    assert "Traceback" not in str(e.value) and len(str(e.value).splitlines()) == 1
+
+
+def test_an_imu_log_round_trips_exactly_with_its_checksums(tmp_path):
+    _, imu = _imu()
+    p = io.write_imu(tmp_path / "imu.parquet", imu)
+    back = io.read_imu(p)
+    np.testing.assert_array_equal(back.time, imu.time)
+    np.testing.assert_array_equal(back.dtheta_b, imu.dtheta_b)
+    np.testing.assert_array_equal(back.dv_b, imu.dv_b)
+    # and the checksums are there: a reader that checks them passes the file, one flipped byte does not
+    pq.read_table(p, page_checksum_verification=True)
+    _flip_in_data_page(p, "time_s")
+    with pytest.raises(OSError, match="CRC checksum verification failed"):
+        pq.read_table(p, page_checksum_verification=True)
+
+
+def test_a_file_without_checksums_is_still_read(tmp_path):
+    """Other software writes no page checksums (pyarrow's default): nothing to check, the file is read."""
+    sol = solution(n=300)
+    cols = P.solution_columns(sol)
+    import pyarrow as pa
+
+    pq.write_table(pa.table(cols), tmp_path / "other.parquet", write_page_checksum=False)
+    back = io.read_solution(tmp_path / "other.parquet")
+    np.testing.assert_array_equal(back.time, sol.time)
+    got, _ = P.read_parquet_columns(tmp_path / "other.parquet")
+    for k, v in cols.items():
+        np.testing.assert_array_equal(got[k], v)
+
+
+def _cut(raw, how):
+    footer = int.from_bytes(raw[-8:-4], "little")
+    if how == "half":
+        return raw[:len(raw) // 2]
+    if how == "last-byte":
+        return raw[:-1]
+    b = bytearray(raw)
+    if how == "footer-length":
+        b[-7] ^= 0xFF
+    else:  # bytes in the middle of the footer (the schema, the column metadata)
+        mid = len(raw) - 8 - footer // 2
+        b[mid:mid + 8] = b"\xff" * 8
+    return bytes(b)
+
+
+@pytest.mark.parametrize("how, want", [
+    ("half", r"not a readable Parquet file: truncated \(it starts as Parquet but its end, the footer with the "
+             r"schema, is missing"),
+    ("last-byte", r"not a readable Parquet file: truncated"),
+    ("footer-length", r"not a readable Parquet file: its footer \(the schema and column metadata\) is damaged"),
+    ("footer-middle", r"not a readable Parquet file: its footer \(the schema and column metadata\) is damaged"),
+])
+def test_a_truncated_file_or_a_damaged_footer_says_so(tmp_path, how, want):
+    p = io.write_solution(tmp_path / "s.parquet", solution(n=300))
+    p.write_bytes(_cut(p.read_bytes(), how))
+    for read in (io.read_solution, lambda q: io.read_solution(q, until_s=243262.0), P.read_parquet_columns,
+                 P.read_metadata, io.read_imu):
+        with pytest.raises(InputError, match=r"s\.parquet: " + want + r".*write it again, or copy it again"):
+            read(p)
+
+
+def test_a_damaged_page_header_is_refused_as_corrupt(tmp_path):
+    """The checksum covers a page's data, not its header: a header that does not decode is corrupt too."""
+    p = io.write_solution(tmp_path / "s.parquet", solution(n=300))
+    cc = pq.ParquetFile(p).metadata.row_group(0).column(1)
+    raw = bytearray(p.read_bytes())
+    raw[cc.data_page_offset] ^= 0xFF
+    p.write_bytes(bytes(raw))
+    with pytest.raises(InputError, match=r"s\.parquet: corrupt Parquet file: a data page does not decode"):
+        io.read_solution(p)
+
+
+def _main(capsys, *args):
+    """``inskit ARGS`` through the entry point, in process: (exit code, stderr)."""
+    import warnings
+
+    from inskit.cli import main
+
+    with warnings.catch_warnings(), np.errstate():  # main() silences both for the process: not beyond here
+        try:
+            main([str(a) for a in args])
+            code = 0
+        except SystemExit as exc:
+            code = exc.code
+    return code, capsys.readouterr().err
+
+
+def test_the_cli_refuses_a_corrupt_parquet_input_with_one_line(tmp_path, capsys):
+    """mechanize (a Parquet IMU log, read streaming) and evaluate (a Parquet solution): exit 2, one line
+    naming the file and what to do, no traceback; the same files whole are read."""
+    from inskit.simulation import truth_solution
+
+    traj, imu = _imu()
+    io.write_imu(tmp_path / "imu.parquet", imu)
+    io.write_solution(tmp_path / "truth.parquet", truth_solution(traj, imu.time))
+    code, err = _main(capsys, "mechanize", tmp_path / "imu.parquet", "--init-from", tmp_path / "truth.parquet",
+                      "--out", tmp_path / "nav.parquet")
+    assert code == 0, err
+    code, err = _main(capsys, "evaluate", tmp_path / "nav.parquet", tmp_path / "truth.parquet", "--json")
+    assert code == 0, err
+
+    _flip_in_data_page(tmp_path / "imu.parquet", "dtheta_y_rad")
+    code, err = _main(capsys, "mechanize", tmp_path / "imu.parquet", "--init-from", tmp_path / "truth.parquet",
+                      "--out", tmp_path / "nav2.parquet")
+    assert code == 2 and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    assert re.search(r"imu\.parquet: " + CORRUPT, err), err
+    assert not (tmp_path / "nav2.parquet").exists()
+
+    _flip_in_data_page(tmp_path / "nav.parquet", "yaw_deg")
+    code, err = _main(capsys, "evaluate", tmp_path / "nav.parquet", tmp_path / "truth.parquet")
+    assert code == 2 and "Traceback" not in err and len(err.strip().splitlines()) == 1, err
+    assert re.search(r"nav\.parquet: " + CORRUPT, err), err

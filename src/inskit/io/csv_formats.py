@@ -54,15 +54,10 @@ def read_table(path) -> tuple:
     from .parquet import is_parquet
 
     if is_parquet(path):
-        import pyarrow.parquet as pq
-
-        from .parquet import parquet_column_names
+        from .parquet import parquet_column_names, read_parquet_table
 
         parquet_column_names(path)  # a column named twice: said so, before pyarrow's 'Multiple matches'
-        try:
-            table = pq.read_table(path)
-        except Exception as exc:  # pyarrow raises several kinds for a damaged file
-            raise InputError(f"{path}: not a readable Parquet file ({str(exc).splitlines()[0]})") from None
+        table = read_parquet_table(path)  # every page's checksum checked: a corrupt file is refused, not misread
         import pyarrow as pa
 
         from .parquet import narrow_float_message
@@ -507,9 +502,9 @@ def lean_columns(path, groups):
         if is_parquet(path):
             import pyarrow.parquet as pq
 
-            from .parquet import narrow_float_message
+            from .parquet import READ_OPTIONS, narrow_float_message
 
-            pf = pq.ParquetFile(str(path))
+            pf = pq.ParquetFile(str(path), **READ_OPTIONS)
             if any(narrow_float_message(path, c, pf.schema_arrow.field(c).type) for c in want):
                 return None  # a float32 time: read_table's message
             n = pf.metadata.num_rows
@@ -545,7 +540,8 @@ def lean_columns(path, groups):
                         return None
                     out[i:i + m, j] = _values(col)
             i += m
-    except (pa.ArrowException, OSError, KeyError, ValueError):
+    except (pa.ArrowException, OSError, KeyError, ValueError) as exc:
+        _refuse_corrupt_parquet(path, exc)
         return None
     finally:
         pa.default_memory_pool().release_unused()  # the reader's blocks: back to the system, not held
@@ -555,6 +551,16 @@ def lean_columns(path, groups):
     if not all(np.isfinite(o).all() for o in outs):
         return None
     return outs
+
+
+def _refuse_corrupt_parquet(path, exc):
+    """Raise the :class:`InputError` of a Parquet page that failed its
+    checksum (``exc``), which a streaming reader's fallback to the whole
+    read would only meet again; anything else is left to that read."""
+    from .parquet import damage_message, is_checksum_error
+
+    if is_checksum_error(exc):
+        raise InputError(damage_message(path, exc)) from None
 
 
 def _values(col):
@@ -1372,10 +1378,10 @@ def _read_solution_head(path, until_s, ranges=True) -> NavSolution | None:
         if is_parquet(path):
             import pyarrow.parquet as pq
 
-            from .parquet import narrow_float_message, parquet_column_names
+            from .parquet import READ_OPTIONS, narrow_float_message, parquet_column_names
 
             parquet_column_names(path)  # a column named twice: refused, not a KeyError below
-            pf = pq.ParquetFile(str(path))
+            pf = pq.ParquetFile(str(path), **READ_OPTIONS)
             if any(narrow_float_message(path, f.name, f.type) for f in pf.schema_arrow):
                 return None  # a float32 time or latitude: the whole read's message
             batches = pf.iter_batches(batch_size=1 << 14)
@@ -1397,7 +1403,8 @@ def _read_solution_head(path, until_s, ranges=True) -> NavSolution | None:
                     and sum(len(x) for x in got) >= 2:
                 reached = True
                 break
-    except (pa.ArrowException, OSError, KeyError, ValueError):
+    except (pa.ArrowException, OSError, KeyError, ValueError) as exc:
+        _refuse_corrupt_parquet(path, exc)
         return None
     if not reached:
         return None

@@ -68,6 +68,96 @@ def is_parquet(path) -> bool:
         return False
 
 
+def is_checksum_error(exc) -> bool:
+    """Is ``exc`` pyarrow's refusal of a page whose CRC-32 does not match
+    its bytes (an ``OSError``: 'could not verify page integrity, CRC
+    checksum verification failed for page_ordinal 5')?"""
+    return isinstance(exc, OSError) and "checksum verification failed" in str(exc)
+
+
+def damage_message(path, exc, remedy="write it again, or copy it again from its source") -> str:
+    """The message of Parquet file ``path`` that pyarrow could not read
+    (``exc``): a page that fails its checksum or does not decode (corrupt),
+    a file that starts as Parquet but lost its end (truncated), a footer
+    that does not decode (damaged), else what pyarrow said.  Each names the
+    file and what to do.
+
+    Parameters
+    ----------
+    path : str or Path
+    exc : Exception
+        What pyarrow raised (``OSError``, ``pyarrow.ArrowException`` ...).
+    remedy : str, optional
+        What to do about a corrupt, truncated or damaged file.
+
+    Returns
+    -------
+    str
+    """
+    text = str(exc).strip()
+    first = text.splitlines()[0] if text else type(exc).__name__
+    again = remedy
+    if is_checksum_error(exc):
+        return (f"{path}: corrupt Parquet file: checksum mismatch in a data page ({first}); its bytes changed "
+                f"after it was written (a disk, copy or transfer fault), so its numbers cannot be trusted: {again}")
+    if is_parquet(path) and ("magic bytes not found in footer" in first or "smaller than the minimum" in first):
+        return (f"{path}: not a readable Parquet file: truncated (it starts as Parquet but its end, the footer with "
+                f"the schema, is missing: the copy or the program writing it stopped early); {again}")
+    low = first.lower()
+    if is_parquet(path) and any(w in low for w in _PAGE_DAMAGE) and _footer_reads(path):
+        # the footer decodes: what does not is a page (its header or its compressed bytes), which has no
+        # checksum to fail in a file written without them, or in its header in any file
+        return (f"{path}: corrupt Parquet file: a data page does not decode ({first}); its bytes changed after it "
+                f"was written (a disk, copy or transfer fault): {again}")
+    if is_parquet(path) and any(w in low for w in ("thrift", "base64", "footer", "metadata")):
+        return (f"{path}: not a readable Parquet file: its footer (the schema and column metadata) is damaged "
+                f"({first}); {again}")
+    return f"{path}: not a readable Parquet file ({first})"
+
+
+#: pyarrow's words (lower case) for a page that does not decode: its header (thrift), its sizes, its compression
+_PAGE_DAMAGE = ("thrift", "page header", "page was smaller", "unexpected end of stream", "decompression failed",
+                "corrupt")
+
+
+def _footer_reads(path) -> bool:
+    """Does the footer (metadata and schema) of Parquet file ``path`` decode?"""
+    import pyarrow.parquet as pq
+
+    try:
+        pq.read_schema(str(path))
+    except Exception:  # noqa: BLE001 (any failure: it does not)
+        return False
+    return True
+
+
+def read_parquet_table(path, columns=None):
+    """The whole Arrow table of Parquet file ``path`` (or ``columns`` of
+    it), every page's checksum checked (:data:`READ_OPTIONS`).
+
+    Parameters
+    ----------
+    path : str or Path
+    columns : sequence of str, optional
+
+    Returns
+    -------
+    pyarrow.Table
+
+    Raises
+    ------
+    InputError
+        A page that fails its checksum, a truncated file, a damaged footer
+        or anything else pyarrow cannot read (:func:`damage_message`).
+    """
+    import pyarrow.parquet as pq
+
+    try:
+        return pq.read_table(str(path), columns=columns, **READ_OPTIONS)
+    except Exception as exc:  # noqa: BLE001 (pyarrow raises several kinds for a damaged file)
+        raise InputError(damage_message(path, exc)) from None
+
+
 def select_columns(names, spec=("all",)) -> list:
     """The columns of ``names`` that ``spec`` asks for, in the order of ``names``.
 
@@ -218,8 +308,14 @@ def write_parquet(path, cols: dict, metadata: dict | None = None, compression="z
 
 
 #: float columns: no dictionary (values rarely repeat), byte-stream split (groups the exponent bytes, which zstd
-#: then packs: 10 % smaller than plain encoding on drive_0708, as fast)
-_PARQUET_OPTIONS = {"use_dictionary": False, "use_byte_stream_split": True}
+#: then packs: 10 % smaller than plain encoding on drive_0708, as fast); a CRC-32 in each page's header, which
+#: every inskit reader checks (:data:`READ_OPTIONS`): a byte changed in a data page after writing is refused,
+#: not read as other numbers
+_PARQUET_OPTIONS = {"use_dictionary": False, "use_byte_stream_split": True, "write_page_checksum": True}
+
+#: pyarrow's reading options of every inskit Parquet reader: the CRC-32 of each page that has one is checked
+#: (a page of a file written without checksums, by other software, is read as it is)
+READ_OPTIONS = {"page_checksum_verification": True}
 
 
 def _schema(cols, metadata):
@@ -368,17 +464,15 @@ def read_parquet_columns(path) -> tuple[dict, dict]:
     Raises
     ------
     InputError
-        Not a readable Parquet file, or a column that is not numeric.
+        Not a readable Parquet file (a page that fails its checksum, a
+        truncated file, a damaged footer: :func:`damage_message`), or a
+        column that is not numeric.
     """
     import pyarrow as pa
-    import pyarrow.parquet as pq
 
     path = require_file(path)
     parquet_column_names(path)
-    try:
-        table = pq.read_table(str(path))
-    except (pa.ArrowException, OSError) as exc:
-        raise InputError(f"{path}: not a readable Parquet file ({str(exc).splitlines()[0]})") from None
+    table = read_parquet_table(path)
     raw = (table.schema.metadata or {}).get(b"inskit")
     try:
         meta = json.loads(raw) if raw else {}
@@ -416,7 +510,7 @@ def parquet_column_names(path) -> list:
     try:
         names = list(pq.read_schema(str(path)).names)
     except (pa.ArrowException, OSError) as exc:
-        raise InputError(f"{path}: not a readable Parquet file ({str(exc).splitlines()[0]})") from None
+        raise InputError(damage_message(path, exc)) from None
     _refuse_repeated_names(path, names, "the Parquet schema")
     return names
 
@@ -451,7 +545,7 @@ def read_metadata(path) -> dict:
     try:
         schema = pq.read_schema(str(path))
     except (pa.ArrowException, OSError) as exc:
-        raise InputError(f"{path}: not a readable Parquet file ({str(exc).splitlines()[0]})") from None
+        raise InputError(damage_message(path, exc)) from None
     raw = (schema.metadata or {}).get(b"inskit")
     try:
         meta = json.loads(raw) if raw else {}
