@@ -138,6 +138,29 @@ def test_interrupted_study_resumes_without_repeating(one_worker, tmp_path):
     assert again["runs_computed"] == 0 and "workers" not in again["execution"]
 
 
+def test_a_corrupt_run_part_is_refused_naming_it_and_the_remedy(tmp_path):
+    """A run part whose data changed on disk was read as other figures (and ranked); its pages carry
+    checksums now, checked on reading: an InputError naming the part and saying to delete it."""
+    import pyarrow.parquet as pq
+
+    from inskit.jobs.study import _write_parquet, read_parts
+
+    (tmp_path / "runs").mkdir()
+    df = pd.DataFrame({"case": np.zeros(2000, "int32"), "run": np.arange(2000, dtype="int32"),
+                       "outage_end_horizontal_m": np.random.default_rng(5).gamma(2.0, 3.0, 2000)})
+    p = _write_parquet(df, tmp_path / "runs" / "part-1.parquet")
+    pd.testing.assert_frame_equal(read_parts(tmp_path), df)
+    cc = pq.ParquetFile(p).metadata.row_group(0).column(2)
+    end = (cc.dictionary_page_offset or cc.data_page_offset) + cc.total_compressed_size
+    mid = (cc.data_page_offset + end) // 2  # the middle of the data pages (after any dictionary page)
+    raw = bytearray(p.read_bytes())
+    raw[mid:mid + 4] = bytes(b ^ 0xFF for b in raw[mid:mid + 4])
+    p.write_bytes(bytes(raw))
+    with pytest.raises(InputError, match=r"part-1\.parquet: corrupt Parquet file: checksum mismatch in a data page "
+                                         r".*delete it to recompute its runs"):
+        read_parts(tmp_path)
+
+
 def test_a_different_study_in_the_same_folder_is_refused(one_worker, tmp_path):
     out1, _ = one_worker
     spec = _spec(tmp_path, TINY.replace("runs = 4", "runs = 5"))

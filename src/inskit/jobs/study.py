@@ -69,6 +69,7 @@ from .. import earth
 from .. import rotations as rot
 from ..config_files import check_magnitude, check_scalar_type, read_toml, validation_message
 from ..errors import ConfigError, InputError
+from ..io.parquet import READ_OPTIONS, damage_message
 from ..files import (atomic_write, check_folder_writable, check_outputs, save_figure, staged_files, write_json,
                      write_text)
 from ..types import ImuData
@@ -597,17 +598,16 @@ def read_parts(out_dir):
     frames = []
     for p in parts:
         try:
-            frames.append(pd.read_parquet(p))
+            frames.append(pd.read_parquet(p, **READ_OPTIONS))  # each page's checksum checked
         except Exception as exc:  # a part is written whole or not at all; anything else is damage
-            raise InputError(f"{p}: not a readable Parquet part of a study ({exc}); delete it to recompute "
-                             "its runs") from None
+            raise InputError(damage_message(p, exc, "delete it to recompute its runs")) from None
     df = pd.concat(frames, ignore_index=True).drop_duplicates(["case", "run"])
     return df.sort_values(["case", "run"], kind="stable").reset_index(drop=True)
 
 
 def _write_parquet(df, path):
     with atomic_write(path) as tmp:
-        df.to_parquet(tmp, index=False, engine="pyarrow", compression="snappy")
+        df.to_parquet(tmp, index=False, engine="pyarrow", compression="snappy", write_page_checksum=True)
     return Path(path)
 
 
