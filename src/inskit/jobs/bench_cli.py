@@ -176,7 +176,8 @@ tables = [(name, pq.read_table(src + "/" + name)) for name in ("imu.parquet", "g
 tables = [(n, pa.table({c: t.column(c).to_numpy() for c in t.column_names}, schema=t.schema)) for n, t in tables]
 t0 = time.perf_counter()
 for name, t in tables:
-    pq.write_table(t, dst + "/" + name, compression="zstd", use_dictionary=False, use_byte_stream_split=True)
+    pq.write_table(t, dst + "/" + name, compression="zstd", use_dictionary=False, use_byte_stream_split=True,
+                   write_page_checksum=True)
 print(json.dumps({"import_s": t_import, "write_s": time.perf_counter() - t0}))
 """
 
