@@ -53,6 +53,7 @@ independent streams by spawn key); Dask ``distributed`` futures API.
 
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import json
 import os
@@ -750,6 +751,57 @@ def _plot(df, cases, path):
     return save_figure(fig, path)
 
 
+@contextlib.contextmanager
+def _interrupt_at_the_end():
+    """Hold a Ctrl-C (SIGINT) that comes inside the block and raise its
+    ``KeyboardInterrupt`` when the block is done; a second Ctrl-C raises at
+    once.  For a request the scheduler serves in steps that must not be cut
+    off by closing the cluster under it (:func:`run_study`'s scatter).  Not
+    in the main thread, or with SIGINT not Python's default handler
+    (ignored: a run started in the background; the caller's own), nothing
+    is held.
+
+    The scatter of the cases is two steps on the scheduler: to the workers
+    (each unpickles the cases, importing inskit: 1 to 4 s on a busy
+    machine), then replicated to every running worker.  A Ctrl-C in the first
+    step interrupted the client's wait and the study closed the cluster at
+    once; the scheduler, still serving the request, then found no running
+    worker ('Can not use replicate to delete data', or a KeyError of the
+    worker removed meanwhile) and, its client's connection closed,
+    re-raised, so asyncio printed 'Task exception was never retrieved' and
+    the traceback beside 'inskit: aborted' (the Ctrl-C test failed when its
+    interrupt, 1 s after the cluster started, came before the scatter was
+    done).
+
+    Raises
+    ------
+    KeyboardInterrupt
+        At the end of the block, after a Ctrl-C inside it; at once after a
+        second one.
+    """
+    import signal
+    import threading
+
+    if threading.current_thread() is not threading.main_thread() or \
+            signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        yield
+        return
+    held = []
+
+    def hold(signum, frame):
+        if held:  # asked twice: at once
+            raise KeyboardInterrupt
+        held.append(signum)
+
+    signal.signal(signal.SIGINT, hold)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    if held:
+        raise KeyboardInterrupt
+
+
 def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None, log=None, force=False) -> dict:
     """Run (or resume) a study on a Dask cluster and write its results.
 
@@ -841,7 +893,8 @@ def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None
             log(f"study: {'cluster at ' + scheduler if scheduler else 'local cluster'}: {nworkers} worker(s) "
                 f"({t_cluster:.1f} s to start)")
             t1 = time.perf_counter()
-            shipped = client.scatter(cases, broadcast=True)
+            with _interrupt_at_the_end():  # the scheduler's scatter whole, not cut off by the cluster's close
+                shipped = client.scatter(cases, broadcast=True)
             futures = [client.submit(run_case, shipped[c], r, spec.seed, key=f"inskit-study-{fp[:16]}-{c}-{r}",
                                      pure=False) for c, r in todo]
             bar = progress(total, total - len(todo)) if progress else None
