@@ -53,7 +53,6 @@ independent streams by spawn key); Dask ``distributed`` futures API.
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
 import json
 import os
@@ -751,55 +750,70 @@ def _plot(df, cases, path):
     return save_figure(fig, path)
 
 
-@contextlib.contextmanager
-def _interrupt_at_the_end():
-    """Hold a Ctrl-C (SIGINT) that comes inside the block and raise its
-    ``KeyboardInterrupt`` when the block is done; a second Ctrl-C raises at
-    once.  For a request the scheduler serves in steps that must not be cut
-    off by closing the cluster under it (:func:`run_study`'s scatter).  Not
-    in the main thread, or with SIGINT not Python's default handler
-    (ignored: a run started in the background; the caller's own), nothing
-    is held.
+class _CtrlC:
+    """Ctrl-C (SIGINT) while the study's client runs: the handler only
+    notes it, and :meth:`check` raises the ``KeyboardInterrupt`` in
+    :func:`run_study`'s own frame, between two requests to the scheduler; a
+    second Ctrl-C raises at once, wherever the program is.  Not in the main
+    thread, or with SIGINT not Python's default handler (ignored: a run
+    started in the background; the caller's own), nothing changes.
 
-    The scatter of the cases is two steps on the scheduler: to the workers
-    (each unpickles the cases, importing inskit: 1 to 4 s on a busy
-    machine), then replicated to every running worker.  A Ctrl-C in the first
-    step interrupted the client's wait and the study closed the cluster at
-    once; the scheduler, still serving the request, then found no running
-    worker ('Can not use replicate to delete data', or a KeyError of the
-    worker removed meanwhile) and, its client's connection closed,
-    re-raised, so asyncio printed 'Task exception was never retrieved' and
-    the traceback beside 'inskit: aborted' (the Ctrl-C test failed when its
-    interrupt, 1 s after the cluster started, came before the scatter was
-    done).
+    Python's own handler raises in whatever Python code the main thread
+    runs, which lost a Ctrl-C two ways (each failed the Ctrl-C test now and
+    then):
 
-    Raises
-    ------
-    KeyboardInterrupt
-        At the end of the block, after a Ctrl-C inside it; at once after a
-        second one.
+    * inside the client's wait for the scatter of the cases, which the
+      scheduler serves in two steps: to the workers (each unpickles the
+      cases, importing inskit: 1 to 4 s on a busy machine), then replicated
+      to every running worker.  The study closed the cluster at once; the
+      scheduler, still serving the request, found no running worker ('Can
+      not use replicate to delete data', or a KeyError of the worker
+      removed meanwhile) and, its client's connection closed, re-raised
+      into a task nobody awaited: asyncio printed 'Task exception was never
+      retrieved' and the traceback beside 'inskit: aborted';
+    * inside a gc callback (distributed's GC diagnosis runs one in the main
+      thread), where an exception is 'ignored': printed with a traceback and
+      dropped, and the study ran on to its end.
+
+    Noted instead, the interrupt takes effect when the scatter has returned
+    or at the next poll of the runs (:data:`_POLL_S`).
     """
-    import signal
-    import threading
 
-    if threading.current_thread() is not threading.main_thread() or \
-            signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
-        yield
-        return
-    held = []
+    def __init__(self):
+        self.pressed = 0
+        self._active = False
 
-    def hold(signum, frame):
-        if held:  # asked twice: at once
+    def __enter__(self):
+        import signal
+        import threading
+
+        self._active = (threading.current_thread() is threading.main_thread()
+                        and signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+        if self._active:
+            signal.signal(signal.SIGINT, self._note)
+        return self
+
+    def _note(self, signum, frame):
+        self.pressed += 1
+        if self.pressed > 1:  # asked twice: at once
             raise KeyboardInterrupt
-        held.append(signum)
 
-    signal.signal(signal.SIGINT, hold)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGINT, signal.default_int_handler)
-    if held:
-        raise KeyboardInterrupt
+    def check(self):
+        """Raise ``KeyboardInterrupt`` if Ctrl-C was pressed."""
+        if self.pressed:
+            raise KeyboardInterrupt
+
+    def __exit__(self, *exc):
+        if self._active:
+            import signal
+
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+        return False
+
+
+#: how often the study looks for finished runs and a noted Ctrl-C while it waits [s]: a result waits at most
+#: this long to be written, so parts stay as small as when the loop blocked in ``as_completed``
+_POLL_S = 0.02
 
 
 def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None, log=None, force=False) -> dict:
@@ -887,29 +901,40 @@ def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None
         t0 = time.perf_counter()
         client, cluster = _open_client(scheduler, workers)
         try:
-            nworkers = len(client.scheduler_info(n_workers=-1)["workers"])
-            cluster_info = {"scheduler": scheduler or "local", "workers": nworkers}
-            t_cluster = time.perf_counter() - t0
-            log(f"study: {'cluster at ' + scheduler if scheduler else 'local cluster'}: {nworkers} worker(s) "
-                f"({t_cluster:.1f} s to start)")
-            t1 = time.perf_counter()
-            with _interrupt_at_the_end():  # the scheduler's scatter whole, not cut off by the cluster's close
+            with _CtrlC() as ctrl_c:  # a Ctrl-C is raised here, between requests (_CtrlC says why)
+                nworkers = len(client.scheduler_info(n_workers=-1)["workers"])
+                cluster_info = {"scheduler": scheduler or "local", "workers": nworkers}
+                t_cluster = time.perf_counter() - t0
+                log(f"study: {'cluster at ' + scheduler if scheduler else 'local cluster'}: {nworkers} worker(s) "
+                    f"({t_cluster:.1f} s to start)")
+                t1 = time.perf_counter()
                 shipped = client.scatter(cases, broadcast=True)
-            futures = [client.submit(run_case, shipped[c], r, spec.seed, key=f"inskit-study-{fp[:16]}-{c}-{r}",
-                                     pure=False) for c, r in todo]
-            bar = progress(total, total - len(todo)) if progress else None
-            seq = 0
-            try:
-                for batch in as_completed(futures, with_results=True).batches():
-                    rows = [res for _, res in batch]
-                    name = f"part-{time.time_ns():020d}-{os.getpid()}-{seq:06d}.parquet"
-                    seq += 1
-                    _write_parquet(_frame(rows, figures), out / "runs" / name)
-                    if bar:
-                        bar(len(rows))
-            finally:
-                client.cancel(futures)
-            t_runs = time.perf_counter() - t1
+                ctrl_c.check()
+                futures = [client.submit(run_case, shipped[c], r, spec.seed, key=f"inskit-study-{fp[:16]}-{c}-{r}",
+                                         pure=False) for c, r in todo]
+                bar = progress(total, total - len(todo)) if progress else None
+                seq = 0
+                try:
+                    done_runs = as_completed(futures, with_results=True)
+                    while not done_runs.is_empty():
+                        ctrl_c.check()
+                        batch = done_runs.next_batch(block=False)
+                        if not batch:
+                            time.sleep(_POLL_S)
+                            continue
+                        for future, res in batch:
+                            if future.status == "error":  # a run that failed: its exception, as the run raised it
+                                raise res[1].with_traceback(res[2])
+                        rows = [res for _, res in batch]
+                        name = f"part-{time.time_ns():020d}-{os.getpid()}-{seq:06d}.parquet"
+                        seq += 1
+                        _write_parquet(_frame(rows, figures), out / "runs" / name)
+                        if bar:
+                            bar(len(rows))
+                    ctrl_c.check()
+                finally:
+                    client.cancel(futures)
+                t_runs = time.perf_counter() - t1
         finally:
             if cluster is not None:  # its shutdown after an interrupt ('Removing worker ... lost scattered data')
                 import logging       # is not the user's message: 'inskit: aborted' is
