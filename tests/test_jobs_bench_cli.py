@@ -80,7 +80,10 @@ def test_long_figures_are_measured_per_length(tmp_path):
     and their memory read; the smoothed run holds more (its store) and is not much the faster (it does the
     forward run and more: on these short drives the start-up of both dominates and a loaded machine's noise
     exceeds the difference, so the wall times are held to a factor, not to their order)."""
-    r = B.long_benchmarks(hours=(0.05, 0.1), root=tmp_path)["navigate_long"]
+    res = B.long_benchmarks(hours=(0.05, 0.1), root=tmp_path)
+    r = res["navigate_long"]
+    per_hour = (r[1]["forward_peak_rss_mb"] - r[0]["forward_peak_rss_mb"]) / 0.05  # the slope between the two
+    assert res["navigate_long_forward_rss_mb_per_hour"] == pytest.approx(per_hour, abs=0.2)
     assert [x["hours"] for x in r] == [0.05, 0.1] and r[1]["epochs"] == 72001
     for x in r:
         assert 0 < x["forward_wall_s"] < 1.5 * x["smoothed_wall_s"] and 50 < x["forward_peak_rss_mb"] < 24000

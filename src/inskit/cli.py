@@ -287,6 +287,9 @@ def bench(quick, no_cli, long_runs, as_json):
         table = "\n".join(f"{r['hours']:>3} h: forward {r['forward_wall_s']:7.1f} s {r['forward_peak_rss_mb']:7.0f} MiB, "
                           f"smoothed {r['smoothed_wall_s']:7.1f} s {r['smoothed_peak_rss_mb']:7.0f} MiB"
                           for r in res.get("navigate_long", []))
+        if "navigate_long_forward_rss_mb_per_hour" in res:
+            table += (f"\nmemory per hour of log: forward {res['navigate_long_forward_rss_mb_per_hour']:.0f} MiB, "
+                      f"smoothed {res['navigate_long_smoothed_rss_mb_per_hour']:.0f} MiB")
         _emit(res, as_json, table or str(res))
         return
     from .jobs.bench import run_benchmarks
