@@ -12,18 +12,16 @@ from inskit.alignment.inmotion import auto_startup
 from inskit.alignment.vehicle_axes import OFF_AXIS, axes_rotation, rotate_imu, vehicle_axes
 from inskit.simulation.scenario import Scenario, simulate
 from inskit.units import DEG
+from scenarios import short_car
 
-SHORT = {"name": "short car", "start": {"lat_deg": 40.0966, "lon_deg": -105.1474, "height_m": 1600.0},
-         "imu": {"rate_hz": 100.0, "grade": "industrial-mems"},
-         "gnss": {"rate_hz": 1.0, "white_h_m": 0.5, "white_v_m": 1.0, "velocity_sigma_m_s": 0.0},
-         "segment": [{"type": "static", "duration_s": 40.0},
-                     {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 10.0},
-                     {"type": "cruise", "duration_s": 20.0},
-                     {"type": "turn", "angle_deg": 90.0, "radius_m": 40.0},
-                     {"type": "cruise", "duration_s": 20.0},
-                     {"type": "turn", "angle_deg": -90.0, "radius_m": 40.0},
-                     {"type": "decelerate", "speed_m_s": 0.0, "duration_s": 10.0},
-                     {"type": "static", "duration_s": 10.0}]}
+SHORT = short_car("short car", [{"type": "static", "duration_s": 40.0},
+                                {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 10.0},
+                                {"type": "cruise", "duration_s": 20.0},
+                                {"type": "turn", "angle_deg": 90.0, "radius_m": 40.0},
+                                {"type": "cruise", "duration_s": 20.0},
+                                {"type": "turn", "angle_deg": -90.0, "radius_m": 40.0},
+                                {"type": "decelerate", "speed_m_s": 0.0, "duration_s": 10.0},
+                                {"type": "static", "duration_s": 10.0}], lever_arm_b_m=None)
 
 
 def sim(mount, seed=1):

@@ -7,6 +7,7 @@ import pytest
 
 from inskit.jobs.config import load_config
 from inskit.jobs.navigate import navigate, summary
+from scenarios import short_car
 
 EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "drive_0708.toml"
 
@@ -1094,16 +1095,12 @@ def test_time_unit_hint_speaks_only_for_spans_a_thousand_times_apart():
     assert time_unit_hint(np.array([5.0]), imu) == ""  # one fix: no span
 
 
-TILT_CAR = {"name": "tilted car", "start": {"lat_deg": 40.0966, "lon_deg": -105.1474, "height_m": 1600.0},
-            "imu": {"rate_hz": 100.0, "grade": "industrial-mems"},
-            "gnss": {"rate_hz": 1.0, "white_h_m": 0.5, "white_v_m": 1.0, "velocity_sigma_m_s": 0.0,
-                     "lever_arm_b_m": [0.0, 0.0, -1.2]},
-            "segment": [{"type": "static", "duration_s": 30.0},
-                        {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 8.0},
-                        {"type": "turn", "angle_deg": 90.0, "radius_m": 30.0},
-                        {"type": "cruise", "duration_s": 20.0},
-                        {"type": "turn", "angle_deg": -90.0, "radius_m": 30.0},
-                        {"type": "cruise", "duration_s": 30.0}]}
+TILT_CAR = short_car("tilted car", [{"type": "static", "duration_s": 30.0},
+                                    {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 8.0},
+                                    {"type": "turn", "angle_deg": 90.0, "radius_m": 30.0},
+                                    {"type": "cruise", "duration_s": 20.0},
+                                    {"type": "turn", "angle_deg": -90.0, "radius_m": 30.0},
+                                    {"type": "cruise", "duration_s": 30.0}])
 
 
 @pytest.fixture(scope="module")

@@ -19,24 +19,21 @@ from inskit.jobs.reproduce_tight import BLOCKAGE_NAVIGATE
 from inskit.jobs.simulate import write_simulation
 from inskit.rotations import dcm_from_euler, rotvec_from_dcm
 from inskit.simulation.scenario import Scenario, load_scenario, simulate
+from scenarios import short_car
 
 ROOT = Path(__file__).resolve().parents[1]
 MOUNT = (0.0, 4.0, 2.0)  # [imu] mount_rpy_deg convention: 4 deg nose-down, 2 deg to the left
-SHORT = {"name": "short car", "start": {"lat_deg": 40.0966, "lon_deg": -105.1474, "height_m": 1600.0},
-         "imu": {"rate_hz": 100.0, "grade": "industrial-mems"},
-         "gnss": {"rate_hz": 1.0, "white_h_m": 0.5, "white_v_m": 1.0, "velocity_sigma_m_s": 0.0,
-                  "lever_arm_b_m": [0.0, 0.0, -1.2]},
-         "segment": [{"type": "static", "duration_s": 40.0},
-                     {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 10.0},
-                     {"type": "cruise", "duration_s": 20.0},
-                     {"type": "turn", "angle_deg": 90.0, "radius_m": 40.0},
-                     {"type": "climb", "angle_deg": 3.0, "duration_s": 20.0},
-                     {"type": "turn", "angle_deg": -90.0, "radius_m": 40.0},
-                     {"type": "cruise", "duration_s": 40.0},
-                     {"type": "turn", "angle_deg": 180.0, "radius_m": 40.0},
-                     {"type": "cruise", "duration_s": 30.0},
-                     {"type": "decelerate", "speed_m_s": 0.0, "duration_s": 10.0},
-                     {"type": "static", "duration_s": 10.0}]}
+SHORT = short_car("short car", [{"type": "static", "duration_s": 40.0},
+                                {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 10.0},
+                                {"type": "cruise", "duration_s": 20.0},
+                                {"type": "turn", "angle_deg": 90.0, "radius_m": 40.0},
+                                {"type": "climb", "angle_deg": 3.0, "duration_s": 20.0},
+                                {"type": "turn", "angle_deg": -90.0, "radius_m": 40.0},
+                                {"type": "cruise", "duration_s": 40.0},
+                                {"type": "turn", "angle_deg": 180.0, "radius_m": 40.0},
+                                {"type": "cruise", "duration_s": 30.0},
+                                {"type": "decelerate", "speed_m_s": 0.0, "duration_s": 10.0},
+                                {"type": "static", "duration_s": 10.0}])
 
 
 def run(sc, mount, mounting, out_dir, windows, seed=1):

@@ -18,20 +18,17 @@ from inskit.jobs.navigate import check_time_offset, gnss_updates_unhealthy, navi
 from inskit.jobs.reproduce_tight import BLOCKAGE_NAVIGATE
 from inskit.jobs.simulate import write_simulation
 from inskit.simulation.scenario import Scenario, simulate
+from scenarios import short_car
 
-CAR = {"name": "short car", "start": {"lat_deg": 40.0966, "lon_deg": -105.1474, "height_m": 1600.0},
-       "imu": {"rate_hz": 100.0, "grade": "industrial-mems"},
-       "gnss": {"rate_hz": 1.0, "white_h_m": 0.5, "white_v_m": 1.0, "velocity_sigma_m_s": 0.0,
-                "lever_arm_b_m": [0.0, 0.0, -1.2]},
-       "segment": [{"type": "static", "duration_s": 30.0},
-                   {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 8.0},
-                   {"type": "turn", "angle_deg": 90.0, "radius_m": 30.0},
-                   {"type": "cruise", "duration_s": 10.0},
-                   {"type": "turn", "angle_deg": -90.0, "radius_m": 30.0},
-                   {"type": "decelerate", "speed_m_s": 8.0, "duration_s": 5.0},
-                   {"type": "turn", "angle_deg": 180.0, "radius_m": 20.0},
-                   {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 5.0},
-                   {"type": "cruise", "duration_s": 10.0}]}
+CAR = short_car("short car", [{"type": "static", "duration_s": 30.0},
+                              {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 8.0},
+                              {"type": "turn", "angle_deg": 90.0, "radius_m": 30.0},
+                              {"type": "cruise", "duration_s": 10.0},
+                              {"type": "turn", "angle_deg": -90.0, "radius_m": 30.0},
+                              {"type": "decelerate", "speed_m_s": 8.0, "duration_s": 5.0},
+                              {"type": "turn", "angle_deg": 180.0, "radius_m": 20.0},
+                              {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 5.0},
+                              {"type": "cruise", "duration_s": 10.0}])
 LATE_S = 0.3  # the offset given; the IMU's tags are right (0)
 
 
