@@ -10,6 +10,7 @@ import pytest
 
 from inskit import io
 from inskit.simulation import StationaryTrajectory, ideal_imu, truth_solution
+from cli_runner import in_process as _in_process
 
 
 def inskit(*args):
@@ -302,22 +303,6 @@ def test_the_program_ends_fast_yet_runs_exit_handlers_and_keeps_its_status(tmp_p
     run = subprocess.run([sys.executable, "-m", "cProfile", "-o", str(prof), "-m", "inskit.cli", "--version"],
                          capture_output=True, text=True)
     assert run.returncode == 0 and prof.is_file() and prof.stat().st_size > 1000
-
-
-def _in_process(capsys, *args):
-    """``inskit ARGS`` through the entry point, in process: (exit code, stdout, stderr)."""
-    import warnings
-
-    from inskit.cli import main
-
-    with warnings.catch_warnings(), np.errstate():  # main() silences both for the process: not beyond here
-        try:
-            main([str(a) for a in args])
-            code = 0
-        except SystemExit as exc:
-            code = exc.code
-    out = capsys.readouterr()
-    return code, out.out, out.err
 
 
 @pytest.mark.parametrize("argv", [

@@ -16,6 +16,7 @@ from inskit.errors import ConfigError, InputError
 from inskit.io import parquet as P
 from inskit.types import NavSolution
 from inskit.units import DEG
+from cli_runner import in_process
 
 
 def solution(n=2001, dt=0.01, t0=243261.7262, rng=None):
@@ -557,18 +558,9 @@ def test_a_damaged_page_header_is_refused_as_corrupt(tmp_path):
 
 
 def _main(capsys, *args):
-    """``inskit ARGS`` through the entry point, in process: (exit code, stderr)."""
-    import warnings
-
-    from inskit.cli import main
-
-    with warnings.catch_warnings(), np.errstate():  # main() silences both for the process: not beyond here
-        try:
-            main([str(a) for a in args])
-            code = 0
-        except SystemExit as exc:
-            code = exc.code
-    return code, capsys.readouterr().err
+    """``inskit ARGS`` in process: (exit code, stderr)."""
+    code, _, err = in_process(capsys, *args)
+    return code, err
 
 
 def test_the_cli_refuses_a_corrupt_parquet_input_with_one_line(tmp_path, capsys):

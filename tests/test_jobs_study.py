@@ -476,6 +476,26 @@ def test_ctrl_c_stops_a_study_with_one_line_and_no_traceback(tmp_path):
     assert (tmp_path / "out" / "study.json").is_file() and not (tmp_path / "out" / "summary.json").exists()
 
 
+def _study_after(prelude, spec, out):
+    """``inskit study SPEC --out OUT --workers 1 --json`` in a subprocess after
+    the Python of ``prelude`` (which arranges a Ctrl-C), SIGINT handled as at a
+    terminal; asserts the one line and exit 130 of an interrupted study and
+    returns the completed process."""
+    import subprocess
+    import sys
+
+    code = (prelude + "import signal, sys\n"
+            "signal.signal(signal.SIGINT, signal.default_int_handler)  # as at a terminal (see the test above)\n"
+            "from inskit.cli import main\n"
+            "sys.argv = ['inskit'] + sys.argv[1:]\n"
+            "main()\n")
+    r = subprocess.run([sys.executable, "-c", code, "study", str(spec), "--out", str(out), "--workers", "1",
+                        "--json"], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 130 and r.stdout == "", r.stderr
+    assert r.stderr.rstrip().endswith("inskit: aborted") and "Traceback" not in r.stderr, r.stderr
+    return r
+
+
 def test_ctrl_c_while_the_cases_are_scattered_stops_as_cleanly(tmp_path):
     """The race behind the Ctrl-C test's rare failure, made certain: Ctrl-C while the scheduler serves the
     scatter of the cases (in its first second: the worker imports inskit to unpickle them, longer under
@@ -483,29 +503,19 @@ def test_ctrl_c_while_the_cases_are_scattered_stops_as_cleanly(tmp_path):
     replicate to delete data') on the client's closed connection, and asyncio printed 'Task exception was
     never retrieved' and its traceback beside 'inskit: aborted'. Now the handler only notes the Ctrl-C and
     the study raises it once the scatter is done: the same one line, exit 130."""
-    import subprocess
-    import sys
-
     spec = _spec(tmp_path, TINY.replace("runs = 4", "runs = 200"))
-    wrap = ("import asyncio, os, signal, sys\n"
-            "from distributed.scheduler import Scheduler\n"
-            "replicate = Scheduler.replicate\n"
-            "async def interrupted(self, *a, **k):\n"
-            "    os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C: the cases are on the worker, not yet replicated\n"
-            "    for _ in range(40):  # what the study does meanwhile: before, close the cluster (at once)\n"
-            "        if not self.running:\n"
-            "            break\n"
-            "        await asyncio.sleep(0.05)\n"
-            "    return await replicate(self, *a, **k)\n"
-            "Scheduler.replicate = interrupted\n"
-            "signal.signal(signal.SIGINT, signal.default_int_handler)  # as at a terminal (see the test above)\n"
-            "from inskit.cli import main\n"
-            "sys.argv = ['inskit'] + sys.argv[1:]\n"
-            "main()\n")
-    r = subprocess.run([sys.executable, "-c", wrap, "study", str(spec), "--out", str(tmp_path / "out"),
-                        "--workers", "1", "--json"], capture_output=True, text=True, timeout=120)
-    assert r.returncode == 130 and r.stdout == "", r.stderr
-    assert r.stderr.rstrip().endswith("inskit: aborted") and "Traceback" not in r.stderr, r.stderr
+    prelude = ("import asyncio, os, signal, sys\n"
+               "from distributed.scheduler import Scheduler\n"
+               "replicate = Scheduler.replicate\n"
+               "async def interrupted(self, *a, **k):\n"
+               "    os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C: the cases are on the worker, not yet replicated\n"
+               "    for _ in range(40):  # what the study does meanwhile: before, close the cluster (at once)\n"
+               "        if not self.running:\n"
+               "            break\n"
+               "        await asyncio.sleep(0.05)\n"
+               "    return await replicate(self, *a, **k)\n"
+               "Scheduler.replicate = interrupted\n")
+    r = _study_after(prelude, spec, tmp_path / "out")
     assert "never retrieved" not in r.stderr and "ERROR" not in r.stderr, r.stderr
     assert (tmp_path / "out" / "study.json").is_file() and not list((tmp_path / "out" / "runs").glob("part-*"))
 
@@ -517,34 +527,24 @@ def test_ctrl_c_while_a_gc_callback_runs_still_stops_the_study(tmp_path):
     exited 0. Made certain here: the SIGINT comes inside a gc callback in the main thread, after the first
     part. Now the handler only notes the Ctrl-C and the study raises it in its own loop: one line, exit 130,
     the parts written so far kept."""
-    import subprocess
-    import sys
-
     spec = _spec(tmp_path, TINY.replace("runs = 4", "runs = 40"))
-    wrap = ("import gc, os, signal, sys\n"
-            "import inskit.jobs.study as S\n"
-            "write = S._write_parquet\n"
-            "def in_gc(phase, info):\n"
-            "    gc.callbacks.remove(in_gc)\n"
-            "    os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C while the main thread runs a gc callback\n"
-            "    for _ in range(100000):\n"
-            "        pass\n"
-            "def first_part(df, path):\n"
-            "    p = write(df, path)\n"
-            "    if 'part-' in str(path) and not getattr(S, 'interrupted', False):\n"
-            "        S.interrupted = True\n"
-            "        gc.callbacks.append(in_gc)\n"
-            "        gc.collect()\n"
-            "    return p\n"
-            "S._write_parquet = first_part\n"
-            "signal.signal(signal.SIGINT, signal.default_int_handler)  # as at a terminal\n"
-            "from inskit.cli import main\n"
-            "sys.argv = ['inskit'] + sys.argv[1:]\n"
-            "main()\n")
-    r = subprocess.run([sys.executable, "-c", wrap, "study", str(spec), "--out", str(tmp_path / "out"),
-                        "--workers", "1", "--json"], capture_output=True, text=True, timeout=120)
-    assert r.returncode == 130 and r.stdout == "", r.stderr
-    assert r.stderr.rstrip().endswith("inskit: aborted") and "Traceback" not in r.stderr, r.stderr
+    prelude = ("import gc, os, signal, sys\n"
+               "import inskit.jobs.study as S\n"
+               "write = S._write_parquet\n"
+               "def in_gc(phase, info):\n"
+               "    gc.callbacks.remove(in_gc)\n"
+               "    os.kill(os.getpid(), signal.SIGINT)  # Ctrl-C while the main thread runs a gc callback\n"
+               "    for _ in range(100000):\n"
+               "        pass\n"
+               "def first_part(df, path):\n"
+               "    p = write(df, path)\n"
+               "    if 'part-' in str(path) and not getattr(S, 'interrupted', False):\n"
+               "        S.interrupted = True\n"
+               "        gc.callbacks.append(in_gc)\n"
+               "        gc.collect()\n"
+               "    return p\n"
+               "S._write_parquet = first_part\n")
+    r = _study_after(prelude, spec, tmp_path / "out")
     assert "Exception ignored" not in r.stderr and "ERROR" not in r.stderr, r.stderr
     parts = list((tmp_path / "out" / "runs").glob("part-*.parquet"))
     assert 1 <= len(parts) and not (tmp_path / "out" / "summary.json").exists()
