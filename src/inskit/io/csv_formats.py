@@ -224,12 +224,7 @@ def _first_line_bytes(path):
     64 KB; None when it cannot be read (the parser then says what is
     wrong)."""
     try:
-        if _is_gzip(path):
-            import gzip
-
-            with gzip.open(path, "rb") as fh:
-                return fh.readline(1 << 16)
-        with open(path, "rb") as fh:
+        with open_bytes(path) as fh:
             return fh.readline(1 << 16)
     except Exception:  # noqa: BLE001 (a damaged file: the parser says what is wrong)
         return None
@@ -326,11 +321,9 @@ def text_fault(path, head: bytes, offset=None, what="comma-separated text") -> s
 def _line_of_offset(path, offset) -> int:
     """The line (from 1) of byte ``offset`` of a file (plain or gzip:
     decompressed bytes), for a message: the line ends before it, plus 1."""
-    import gzip
-
     n, seen = 1, 0
     try:
-        with (gzip.open(path, "rb") if _is_gzip(path) else open(path, "rb")) as fh:
+        with open_bytes(path) as fh:
             while seen < offset:
                 block = fh.read(min(1 << 24, offset - seen))
                 if not block:
@@ -347,12 +340,10 @@ def undecodable_message(path, what="comma-separated text") -> str:
     UnicodeDecodeError): the line and the byte, found by decoding the file
     (plain or gzip) again, in blocks; a message only."""
     import codecs
-    import gzip
-
     dec = codecs.getincrementaldecoder("utf-8-sig")()
     line = 1
     try:
-        with (gzip.open(path, "rb") if _is_gzip(path) else open(path, "rb")) as fh:
+        with open_bytes(path) as fh:
             while True:
                 block = fh.read(1 << 22)
                 try:
@@ -383,11 +374,9 @@ class CheckedBytes(io.RawIOBase):
     """
 
     def __init__(self, path, what="comma-separated text"):
-        import gzip
-
         super().__init__()
         self.path, self.what = Path(path), what
-        self._raw = gzip.open(path, "rb") if _is_gzip(path) else open(path, "rb")
+        self._raw = open_bytes(path)
         self._seen = 0
         self._head = b""
 
@@ -429,6 +418,16 @@ def check_path_argument(path, name="path"):
     if not isinstance(path, (str, os.PathLike)):
         raise InputError(f"`{name}` must be a file path (str or Path), got {type(path).__name__} {path!r:.80}")
     return Path(path)
+
+
+def open_bytes(path):
+    """A binary handle on ``path``'s bytes, decompressed when it is gzip
+    (recognised by its first bytes, not its name)."""
+    if _is_gzip(path):
+        import gzip
+
+        return gzip.open(path, "rb")
+    return open(path, "rb")
 
 
 def open_text(path):
@@ -672,8 +671,6 @@ def cut_short_note(path) -> str:
     for the message of a fault in its last line; ``""`` otherwise (a
     Parquet file, a file ending in a line end).  Reads to the end of a
     gzip file: for a message only."""
-    import gzip
-
     from .parquet import is_parquet
 
     try:
@@ -681,7 +678,7 @@ def cut_short_note(path) -> str:
             return ""
         if _is_gzip(path):
             last = b""
-            with gzip.open(path, "rb") as fh:
+            with open_bytes(path) as fh:
                 while block := fh.read(1 << 24):
                     last = block[-1:]
         else:
