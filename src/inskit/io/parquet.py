@@ -96,22 +96,21 @@ def damage_message(path, exc, remedy="write it again, or copy it again from its 
     """
     text = str(exc).strip()
     first = text.splitlines()[0] if text else type(exc).__name__
-    again = remedy
     if is_checksum_error(exc):
         return (f"{path}: corrupt Parquet file: checksum mismatch in a data page ({first}); its bytes changed "
-                f"after it was written (a disk, copy or transfer fault), so its numbers cannot be trusted: {again}")
+                f"after it was written (a disk, copy or transfer fault), so its numbers cannot be trusted: {remedy}")
     if is_parquet(path) and ("magic bytes not found in footer" in first or "smaller than the minimum" in first):
         return (f"{path}: not a readable Parquet file: truncated (it starts as Parquet but its end, the footer with "
-                f"the schema, is missing: the copy or the program writing it stopped early); {again}")
+                f"the schema, is missing: the copy or the program writing it stopped early); {remedy}")
     low = first.lower()
     if is_parquet(path) and any(w in low for w in _PAGE_DAMAGE) and _footer_reads(path):
         # the footer decodes: what does not is a page (its header or its compressed bytes), which has no
         # checksum to fail in a file written without them, or in its header in any file
         return (f"{path}: corrupt Parquet file: a data page does not decode ({first}); its bytes changed after it "
-                f"was written (a disk, copy or transfer fault): {again}")
+                f"was written (a disk, copy or transfer fault): {remedy}")
     if is_parquet(path) and any(w in low for w in ("thrift", "base64", "footer", "metadata")):
         return (f"{path}: not a readable Parquet file: its footer (the schema and column metadata) is damaged "
-                f"({first}); {again}")
+                f"({first}); {remedy}")
     return f"{path}: not a readable Parquet file ({first})"
 
 
