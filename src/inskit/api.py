@@ -21,7 +21,7 @@ import numbers
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .errors import InputError
+from .errors import InputError, is_number
 from .types import NavSolution
 
 
@@ -255,7 +255,7 @@ def simulate(scenario, seed=0, *, truth_rate_hz=None, out_dir=None, overwrite=Fa
             if on:
                 raise InputError(f"{name}=True would be ignored: without out_dir nothing is written (give "
                                  "out_dir=FOLDER for the files)")
-    if truth_rate_hz is not None and (isinstance(truth_rate_hz, bool) or not isinstance(truth_rate_hz, numbers.Real)):
+    if truth_rate_hz is not None and not is_number(truth_rate_hz):
         raise InputError(f"truth_rate_hz must be a number [Hz] (or None), got {type(truth_rate_hz).__name__} "
                          f"{truth_rate_hz!r}")
     if not isinstance(scenario, Scenario):

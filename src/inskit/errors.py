@@ -18,3 +18,12 @@ class InputError(InskitError, ValueError):
 
 class ConfigError(InskitError, ValueError):
     """An impossible or inconsistent configuration."""
+
+
+def is_number(x) -> bool:
+    """A real number (int or float, numpy's too), not a bool (``True`` is an
+    int to Python) or a string: the test of an argument that must be one
+    before its range is checked."""
+    import numbers
+
+    return isinstance(x, numbers.Real) and not isinstance(x, bool)

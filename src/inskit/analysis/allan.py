@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..files import save_figure
-from ..errors import InputError
+from ..errors import InputError, is_number
 from ..types import ImuData
 
 
@@ -78,10 +78,9 @@ def allan_deviation(increments, dt, taus_per_decade=10, min_clusters=9):
     if not np.isfinite(x).all():
         i = int(np.argmax((~np.isfinite(x)).reshape(len(x), -1).any(axis=1)))
         raise InputError(f"increments hold a NaN or infinite value (row {i}): an Allan deviation of it is NaN")
-    if isinstance(dt, bool) or not isinstance(dt, numbers.Real) or not (0 < dt < np.inf):
+    if not (is_number(dt) and 0 < dt < np.inf):
         raise InputError(f"dt must be the sample interval, a finite number > 0 [s], got {dt!r}")
-    if isinstance(taus_per_decade, bool) or not isinstance(taus_per_decade, numbers.Real) or not (
-            0 < taus_per_decade < np.inf):
+    if not (is_number(taus_per_decade) and 0 < taus_per_decade < np.inf):
         raise InputError(f"taus_per_decade must be a finite number > 0, got {taus_per_decade!r}")
     if isinstance(min_clusters, bool) or not isinstance(min_clusters, numbers.Integral) or min_clusters < 1:
         raise InputError(f"min_clusters must be an integer >= 1 (the fewest clusters the longest cluster time "

@@ -31,7 +31,7 @@ import numpy as np
 
 from .. import earth
 from .. import rotations as rot
-from ..errors import InputError
+from ..errors import InputError, is_number
 from ..types import ImuData, NavSolution, NavState
 from . import kernels as K
 
@@ -88,13 +88,6 @@ def _qz(angle):
     angle = np.asarray(angle, dtype=float)
     z = np.zeros_like(angle)
     return np.stack([np.cos(0.5 * angle), z, z, np.sin(0.5 * angle)], -1)
-
-
-def _is_number(x) -> bool:
-    """A real number (an int or a float, numpy's too), not a bool or a string."""
-    import numbers
-
-    return isinstance(x, numbers.Real) and not isinstance(x, (bool, np.bool_))
 
 
 class _Integrator:
@@ -165,7 +158,7 @@ class NedIntegrator(_Integrator):
         super().__init__(initial, coning=coning, gravity=gravity)
         if height not in _HEIGHT_MODES:
             raise InputError(f"`height` must be one of {sorted(_HEIGHT_MODES)}, got {height!r}")
-        if not (_is_number(height_time_constant) and 0 < height_time_constant < np.inf):
+        if not (is_number(height_time_constant) and 0 < height_time_constant < np.inf):
             raise InputError(f"`height_time_constant` must be a finite number > 0 [s], got {height_time_constant!r}")
         self.height_mode = _HEIGHT_MODES[height]
         tau = float(height_time_constant)
@@ -237,7 +230,7 @@ class WanderIntegrator(_Integrator):
 
     def __init__(self, initial, *, coning=True, alpha0=0.0, gravity="normal"):
         super().__init__(initial, coning=coning, gravity=gravity)
-        if not (_is_number(alpha0) and np.isfinite(alpha0)):
+        if not (is_number(alpha0) and np.isfinite(alpha0)):
             raise InputError(f"`alpha0` must be a finite wander angle [rad], got {alpha0!r}")
         lat, lon, h = initial.lla
         C_ew = earth.dcm_en(lat, lon) @ rot.dcm_from_quat(_qz(alpha0))
