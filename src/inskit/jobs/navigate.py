@@ -2037,7 +2037,7 @@ def write_innovations(innovations: dict, path) -> Path:
     ``nis`` is the update's (the rows used, when some were refused).
     """
     from ..files import write_csv
-    from ..integration.engine import ROW_STATUS
+    from ..integration.engine import ROW_ACCEPTED, ROW_STATUS
     from .plots import COMPONENTS
 
     cols = {k: [] for k in ("measurement", "t", "row", "label", "nu", "sigma", "nis", "accepted", "status")}
@@ -2071,7 +2071,7 @@ def write_innovations(innovations: dict, path) -> Path:
         cols["nu"].append(nu_f)
         cols["sigma"].append(sg_f)
         cols["nis"].append(np.repeat(np.asarray(v["nis"], float), k))
-        cols["accepted"].append((status == 0).astype(int))
+        cols["accepted"].append((status == ROW_ACCEPTED).astype(int))
         cols["status"].append(names[status])
     data = {c: (np.concatenate(v) if v else np.empty(0)) for c, v in cols.items()}
     return write_csv(path, data, "%.10g")

@@ -259,7 +259,9 @@ def _innovation_rows(v, name):
     refused = np.repeat(~acc, k)
     st = v.get("status")  # per row: one satellite refused while the others were used
     if st is not None and len(st) == len(z):
-        refused |= np.asarray(st) != 0
+        from ..integration.engine import ROW_ACCEPTED
+
+        refused |= np.asarray(st) != ROW_ACCEPTED
     return np.repeat(np.asarray(v["t"], float), k), z, comp, refused, names
 
 
