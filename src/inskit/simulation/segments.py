@@ -22,6 +22,7 @@ from numba import njit
 
 from .. import earth
 from ..errors import ConfigError
+from ..rotations import euler_quat
 from .imu import rates_at
 from .trajectory import Kinematics, kinematics_from_curvilinear
 
@@ -335,16 +336,8 @@ def _state_kernel(t, c0, off, t0, T, A, end, osc, h, y, dy, yaw0, gravity, lo, a
             lla_o[k, 0], lla_o[k, 1], lla_o[k, 2] = lat, lon, hgt
         if v_o.shape[0] > 0:
             v_o[k, 0], v_o[k, 1], v_o[k, 2] = vn, ve, vd
-        if q_o.shape[0] > 0:  # ZYX half-angle products (quat_from_euler), scalar part >= 0
-            cr, sr = np.cos(0.5 * e0), np.sin(0.5 * e0)
-            cp, sp = np.cos(0.5 * e1), np.sin(0.5 * e1)
-            cy, sy = np.cos(0.5 * e2), np.sin(0.5 * e2)
-            q0 = cr * cp * cy + sr * sp * sy
-            sgn = -1.0 if q0 < 0.0 else 1.0
-            q_o[k, 0] = sgn * q0
-            q_o[k, 1] = sgn * (sr * cp * cy - cr * sp * sy)
-            q_o[k, 2] = sgn * (cr * sp * cy + sr * cp * sy)
-            q_o[k, 3] = sgn * (cr * cp * sy - sr * sp * cy)
+        if q_o.shape[0] > 0:
+            q_o[k, 0], q_o[k, 1], q_o[k, 2], q_o[k, 3] = euler_quat(e0, e1, e2)
         if a_o.shape[0] > 0:
             a_o[k, 0], a_o[k, 1], a_o[k, 2] = an, ae, ad
 
