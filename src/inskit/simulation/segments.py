@@ -26,7 +26,6 @@ from ..rotations import euler_quat
 from .imu import rates_at
 from .trajectory import Kinematics, kinematics_from_curvilinear
 
-_A, _E2 = earth.A, earth.E2
 
 G_COORD = 9.80665  # gravity used only to set the bank angle of coordinated turns
 
@@ -163,10 +162,7 @@ class Oscillation:
 def _lla_rate(lat, hgt, vn, ve, vd):
     """``d(lat, lon, h)/dt = (v_N/(R_N+h), v_E/((R_E+h) cos lat), -v_D)``
     (radii as :func:`inskit.earth.principal_radii`, WGS84)."""
-    sl = np.sin(lat)
-    w = np.sqrt(1.0 - _E2 * sl * sl)
-    rn = _A * (1.0 - _E2) / (w * w * w) + hgt
-    re = _A / w + hgt
+    rn, re = earth.principal_radii(lat, hgt)
     return vn / rn, ve / (re * np.cos(lat)), -vd
 
 
