@@ -79,3 +79,29 @@ def test_the_light_load_can_be_switched_off(tmp_path):
     got = _run(_cached(tmp_path), {"INSKIT_NUMBA_REFRESH": "1"})
     assert got["refreshed-after-load"] == "True"        # numba's own way: the refresh at the first load
     assert got["ar1-exact"] == "True" and got["matmul-exact"] == "True" and got["compiled-exact"] == "True"
+
+
+def test_a_cache_that_loads_otherwise_falls_back_to_numbas_own_load():
+    """A numba whose ``_load_overload`` fails (another version's cache) is not
+    a crash: the wrapped load hands the call to numba's own method."""
+    import contextlib
+
+    from numba.core.registry import cpu_target
+
+    from inskit._numba_load import _light_load_overload
+
+    class Cache:
+        def _guard_against_spurious_io_errors(self):
+            return contextlib.nullcontext()
+
+        def _load_overload(self, sig, target_context):
+            raise AttributeError("no such index in this numba")
+
+    calls = []
+
+    def original(self, sig, target_context):
+        calls.append(sig)
+        return "numba's own load"
+
+    load = _light_load_overload(original)
+    assert load(Cache(), "sig", cpu_target.target_context) == "numba's own load" and calls == ["sig"]

@@ -45,9 +45,11 @@ def _light_load_overload(original):
             rtsys.initialize(target_context)  # what the refresh does first: the runtime compiled code calls
         except Exception:  # noqa: BLE001 (numba's own way then)
             return original(self, sig, target_context)
-        cres = None
-        with self._guard_against_spurious_io_errors():
-            cres = self._load_overload(sig, target_context)
+        try:
+            with self._guard_against_spurious_io_errors():
+                cres = self._load_overload(sig, target_context)
+        except Exception:  # noqa: BLE001 (a numba whose cache loads otherwise: its own way, refresh and all)
+            return original(self, sig, target_context)
         if cres is not None and _calls_blas(cres.library):
             _preload_blas()
         return cres  # None: not in the cache (or a spurious I/O error): numba compiles, and refreshes first
