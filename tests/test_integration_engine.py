@@ -318,6 +318,38 @@ def test_a_streamed_run_hands_every_row_once_and_matches_the_whole_run(settings)
         run_filter(imu, init, meas, FilterSettings(), sink=sink, smoother=True)
 
 
+def test_a_streamed_run_holds_a_fixed_record_per_update_and_nothing_per_row():
+    """Memory of a streamed run beyond its input (tracemalloc's peak, a 4x
+    longer log, GNSS at 1 Hz, ZUPT and NHC at 10 Hz, IMU at 100 Hz): per
+    update the compiled loop's item arrays (48 B), innovation records (49 B
+    and 17 B per component) and recovery slots (96 B), about 0.23 kB; the
+    segment buffers and the node estimates are per segment, not per row.
+    Python lists of the items (0.15 kB per update) or node estimates kept for
+    every node (0.13 kB) would break the 0.3 kB bound."""
+    import tracemalloc
+
+    from inskit.integration import NonHolonomic, ZeroVelocity
+
+    def peak(n):
+        traj = StationaryTrajectory((0.7, 0.1, 10.0))
+        t = np.arange(n) * 0.01
+        imu, truth = ideal_imu(traj, t, nodes=1), truth_solution(traj, t)
+        g = GnssData(t[::100], truth.lla[::100], np.full((len(t[::100]), 3), 0.05))
+        meas = [GnssPosition(g), ZeroVelocity([(0.0, t[-1])], 10.0, 0.02), NonHolonomic([(0.0, t[-1])], 10.0, 0.1)]
+        tracemalloc.start()
+        try:
+            out = run_filter(imu, truth.state(0), meas, FilterSettings(), sink=lambda sg: None,
+                             keep_rows=np.array([1]), segment_rows=4096)
+            p = tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
+        return p, sum(c["used"] + c["rejected"] for c in out.counts.values())
+
+    (p1, u1), (p2, u2) = peak(20_000), peak(80_000)
+    assert u2 - u1 > 12_000
+    assert (p2 - p1) / (u2 - u1) < 300.0
+
+
 def test_a_streamed_smoother_store_holds_the_nodes_of_the_whole_run(tmp_path):
     """The node data a streamed run hands to a DiskStore, read back in
     blocks, is the in-memory store's, node for node; smoothing from it gives

@@ -1022,6 +1022,58 @@ def test_a_pos_file_of_geodetic_heights_is_said(tmp_path):
     assert not [x for x in s["health"]["warnings"] if "geodetic" in x]
 
 
+def test_innovation_file_is_written_in_blocks_and_quoted_when_a_label_needs_it(tmp_path, monkeypatch):
+    """innovations.csv is made a block of updates at a time (an 8 h run's
+    0.6 M lines never whole): blocks of 3 updates give the file of one
+    block; a ragged measurement (rows per update vary) keeps its rows; a
+    label with a comma sends the table to the quoting writer."""
+    import pandas as pd
+
+    import inskit.jobs.navigate as N
+
+    inn = {"gnss_pos": {"t": np.arange(7.0), "nu": np.arange(21.0).reshape(7, 3) * 0.1,
+                        "sigma": np.full((7, 3), 0.5), "nis": np.arange(7.0), "accepted": np.arange(7) != 3,
+                        "dof": np.full(7, 3)},
+           "pr": {"t": np.array([1.0, 2.0, 3.0]), "nu": np.array([np.zeros(2), np.ones(3), np.ones(1)], dtype=object),
+                  "sigma": np.array([np.ones(2), np.ones(3), np.ones(1)], dtype=object), "nis": np.ones(3),
+                  "accepted": np.ones(3, bool), "dof": np.array([2, 3, 1]),
+                  "status": np.array([0, 0, 0, 0, 1, 0], np.int8),
+                  "label": np.array(["G01", "G02", "G01", "G02", "G07", "G01"], dtype=object)},
+           "empty": {"t": np.zeros(0)}}
+    whole = N.write_innovations(inn, tmp_path / "whole.csv").read_bytes()
+    monkeypatch.setattr(N, "INNOVATION_BLOCK_UPDATES", 3)
+    assert N.write_innovations(inn, tmp_path / "blocks.csv").read_bytes() == whole
+    df = pd.read_csv(tmp_path / "blocks.csv", keep_default_na=False)
+    assert len(df) == 21 + 6
+    g = df[df.measurement == "gnss_pos"]
+    assert g.label.tolist()[:3] == ["north", "east", "down"] and g.row.tolist()[:4] == [0, 1, 2, 0]
+    assert (g.status[g.t == 3] == "refused_update_gate").all() and g.accepted.sum() == 18
+    pr = df[df.measurement == "pr"]
+    assert pr.row.tolist() == [0, 1, 0, 1, 2, 0] and pr.label.tolist() == ["G01", "G02", "G01", "G02", "G07", "G01"]
+    assert pr.status.tolist()[4] == "refused_row_gate"
+    inn["pr"]["label"] = np.array(["G01", "a,b", "G01", "G02", "G07", "G01"], dtype=object)
+    q = pd.read_csv(N.write_innovations(inn, tmp_path / "q.csv"), keep_default_na=False)
+    assert q[q.measurement == "pr"].label.tolist()[1] == "a,b" and len(q) == 27
+
+
+def test_a_streamed_run_keeps_a_grid_of_bounded_rows():
+    """The kept rows' regular grid is [output] rate_hz on a short log and at
+    most KEPT_GRID_ROWS rows on a long one (8 h at 10 Hz: 50 000 rows, not
+    288 000); the rows around each fix stay whatever the length."""
+    from inskit.jobs.config import KEPT_GRID_ROWS
+    from inskit.jobs.navigate import kept_grid_rate, stream_keep_rows
+    from inskit.types import GnssData
+
+    assert kept_grid_rate(np.arange(0.0, 600.0, 0.01), 10.0) == 10.0
+    t = np.arange(0.0, 28800.0, 0.05)
+    assert kept_grid_rate(t, 10.0) == pytest.approx(KEPT_GRID_ROWS / t[-1])
+    g = GnssData(np.arange(0.5, 28800.0, 30.0), np.zeros((960, 3)), np.ones((960, 3)))
+    rows = stream_keep_rows(t, g, [], 10.0)
+    assert KEPT_GRID_ROWS <= len(rows) <= KEPT_GRID_ROWS + 2 * len(g) + 2
+    k = np.searchsorted(t, g.time, side="right") - 1
+    assert np.isin(k, rows).all() and np.isin(k + 1, rows).all()
+
+
 def test_tight_innovation_file_says_per_satellite_row_what_the_gate_did(tmp_path):
     """A simulated tight run with one satellite's pseudoranges 60 m off for
     20 epochs: innovations.csv recorded the refused satellite's rows as

@@ -364,6 +364,18 @@ def same_file(a, b) -> bool:
         return False
 
 
+def distinct_text(v) -> list:
+    """The distinct values of a text column as ``str``: a set of an object
+    column's values (its ``astype(str)`` would be a fixed-width copy four
+    bytes per character of its longest value, and ``unique`` sort it)."""
+    if v.dtype.kind == "O":
+        try:
+            return [str(x) for x in set(v.tolist())]
+        except TypeError:  # unhashable values (arrays, lists): their text
+            pass
+    return np.unique(v.astype(str)).tolist()
+
+
 def write_csv(path, columns, float_format="%.15g"):
     """Write a table (a dict of columns or a DataFrame) as CSV, atomically.
 
@@ -377,11 +389,11 @@ def write_csv(path, columns, float_format="%.15g"):
     m = re.fullmatch(r"%\.(\d+)g", float_format or "")
     if m and isinstance(columns, dict):
         cols = {k: np.asarray(v) for k, v in columns.items()}
-        plain_text = all(not any(c in x for x in np.unique(v.astype(str)) for c in ',"\n\r')
+        plain_text = all(not any(c in x for x in distinct_text(v) for c in ',"\n\r')
                          for v in cols.values() if v.dtype.kind in "OU")  # the writer does not quote
         if cols and plain_text and all(v.ndim == 1 and v.dtype.kind in "fiubOU" for v in cols.values()) \
                 and len({len(v) for v in cols.values()}) == 1:
-            return write_csv_fast(path, {k: v if v.dtype.kind in "OUiub" else v.astype(np.float64)
+            return write_csv_fast(path, {k: v if v.dtype.kind in "OUiub" else np.asarray(v, np.float64)
                                          for k, v in cols.items()}, int(m.group(1)))
     import pandas as pd  # only for what the fast writer does not take
 
@@ -484,11 +496,22 @@ def write_csv_fast(path, cols: dict, digits=CSV_DIGITS) -> Path:
     files stay the size of the former ``%.15g`` ones and read back within one
     unit of the last digit, by pandas' default parser too.
     """
+    return write_csv_parts(path, list(cols), [cols], digits)
+
+
+def write_csv_parts(path, names, parts, digits=CSV_DIGITS) -> Path:
+    """:func:`write_csv_fast` of a table given as consecutive ``parts``
+    (an iterable of dicts of equally long columns, keyed by ``names``), each
+    made only when the writer reaches it: a long table (every innovation of
+    an 8 h run) never exists whole.  Text must need no quoting (no comma,
+    quote or line break: the writer does not quote)."""
     import pyarrow as pa
     import pyarrow.csv as pcsv
 
     path = Path(path)
-    header = (",".join(cols) + "\n").encode()
+    names = list(names)
+    header = (",".join(names) + "\n").encode()
+
     def column(v):  # text and integers as they are (an integer is exact: no rounding to digits), floats formatted
         v = np.asarray(v)
         if v.dtype.kind in "OU":
@@ -498,14 +521,15 @@ def write_csv_fast(path, cols: dict, digits=CSV_DIGITS) -> Path:
         return format_column(v, digits)
 
     opts = pcsv.WriteOptions(include_header=False, batch_size=8192, quoting_style="none")
-    n = len(next(iter(cols.values()))) if cols else 0
     step = CSV_BLOCK_ROWS  # formatted text in blocks: the memory of one block, whatever the table's length
 
     def write(out):
         out.write(header)
-        for a in range(0, n, step):
-            pcsv.write_csv(pa.Table.from_arrays([column(np.asarray(v)[a:a + step]) for v in cols.values()],
-                                                names=list(cols)), out, opts)
+        for cols in parts:
+            n = len(cols[names[0]]) if names else 0
+            for a in range(0, n, step):
+                pcsv.write_csv(pa.Table.from_arrays([column(np.asarray(cols[k])[a:a + step]) for k in names],
+                                                    names=names), out, opts)
 
     with atomic_write(path) as tmp:
         if path.name.endswith(".gz"):

@@ -1002,7 +1002,7 @@ def _read_imu_lean(path, check_units, first_row):
     t, dth, dv = got[0][:, 0], got[1], got[2]
     check_time_column(path, t)
     # the rows' norms from row 1 on (file units; the unit factors are positive): made once for both rules
-    norms = [_norm(dth[1:]), _norm(dv[1:])] if len(t) > 1 else None
+    norms = [_norm_rows32(dth[1:]), _norm_rows32(dv[1:])] if len(t) > 1 else None
     # the first-row rule (these two rules change row 0 only): its message when row 0 holds increments
     if first_row == "initial" and not _first_row_empty_parts(dth, dv, norms):
         first_row_rule(path, t[:1], np.hstack([dth[:1], dv[:1]]), tcols + vcols, "initial")
@@ -1013,9 +1013,10 @@ def _read_imu_lean(path, check_units, first_row):
     if DV_UNITS[vu] != 1.0:
         dv *= DV_UNITS[vu]
     if check_units and norms is not None:
-        inv_dt = 1.0 / np.diff(t)
-        norms[0] *= DTHETA_UNITS[du] * inv_dt
-        norms[1] *= DV_UNITS[vu] * inv_dt
+        for a in range(0, len(t) - 1, NORM_BLOCK_ROWS):  # the rates' norms, block by block (no (n,) temporaries)
+            inv_dt = 1.0 / np.diff(t[a:a + NORM_BLOCK_ROWS + 1])
+            norms[0][a:a + NORM_BLOCK_ROWS] *= DTHETA_UNITS[du] * inv_dt
+            norms[1][a:a + NORM_BLOCK_ROWS] *= DV_UNITS[vu] * inv_dt
         check_units_norms(path, norms[0], norms[1], tcols[0], vcols[0], "rad_s" if du == "rad" else "deg_s",
                           "m_s2")
     check_imu_time(path, t, check_units=check_units)
@@ -1093,6 +1094,25 @@ def _norm(x):
     with np.errstate(over="ignore", invalid="ignore"):
         n = np.hypot(np.hypot(x[:, 0], x[:, 1]), x[:, 2])
     return np.minimum(n, np.finfo(float).max)
+
+
+#: rows per block of :func:`_norm_rows32` and the rates' norms of :func:`_read_imu_lean`
+NORM_BLOCK_ROWS = 1 << 18
+
+
+def _norm_rows32(x) -> np.ndarray:
+    """:func:`_norm` of an (n, 3) array as float32, made block by block: the
+    unit checks compare medians and percentiles with thresholds a factor of
+    two or more apart, which single precision holds to 1e-7, and a long log's
+    norms then take 4 bytes per row with no (n,) float64 temporaries (8 h at
+    200 Hz: 46 MB for both instead of 0.2 GB)."""
+    out = np.empty(len(x), np.float32)
+    for a in range(0, len(x), NORM_BLOCK_ROWS):
+        out[a:a + NORM_BLOCK_ROWS] = np.minimum(_norm(x[a:a + NORM_BLOCK_ROWS]), _F32_MAX)  # finite, as _norm's
+    return out
+
+
+_F32_MAX = float(np.finfo(np.float32).max)
 
 
 def check_imu_units(path, w, f, gcol, acol, gunit, aunit):

@@ -129,6 +129,9 @@ class ImuSection(_Strict):
         return self
 
 
+#: the most rows of the ``[output] rate_hz`` grid a streamed run keeps in memory for its plots (a longer log
+#: keeps a coarser grid: 8 h at 10 Hz would hold 0.29 M rows, 0.1 GB): :func:`inskit.jobs.navigate.kept_grid_rate`
+KEPT_GRID_ROWS = 50_000
 #: [gnss] keys that configure the reading and single-point solution of the RINEX files
 GNSS_RINEX_KEYS = ("obs", "nav", "systems", "mask_deg", "iono", "tropo")
 #: [gnss] keys used only when pseudoranges are fused (tight coupling)
@@ -610,8 +613,9 @@ class OutputSection(_Strict):
         "at 100 Hz; Parquet files always hold every epoch; --output-rate overrides it")
     stream: Literal["auto", "on", "off"] = Field(
         "auto", description="write the solution files while the filter runs, keeping in memory only the rows "
-        "the summary and plots use (every update node, the rows around each fix, every row of an outage window, "
-        "the rate_hz grid), so memory grows only by the IMU log itself (56 bytes per epoch) and the files are "
+        "the summary and plots use (the rows around each fix, every row of an outage window, the rate_hz grid, "
+        f"at most {KEPT_GRID_ROWS} rows of it), so memory grows by the IMU log itself (56 bytes per epoch) and little else, "
+        "and the files are "
         "written on a second core while the filter computes: auto and on (the same: every run with a filter), or off (every row kept, as "
         "navigate() in Python does). The numbers are the same either way. A streamed smoother keeps its node "
         "data (about 11 KB per update node) in a scratch folder of the result folder until the run ends")

@@ -24,7 +24,7 @@ from ..units import DEG, MILLI_G
 from ..integration import (FilterOutput, FilterSettings, GnssPosition, GnssVelocity, InitialUncertainty,
                            NonHolonomic, SensorNoise, Track, ZeroVelocity, rts_smooth, run_filter, run_uncoupled)
 from ..types import NavSolution
-from .config import NavigateConfig
+from .config import KEPT_GRID_ROWS, NavigateConfig
 from .outages import OutageScore, rtklibexplorer_outages, score_outages, withheld_mask
 
 
@@ -85,20 +85,28 @@ def streams_run(cfg: NavigateConfig) -> bool:
     return cfg.filter.scheme != "uncoupled" and cfg.output.stream != "off"
 
 
+def kept_grid_rate(t, rate_hz) -> float:
+    """The rate of the grid :func:`stream_keep_rows` keeps: ``rate_hz``, or
+    :data:`KEPT_GRID_ROWS` over the log's span when that is lower."""
+    span = float(t[-1] - t[0]) if len(t) > 1 else 0.0
+    return float(rate_hz) if span * float(rate_hz) <= KEPT_GRID_ROWS else KEPT_GRID_ROWS / span
+
+
 def stream_keep_rows(t, gnss: GnssData, windows, rate_hz) -> np.ndarray:
     """The IMU rows a streamed run keeps in memory for the summary and the
-    plots (the engine adds every update node): the two rows around each fix
-    (used or withheld, so the antenna position at a fix interpolates as in
-    the whole run), every row of an outage's unaided span (from the last used
-    fix before it to the first after it, :func:`.outages.unaided_spans`:
-    where its worst point against a truth is looked for) and the ``rate_hz``
-    grid (:func:`inskit.io.parquet.decimation_index`)."""
+    plots: the two rows around each fix (used or withheld, so the antenna
+    position at a fix interpolates as in the whole run), every row of an
+    outage's unaided span (from the last used fix before it to the first
+    after it, :func:`.outages.unaided_spans`: where its worst point against a
+    truth is looked for) and a regular grid (:func:`inskit.io.parquet.decimation_index`)
+    at ``rate_hz``, coarser on a long log (:func:`kept_grid_rate`), so the
+    kept rows grow with the fixes and the outages, not with the IMU rate."""
     from ..io.parquet import decimation_index
     from .outages import unaided_spans
 
     n = len(t)
     k = np.searchsorted(t, gnss.time, side="right") - 1
-    parts = [np.clip(k, 0, n - 1), np.clip(k + 1, 0, n - 1), decimation_index(t, rate_hz)]
+    parts = [np.clip(k, 0, n - 1), np.clip(k + 1, 0, n - 1), decimation_index(t, kept_grid_rate(t, rate_hz))]
     for (a, b), (t_prev, t_next) in zip(windows, unaided_spans(gnss, windows)):
         a, b = min(a, t_prev) if np.isfinite(t_prev) else a, max(b, t_next) if np.isfinite(t_next) else b
         lo, hi = np.searchsorted(t, [a, b])
@@ -1530,8 +1538,8 @@ def summary(res: NavigateResult) -> dict:
     if rows is not None:
         out["rows_kept"] = int(len(rows))
         out["rows_kept_note"] = ("streamed run: the solution files and the truth errors cover every epoch; the plots "
-                                 "use the kept rows (every update node, the rows around each fix, every row of an "
-                                 "outage window, the [output] rate_hz grid)")
+                                 "use the kept rows (the rows around each fix, every row of an outage window, the "
+                                 f"[output] rate_hz grid, at most {KEPT_GRID_ROWS} rows of it)")
     if "time_offset" in fw.layout:
         out["estimated_time_offset_s"] = float(fw.estimate("time_offset")[-1, 0])
     out["final_bias"] = {
@@ -2036,45 +2044,69 @@ def write_innovations(innovations: dict, path) -> Path:
     the fixed-row measurements, empty where unknown (a user's plug-in).
     ``nis`` is the update's (the rows used, when some were refused).
     """
-    from ..files import write_csv
+    from ..files import distinct_text, write_csv, write_csv_parts
+    from ..integration.engine import ROW_STATUS
+    from .plots import COMPONENTS
+
+    names = list(INNOVATION_COLUMNS)
+    text = [list(innovations), ROW_STATUS] + [list(COMPONENTS.get(k, ())) for k in innovations]
+    text += [distinct_text(np.asarray(v["label"], dtype=object)) for v in innovations.values()
+             if v.get("label") is not None]
+    if not any(c in str(x) for vals in text for x in vals for c in ',"\n\r'):  # the block writer does not quote
+        return write_csv_parts(path, names, _innovation_parts(innovations), 10)
+    parts = list(_innovation_parts(innovations))
+    return write_csv(path, {c: np.concatenate([q[c] for q in parts]) if parts else np.empty(0) for c in names},
+                     "%.10g")
+
+
+#: the columns of ``innovations.csv`` (:func:`write_innovations`)
+INNOVATION_COLUMNS = ("measurement", "t", "row", "label", "nu", "sigma", "nis", "accepted", "status")
+#: updates per block of :func:`_innovation_parts`
+INNOVATION_BLOCK_UPDATES = 1 << 16
+
+
+def _innovation_parts(innovations: dict):
+    """The lines of :func:`write_innovations` as consecutive column dicts, a
+    block of :data:`INNOVATION_BLOCK_UPDATES` updates of one measurement at a
+    time (the table of an 8 h run, 0.6 M lines, is never made whole)."""
     from ..integration.engine import ROW_ACCEPTED, ROW_STATUS
     from .plots import COMPONENTS
 
-    cols = {k: [] for k in ("measurement", "t", "row", "label", "nu", "sigma", "nis", "accepted", "status")}
-    names = np.array(ROW_STATUS, dtype=object)
+    status_names = np.array(ROW_STATUS, dtype=object)
     for name, v in innovations.items():
         t = np.asarray(v.get("t", []), float)
         if not len(t):
             continue
         nu, sg = v["nu"], v["sigma"]
-        if nu.dtype == object:
-            k = np.asarray(v["dof"], np.int64)
-            nu_f, sg_f = np.concatenate(list(nu)), np.concatenate(list(sg))
-        else:
-            k = np.full(len(t), nu.shape[1], np.int64)
-            nu_f, sg_f = nu.reshape(-1), sg.reshape(-1)
-        starts = np.repeat(np.cumsum(k) - k, k)
-        row = np.arange(len(nu_f)) - starts
-        status = v.get("status")
-        if status is None or len(status) != len(nu_f):  # a record without row codes: its update's verdict
-            status = np.where(np.repeat(np.asarray(v["accepted"], bool), k), 0, 2)
-        status = np.asarray(status, np.int64)
-        label = v.get("label")
-        if label is None or len(label) != len(nu_f):
-            axes = COMPONENTS.get(name, ())
-            label = (np.array(axes, dtype=object)[row] if nu.dtype != object and len(axes) == nu.shape[1]
-                     else np.full(len(nu_f), "", dtype=object))
-        cols["measurement"].append(np.full(len(nu_f), name, dtype=object))
-        cols["t"].append(np.repeat(t, k))
-        cols["row"].append(row)
-        cols["label"].append(np.asarray(label, dtype=object))
-        cols["nu"].append(nu_f)
-        cols["sigma"].append(sg_f)
-        cols["nis"].append(np.repeat(np.asarray(v["nis"], float), k))
-        cols["accepted"].append((status == ROW_ACCEPTED).astype(int))
-        cols["status"].append(names[status])
-    data = {c: (np.concatenate(v) if v else np.empty(0)) for c, v in cols.items()}
-    return write_csv(path, data, "%.10g")
+        ragged = nu.dtype == object
+        k_all = np.asarray(v["dof"], np.int64) if ragged else np.full(len(t), nu.shape[1], np.int64)
+        ends = np.cumsum(k_all)  # each update's last line + 1, in this measurement's lines
+        n_lines = int(ends[-1])
+        status_all, label_all = v.get("status"), v.get("label")
+        has_status = status_all is not None and len(status_all) == n_lines  # else: its update's verdict
+        has_label = label_all is not None and len(label_all) == n_lines
+        axes = COMPONENTS.get(name, ())
+        axis_labels = not ragged and len(axes) == nu.shape[1]
+        accepted = np.asarray(v["accepted"], bool)
+        nis = np.asarray(v["nis"], float)
+        for a in range(0, len(t), INNOVATION_BLOCK_UPDATES):
+            b = min(a + INNOVATION_BLOCK_UPDATES, len(t))
+            k = k_all[a:b]
+            la, lb = int(ends[a - 1]) if a else 0, int(ends[b - 1])
+            if ragged:
+                nu_f, sg_f = np.concatenate(list(nu[a:b])), np.concatenate(list(sg[a:b]))
+            else:
+                nu_f, sg_f = nu[a:b].reshape(-1), sg[a:b].reshape(-1)
+            row = np.arange(lb - la) - np.repeat(np.cumsum(k) - k, k)
+            status = (np.asarray(status_all[la:lb], np.int64) if has_status
+                      else np.where(np.repeat(accepted[a:b], k), 0, 2))
+            if has_label:
+                label = np.asarray(label_all[la:lb], dtype=object)
+            else:
+                label = np.array(axes, dtype=object)[row] if axis_labels else np.full(lb - la, "", dtype=object)
+            yield {"measurement": np.full(lb - la, name, dtype=object), "t": np.repeat(t[a:b], k), "row": row,
+                   "label": label, "nu": nu_f, "sigma": sg_f, "nis": np.repeat(nis[a:b], k),
+                   "accepted": (status == ROW_ACCEPTED).astype(int), "status": status_names[status]}
 
 
 def write_outputs(res: NavigateResult, out_dir: Path, s: dict, *, replace_previous=False) -> list:
