@@ -15,7 +15,6 @@ from pathlib import Path
 import click
 import numpy as np
 
-from . import __version__
 from .cli_output import emit as _emit
 from .cli_output import FINITE, RATE_HZ
 from .cli_output import log as _log
@@ -49,8 +48,20 @@ class _Group(click.Group):
             raise InputError(f"an input file ended early ({exc or 'end of file'}): truncated or damaged?") from None
 
 
+def _print_version(ctx, param, value):
+    """``--version``: the installed version, looked up only when asked
+    (importlib.metadata is 18 ms of every command's start-up)."""
+    if not value or ctx.resilient_parsing:
+        return
+    from . import __version__
+
+    click.echo(f"inskit, version {__version__}")
+    ctx.exit()
+
+
 @click.group(cls=_Group, context_settings={"help_option_names": ["-h", "--help"]})
-@click.version_option(__version__, prog_name="inskit")
+@click.option("--version", is_flag=True, expose_value=False, is_eager=True, callback=_print_version,
+              help="Show the version and exit.")
 def cli():
     """inskit: inertial navigation and INS/GNSS integration."""
 
