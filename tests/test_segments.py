@@ -176,6 +176,35 @@ def test_duration_limit_cuts_the_run(tmp_path):
         load_scenario(p)
 
 
+def test_duration_limit_bounds_the_work_not_only_the_output(tmp_path, capsys):
+    """A 20 s limit on a static segment of 1e7 s integrated the position over
+    all 1e7 s (killed after a minute), and on a one-second segment repeated a
+    million times built every repetition (3.6 GB, 12 s for 1001 samples); the
+    JSON listed all the segments.  Now the segments stop at the limit and the
+    position spline covers the run: its grid of 0.05 s has ceil(20 / 0.05) + 2
+    rows."""
+    import json
+
+    from inskit.cli import main
+
+    head = 'name = "t"\nduration_limit_s = {}\n[start]\nlat_deg = 45\nlon_deg = 10\n'
+    p = tmp_path / "long.toml"
+    p.write_text(head.format(20) + '[[segment]]\ntype = "static"\nduration_s = 1e7\n')
+    tr = build_trajectory(load_scenario(p))
+    assert tr.duration == 20.0
+    tr._integrate_position()
+    assert len(tr._pos.y) == int(np.ceil(20.0 / 0.05)) + 2
+    p = tmp_path / "many.toml"
+    p.write_text(head.format(10) + '[[segment]]\ntype = "static"\nduration_s = 1\nrepeat = 1000000\n')
+    tr = build_trajectory(load_scenario(p))
+    assert len(tr.segments) == 10 and tr.duration == 10.0
+    with pytest.raises(SystemExit) as exc:
+        main(["simulate", str(p), "--out", str(tmp_path / "o"), "--no-plot", "--json"])
+    assert exc.value.code == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["duration_s"] == 10.0 and len(res["segments"]) == 10 and res["segments"][-1]["end_s"] == 10.0
+
+
 def test_uniform_hermite_matches_scipy():
     """The simulator's position interpolation (written out to spare the
     scipy.interpolate import) against scipy's CubicHermiteSpline: the same

@@ -480,7 +480,9 @@ def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, f
         "imu_rate_hz": sc.imu.rate_hz, "imu_grade": sc.imu.grade, "gravity": sc.earth.gravity,
         "gnss_fixes": len(sim.gnss),
         "elapsed_s": time.perf_counter() - t0, "files": [str(f) for f in files],
-        "segments": sim.trajectory.segments,
+        # the segments the run holds (a duration_limit_s cuts the last one short and leaves out those after it)
+        "segments": [dict(g, end_s=min(g["end_s"], sim.trajectory.duration)) for g in sim.trajectory.segments
+                     if g["start_s"] < sim.trajectory.duration],
     }
     text = (f"{sc.name}: {res['duration_s']:.0f} s, {len(sim.imu)} IMU epochs, {len(sim.gnss)} GNSS "
             f"fixes -> {out_dir}/ ({res['elapsed_s']:.1f} s)")

@@ -434,9 +434,14 @@ def build_trajectory(sc: Scenario, rng=None) -> SegmentTrajectory:
     tr = SegmentTrajectory((s.lat_deg * DEG, s.lon_deg * DEG, s.height_m), s.yaw_deg * DEG, s.speed_m_s,
                            s.transition_s)
     tr.source = sc._source
+    limit = sc.duration_limit_s
+    cut = False  # the segments were cut at duration_limit_s: those after it are not built
     for i, seg in enumerate(sc.segment, start=1):
         t = seg.type
         for r in range(1, seg.repeat + 1):
+            if limit is not None and tr.t >= limit:  # a segment starting at or after the limit adds nothing but
+                cut = True                           # its cost (a segment repeated a million times, 3.6 GB)
+                break
             tr.label = f"{where}segment {i} ({t})" + (f", repetition {r} of {seg.repeat}" if seg.repeat > 1 else "")
             if t == "static":
                 tr.static(seg.duration_s)
@@ -473,9 +478,9 @@ def build_trajectory(sc: Scenario, rng=None) -> SegmentTrajectory:
                 raise ConfigError(f"{where}random vibration needs a seed")
             band = v.band_hz or (0.5 * v.frequency_hz, 1.5 * v.frequency_hz)
             tr.random_vibration(v.target, amp, band, rng)
-    if sc.duration_limit_s is not None:
-        tr.duration_limit = float(sc.duration_limit_s)
-    _check_windows_inside(sc, tr.t, where)
+    if limit is not None:
+        tr.duration_limit = float(limit)
+    _check_windows_inside(sc, np.inf if cut else tr.t, where)
     return tr
 
 
@@ -483,7 +488,8 @@ def _check_windows_inside(sc: Scenario, total_s, where=""):
     """Refuse a GNSS outage or raw-GNSS blockage window that starts after the
     segments end (``total_s``): it would withhold nothing, silently.  A
     window beyond ``duration_limit_s`` but inside the segments is kept (the
-    limit cuts a scenario short on purpose)."""
+    limit cuts a scenario short on purpose); ``total_s`` is infinite when the
+    segments were built only up to the limit (their end then unknown)."""
     lists = [("gnss.outages_s", [tuple(w) for w in sc.gnss.outages_s])]
     if sc.raw_gnss is not None:
         lists.append(("raw_gnss.blockage", [(b.start_s, b.end_s) for b in sc.raw_gnss.blockage]))

@@ -514,9 +514,11 @@ class SegmentTrajectory:
         return v_n, a_n, (v, dv, rb, drb, psi, r, g, dg)
 
     def _integrate_position(self):
-        """RK4 of (lat, lon, h) on a 0.05 s grid, kept as Hermite splines."""
+        """RK4 of (lat, lon, h) on a 0.05 s grid, kept as Hermite splines,
+        over the run's :attr:`duration` (a ``duration_limit_s`` of 20 s on
+        segments of 1e7 s integrated all of them: minutes and gigabytes)."""
         h = 0.05
-        n = int(np.ceil(self.t / h)) + 2
+        n = int(np.ceil(self.duration / h)) + 2
         tg = np.arange(n) * h
         y = np.empty((n, 3))
         y[0] = self.lla0
