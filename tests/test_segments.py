@@ -576,6 +576,18 @@ def test_a_trajectory_beyond_100_km_of_height_is_refused(tmp_path, start, seg, w
         simulate_scenario(load_scenario(p))
 
 
+def test_a_speed_beyond_the_readers_limit_is_refused(tmp_path):
+    """An accelerate to 20 km/s was simulated and wrote a truth file that inskit's own reader refused
+    ('vn_m_s=12009.3 is beyond +-12000 m/s'); now the scenario is refused, naming the segment."""
+    p = _scenario(tmp_path, "lat_deg = 45\nlon_deg = 10",
+                  "[[segment]]\ntype = \"accelerate\"\nspeed_m_s = 20000\nduration_s = 5.0\n")
+    with pytest.raises(ConfigError, match=rf"^{re.escape(str(p))}: segment 1 \(accelerate\): a velocity component "
+                                          r"reaches 12,\d\d\d m/s at t = 2\.\d\d s, beyond \+-12000 m/s"):
+        simulate_scenario(load_scenario(p))
+    p.write_text(p.read_text().replace("20000", "11000"))
+    assert simulate_scenario(load_scenario(p)).truth.v_n[:, 0].max() == pytest.approx(11000.0, rel=1e-6)
+
+
 def test_a_down_vibration_beyond_100_km_is_refused_naming_the_file(tmp_path):
     """[[vibration]] target = "down", amplitude = 2e5 (metres: a unit slipped) wrote a truth file of heights to
     -190 km that inskit's reader refused."""

@@ -552,8 +552,9 @@ class SegmentTrajectory:
         past 90 deg, the longitude to 1e10 rad, and the truth was refused as
         'degrees where radians are expected?'), or a height beyond
         +-:data:`inskit.units.MAX_HEIGHT_M` (a descent into the Earth wrote a
-        truth file that inskit's readers refuse)."""
-        from ..units import MAX_HEIGHT_M
+        truth file that inskit's readers refuse), or a velocity component
+        beyond +-:data:`inskit.units.MAX_SPEED_M_S` (the same)."""
+        from ..units import MAX_HEIGHT_M, MAX_SPEED_M_S
 
         inside = tg <= self.duration + 1e-9
         lat, hgt = y[inside, 0], y[inside, 2]
@@ -572,6 +573,13 @@ class SegmentTrajectory:
                               f"{tg[k]:.2f} s, beyond +-{MAX_HEIGHT_M / 1000:g} km of the ellipsoid (where inskit's "
                               "readers stop: the truth file would be refused); a shallower or shorter climb or "
                               "descent")
+        fast = ~(np.abs(v_grid[inside]).max(axis=1) <= MAX_SPEED_M_S) if inside.any() else np.zeros(0, bool)
+        if fast.any():
+            k = int(np.argmax(fast))
+            raise ConfigError(f"{self.segment_at(tg[k])}: a velocity component reaches "
+                              f"{np.abs(v_grid[k]).max():,.0f} m/s at t = {tg[k]:.2f} s, beyond "
+                              f"+-{MAX_SPEED_M_S:g} m/s (faster than the Earth's escape speed, where inskit's readers "
+                              "stop: the truth file would be refused); a lower speed_m_s")
         heave = sum(abs(o.amplitude) for o in self.osc if o.target == "down")  # on top of the segments' height
         if heave and not np.abs(hgt).max() + heave <= MAX_HEIGHT_M:
             where = f"{self.source}: " if self.source else ""
