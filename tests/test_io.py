@@ -294,8 +294,9 @@ def test_first_row_increment_keeps_every_interval_and_discard_loses_one(tmp_path
     """A file of real increments from the start of its first interval, t0, whose time is not in the file.
     first_row="increment" puts the initial epoch one median interval before the first row, at t0: free-inertial
     navigation from the truth at t0 stays at rest (the ideal increments leave only integration error).
-    "discard" drops the first increment: from the same state at t0 the first interval then carries no specific
-    force, and the velocity is off by the lost gravity compensation, g * dt = 0.098 m/s at 100 Hz."""
+    "discard" drops the first increment: its first row (at t0 + dt) becomes the initial epoch, and a state at t0
+    is refused (the interval before that row would be integrated with no specific force, free fall: the velocity
+    was off by the lost gravity compensation, g * dt = 0.098 m/s at 100 Hz); the state must be the row's own."""
     from inskit.strapdown import mechanize
 
     dt = 0.01
@@ -310,8 +311,9 @@ def test_first_row_increment_keeps_every_interval_and_discard_loses_one(tmp_path
     assert np.abs(mechanize(inc, start).v_n[-1]).max() < 1e-6
     dis = io.read_imu(p, first_row="discard")
     assert len(dis) == len(imu) - 1 and dis.time[0] == imu.time[1] and not dis.dv_b[0].any()
-    lost = np.linalg.norm(mechanize(dis, start).v_n[-1])
-    assert lost == pytest.approx(G0 * dt, rel=0.01)
+    with pytest.raises(InputError, match=r"whose increments are all zero: an initial epoch"):
+        mechanize(dis, start)
+    assert np.abs(mechanize(dis, truth.state(1)).v_n[-1]).max() < 1e-6
 
 
 def test_first_row_increment_refuses_an_initial_row_and_a_single_row(tmp_path):

@@ -184,6 +184,27 @@ def test_streaming_rejects_overlap_and_bad_options():
         mechanize(imu, truth_solution(traj, t[:1]).state(0), frame="body")
 
 
+@pytest.mark.parametrize("frame", ["ned", "wander", "ecef", "inertial"])
+def test_an_initial_state_before_the_imu_is_taken_only_when_row_0_can_cover_the_gap(frame):
+    """A state 10 ms before an IMU whose row 0 is the initial epoch (zero increments) integrated that row as a
+    measured interval, free fall (98.2 m for 100 m at the end of the car's run); 5 s early: -905 m.  Refused now,
+    saying what to give; a row 0 of real increments one interval after the state (a file without the initial row)
+    is still integrated, and matches the run from row 0's own state."""
+    traj = StationaryTrajectory((LAT45, np.radians(10.0), 100.0), (0.02, -0.01, 1.0))
+    t = np.arange(0.0, 10.0 + 1e-9, 0.01)
+    imu = ideal_imu(traj, t, nodes=1)
+    s0 = truth_solution(traj, t[:1]).state(0)
+    for dt, said in ((0.01, r"whose increments are all zero: an initial epoch"),
+                     (5.0, r"is 5 s before the IMU's first row .* longer than its sampling interval \(0\.01 s\)")):
+        early = type(s0)(s0.time - dt, s0.lla, s0.v_n, s0.q_nb)
+        with pytest.raises(InputError, match=said + r".*give the state at the IMU's first time, 0\.000000 s"):
+            mechanize(imu, early, frame=frame)
+    cover = ideal_imu(traj, t, nodes=1, t_before=-0.01)  # row 0: the increment over (-0.01, 0]
+    early = type(s0)(-0.01, s0.lla, s0.v_n, s0.q_nb)
+    a, b = mechanize(cover, early, frame=frame), mechanize(imu, s0, frame=frame)
+    assert np.abs(earth.lla_to_ned(a.lla, b.lla[0]) - earth.lla_to_ned(b.lla, b.lla[0])).max() < 1e-6
+
+
 @pytest.mark.parametrize("args, options, said", [
     ((), {"foo": 1}, r"^'foo': not an option of the ned mechanization, which takes coning, height, "
                      r"height_time_constant, gravity$"),

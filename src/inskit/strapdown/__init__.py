@@ -122,12 +122,36 @@ class _Integrator:
                 raise InputError(
                     f"the IMU data start at {imu.time[0]:.6f} s, before the initial state at {t_prev:.6f} s"
                 )
+            self._check_first_interval(imu, t_prev)
             return 0
         if imu.time[0] <= t_prev:
             raise InputError(
                 f"chunk starts at {imu.time[0]:.6f} s, not after the previous chunk's end {t_prev:.6f} s"
             )
         return 0
+
+    @staticmethod
+    def _check_first_interval(imu: ImuData, t_prev):
+        """Row 0 after the initial state: its increments are integrated over
+        ``(t_prev, imu.time[0]]`` (a file whose row 0 is a real increment,
+        docs/formats.md).  Refused when they cannot cover that interval: the
+        gap is longer than the sampling interval (the motion over it was
+        never measured: it was integrated as free fall, 1.8 m of height lost
+        over a 100 s run for a state 10 ms early, -905 m for 5 s), or row 0
+        holds six exact zeros (an initial epoch, not an interval: even at
+        rest the accelerometers' increments are not zero)."""
+        gap = float(imu.time[0] - t_prev)
+        step = float(np.median(np.diff(imu.time[: min(len(imu), 101)]))) if len(imu) > 1 else gap
+        fix = (f"give the state at the IMU's first time, {imu.time[0]:.6f} s (row 0 is then the initial epoch and "
+               "its increments are not used)")
+        if gap > 1.5 * step:
+            raise InputError(f"the initial state at {t_prev:.6f} s is {gap:.6g} s before the IMU's first row "
+                             f"({imu.time[0]:.6f} s), longer than its sampling interval ({step:.6g} s): the motion "
+                             f"over that gap was never measured (it would be integrated as free fall); {fix}")
+        if not (np.any(imu.dtheta_b[0] != 0.0) or np.any(imu.dv_b[0] != 0.0)):
+            raise InputError(f"the initial state at {t_prev:.6f} s is before the IMU's first row ({imu.time[0]:.6f} "
+                             "s), whose increments are all zero: an initial epoch, not a measured interval (it "
+                             f"would be integrated as free fall); {fix}")
 
     def run(self, imu: ImuData, **kwargs) -> NavSolution:  # pragma: no cover - abstract
         raise NotImplementedError
