@@ -201,6 +201,22 @@ def test_a_window_without_fixes_is_named_not_silently_dropped(constructed):
     assert score_outages(sol, gnss, windows, LEVER_B).summary["outages_unscored"] == []
 
 
+def test_a_window_whose_fixes_stop_before_its_end_is_not_scored_at_its_last_fix(constructed):
+    """A window running past the last fix (windows:549-600 on a file ending at 549 s) was scored at the fix at its
+    start, 0.015 m, and averaged into the RMS; one over a gap at its end was scored 15 s early.  Now such a window
+    is listed unscored with where its fixes stop; a window ending between two fixes (up to 1.5 intervals after its
+    last one) is still scored."""
+    sol, truth, gnss, windows, noise, drift = constructed
+    s = score_outages(sol, gnss, windows + [(59.0, 80.0), (50.0, 50.6)], LEVER_B).summary
+    assert s["outages"] == 2 and [u["k"] for u in s["outages_unscored"]] == [1]
+    assert s["outages_unscored"][0]["reason"].startswith("the window's last fix is at 60.00 s, 20.00 s before its end "
+                                                         "(the fixes stop there; no fix follows)")
+    keep = ~((gnss.time > 35.5) & (gnss.time < 45.5))  # the file has no fix 36..45 s: a window 33-40 loses its end
+    g = GnssData(gnss.time[keep], gnss.lla[keep], gnss.sigma_ned[keep])
+    u = score_outages(sol, g, windows + [(33.0, 40.0)], LEVER_B).summary["outages_unscored"]
+    assert [x["k"] for x in u] == [1] and "the unaided span runs on to the next fix at 46.00 s" in u[0]["reason"]
+
+
 def test_the_python_api_scores_the_outages_against_a_truth_it_is_given(drive):
     """inskit.navigate(..., truth=PATH) takes the place of [truth] file: the
     same outage figures against the truth as the config route."""

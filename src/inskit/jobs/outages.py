@@ -70,7 +70,9 @@ class OutageScore:
       fixes withheld inside each window (what a real drive offers).  The fix
       noise is in the figure: a smoothed 0.2 m error reads as about 1 m
       against fixes of 1 m noise.  The *end* is the last withheld fix of the
-      window.
+      window; a window whose fixes stop earlier than :func:`end_reach_s`
+      before its end (the file ends, or a gap) is not scored but listed in
+      ``outages_unscored`` with the reason, as one that withholds no fix.
     * ``vs_truth`` (only when a truth is given): the solution against the
       truth at every solution epoch of the unaided span, from the last used
       fix before the window to the first used fix after it.  The *end* is the
@@ -316,6 +318,16 @@ def _truth_scores(sol: NavSolution, truth: NavSolution, gnss: GnssData, windows,
     return out
 
 
+def end_reach_s(fix_time) -> float:
+    """How far before a window's end its last withheld fix may lie and the
+    window still be scored [s]: 1.5 median fix intervals (a window ending
+    between two fixes ends at most one interval after its last one), at least
+    1 ms.  Further, the fixes stop inside the window (the file ends, or a
+    gap): its "end" error would be measured early."""
+    dt = np.diff(np.asarray(fix_time, float))
+    return max(1.5 * float(np.median(dt)) if len(dt) else 0.0, 1e-3)
+
+
 def score_outages(sol: NavSolution, gnss: GnssData, windows, lever_arm_b, t0=None, truth: NavSolution | None = None,
                   fused=True):
     """Score a solution against the withheld fixes, against the used fixes
@@ -347,6 +359,7 @@ def score_outages(sol: NavSolution, gnss: GnssData, windows, lever_arm_b, t0=Non
     """
     t0 = gnss.time[0] if t0 is None else t0
     rows, unscored = [], []
+    reach = end_reach_s(gnss.time)
     for k, (a, b) in enumerate(windows):
         inside = np.nonzero((gnss.time >= a - 1e-6) & (gnss.time <= b + 1e-6))[0]
         in_span = inside[(gnss.time[inside] >= sol.time[0]) & (gnss.time[inside] <= sol.time[-1])]
@@ -357,6 +370,15 @@ def score_outages(sol: NavSolution, gnss: GnssData, windows, lever_arm_b, t0=Non
             continue
         inside = in_span
         i = inside[-1]
+        if b - gnss.time[i] > reach:  # the fixes stop well before the window's end: no end error to score
+            after = gnss.time[gnss.time > b + 1e-6]
+            nxt = (f"the unaided span runs on to the next fix at {after[0] - t0:.2f} s" if len(after)
+                   else "no fix follows")
+            unscored.append({"k": k, "start_s": a - t0, "end_s": b - t0,
+                             "reason": f"the window's last fix is at {gnss.time[i] - t0:.2f} s, {b - gnss.time[i]:.2f} "
+                                       f"s before its end (the fixes stop there; {nxt}): its end error would be "
+                                       "measured that much early, and the outage is not the window's length"})
+            continue
         ant = antenna_positions(sol, gnss.time[inside], lever_arm_b)
         d_all = earth.lla_to_ned(ant, gnss.lla[inside])
         h_all = np.hypot(d_all[:, 0], d_all[:, 1])
