@@ -656,6 +656,27 @@ def test_outage_windows_without_a_used_fix_between_are_refused(windows):
     # beyond the fixes the windows withhold nothing and are reported as not scored, not refused
 
 
+@pytest.mark.parametrize("window", [[0.0, 70.0], [0.0, 10.0]])
+def test_an_outage_window_withholding_the_first_fix_is_refused(window):
+    """windows:0-70 on a car parked for 60 s started the INS at t = 0 from the fix at 71 s (position and 14 m/s of
+    the moving car), scored 980 m and blamed the attitude; on drive_0708 windows:0-10 said 'start-up needs ... GNSS
+    from the start; found 34.0 s'.  The start-up takes its position from the first fix: a window over it is
+    refused, naming it; one starting after it is taken."""
+    from inskit.errors import InputError
+    from inskit.jobs.navigate import outage_windows
+    from inskit.types import GnssData
+
+    t = np.arange(1000.0, 1400.0, 1.0)
+    gnss = GnssData(t, np.tile([0.7, 0.1, 100.0], (len(t), 1)), np.full((len(t), 3), 0.5))
+    cfg = load_config(EXAMPLE, {"outages": {"protocol": "windows", "windows_s": [[200.0, 210.0], window]}})
+    with pytest.raises(InputError, match=rf"^outages: window \[{window[0]:g}, {window[1]:g}\] s after the first GNSS "
+                                         r"fix withholds the first fix, which the start-up takes the initial position "
+                                         rf"from .* at {window[1]:g} s or later"):
+        outage_windows(cfg, gnss)
+    ok = load_config(EXAMPLE, {"outages": {"protocol": "windows", "windows_s": [[0.5, 10.0]]}})
+    assert outage_windows(ok, gnss) == [(1000.5, 1010.0)]
+
+
 def test_a_speed_course_log_outside_the_imu_span_is_refused(tmp_path):
     """A speed-and-course log on another time base gave 0 updates and a
     healthy run, as if it had been used; the odometer and height logs were

@@ -619,6 +619,8 @@ def outage_windows(cfg: NavigateConfig, gnss: GnssData):
     Raises
     ------
     InputError
+        A window starting at or before the first fix (time zero): the
+        start-up takes its initial position from that fix.
         Two windows that both withhold fixes with no used fix between them
         (touching windows, or a gap shorter than the fixes' interval): the
         first has no end, its scores would be the second's over again and
@@ -629,6 +631,13 @@ def outage_windows(cfg: NavigateConfig, gnss: GnssData):
         return rtklibexplorer_outages(t0)
     if cfg.outages.protocol != "windows":
         return []
+    for a, b in cfg.outages.windows_s:
+        if a <= 0.0:  # withholding the first fix: the INS would start from a later fix with its state at 0 unknown
+            raise InputError(
+                f"outages: window [{a:g}, {b:g}] s after the first GNSS fix withholds the first fix, which the start-up "
+                "takes the initial position from (the run would start from the first fix after the window, at "
+                f"{b:g} s or later, and score the motion before it as outage error): start the window after the "
+                "first fix")
     windows = [(t0 + a, t0 + b) for a, b in cfg.outages.windows_s]
     t = gnss.time
     used = ~withheld_mask(t, windows)
