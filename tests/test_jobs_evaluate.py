@@ -167,14 +167,22 @@ def test_a_one_row_truth_scores_the_epoch_at_its_time(files, tmp_path):
     assert np.array_equal(one.lla, tr.lla) and np.allclose(one.q_nb, tr.q_nb)
 
 
-def test_a_truth_in_milliseconds_is_said(files, tmp_path):
+def test_a_truth_in_milliseconds_is_refused_and_a_coarse_one_is_said(files, tmp_path):
     """A 10 Hz truth whose time column holds milliseconds reads as a sample every 100 s: it overlapped the
-    solution's first 300 s with 4 samples and was scored without a word (a helper found it: 5.8 km RMS on a
-    drive); the warning names the step.  The right file, and a 1 Hz truth (GNSS-like), say nothing."""
+    solution's first 300 s with 4 samples and was scored (5.8 km RMS on a drive), later with a warning only.  Its
+    positions move 1000 times slower than its velocity columns say: refused when read, naming the file.  A truth
+    really sampled every 100 s is scored with the warning naming the step; the right file, and a 1 Hz truth
+    (GNSS-like), say nothing."""
     truth = io.read_solution(files / "truth.csv")
     ms = NavSolution(truth.time * 1000.0, truth.lla, truth.v_n, truth.q_nb, {})
     io.write_solution(tmp_path / "truth_ms.csv", ms)
-    s = evaluate(files / "sol.csv", tmp_path / "truth_ms.csv")
+    with pytest.raises(InputError, match=r"truth_ms\.csv: its positions move 1000 times slower than its velocity "
+                                         r"columns say .*the time column holds milliseconds, not seconds"):
+        evaluate(files / "sol.csv", tmp_path / "truth_ms.csv")
+    coarse = np.arange(0, len(truth.time), 1000)
+    io.write_solution(tmp_path / "truth_100s.csv", NavSolution(truth.time[coarse], truth.lla[coarse],
+                                                                truth.v_n[coarse], truth.q_nb[coarse], {}))
+    s = evaluate(files / "sol.csv", tmp_path / "truth_100s.csv")
     w = [x for x in s["warnings"] if "the truth is sampled every 100 s" in x]
     assert len(w) == 1 and "against the solution's 0.1 s" in w[0] and "in ms" in w[0], s["warnings"]
     assert "warning: " + w[0] in summary_text(s)
@@ -188,14 +196,21 @@ def test_a_truth_in_milliseconds_is_said(files, tmp_path):
 
 def test_a_truth_elsewhere_from_the_start_is_said(files, tmp_path):
     """A truth whose latitude and longitude hold radians under the _deg headers (0.698 for 40 deg) was scored
-    as an error of thousands of km without a word (a helper found it); a solution that starts 10 km or more
-    from its truth describes another place, and the warning says so.  The right truth says nothing."""
+    as an error of thousands of km without a word (a helper found it): now its reader refuses it (its positions
+    move 57.3 times less than its velocities say); a solution that starts 10 km or more from its truth describes
+    another place, and the warning says so.  The right truth says nothing."""
     truth = io.read_solution(files / "truth.csv")
     df = pd.read_csv(files / "truth.csv")
     df["lat_deg"] = np.radians(df["lat_deg"])
     df["lon_deg"] = np.radians(df["lon_deg"])
     df.to_csv(tmp_path / "truth_rad.csv", index=False)
-    s = evaluate(files / "sol.csv", tmp_path / "truth_rad.csv")
+    with pytest.raises(InputError, match=r"truth_rad\.csv: its positions move 57\.\d+ times slower than its velocity "
+                                         r"columns say .*latitude and longitude hold radians under the _deg headers"):
+        evaluate(files / "sol.csv", tmp_path / "truth_rad.csv")  # refused by the reader: it moves 57 times too little
+    df = pd.read_csv(files / "truth.csv")
+    df["lat_deg"] += 0.2  # 22 km north: another datum, another place
+    df.to_csv(tmp_path / "truth_far.csv", index=False)
+    s = evaluate(files / "sol.csv", tmp_path / "truth_far.csv")
     w = [x for x in s["warnings"] if "km from the truth" in x]
     assert len(w) == 1 and "radians under a _deg header" in w[0], s["warnings"]
     assert not [x for x in evaluate(files / "sol.csv", files / "truth.csv")["warnings"] if "km from" in x]

@@ -1310,6 +1310,67 @@ def write_gnss(path, gnss: GnssData, *, overwrite=False):
 
 
 def read_solution(path, *, until_s=None, ranges=True) -> NavSolution:
+    """Read a navigation solution or truth file (:func:`_read_solution`),
+    its time column checked against its own motion
+    (:func:`check_solution_time_unit`)."""
+    sol = _read_solution(path, until_s=until_s, ranges=ranges)
+    check_solution_time_unit(path, sol)
+    return sol
+
+
+#: moving rows (horizontal speed above TIME_UNIT_MIN_SPEED_M_S) the time-unit check of a solution file needs, and
+#: the most consecutive pairs it looks at (evenly spread)
+TIME_UNIT_MIN_ROWS = 20
+TIME_UNIT_MAX_PAIRS = 2000
+TIME_UNIT_MIN_SPEED_M_S = 1.0
+#: a median ratio of the velocity columns' speed to the positions' own speed above this is refused: 1 in a
+#: consistent file (a few per cent more on coarse rows through turns); 1000 for a time column in ms.  The other
+#: way (positions faster) is not judged: hand-made files often pair a track with any velocity
+TIME_UNIT_RATIO_MAX = 20.0
+
+
+def check_solution_time_unit(path, sol: NavSolution) -> None:
+    """Refuse a solution or truth file whose positions move more slowly than
+    its velocity columns say, by more than :data:`TIME_UNIT_RATIO_MAX`
+    (median over up to :data:`TIME_UNIT_MAX_PAIRS` consecutive
+    rows where the file moves faster than :data:`TIME_UNIT_MIN_SPEED_M_S`):
+    a time column in milliseconds reads 1000 times too long (a truth in ms
+    scored 2181 m of 'outage error' against a solution fitting its fixes to
+    0.5 m, with no warning), and radians under the ``_deg`` headers move
+    57.3 times too little.  A file that stands still, or has fewer than
+    :data:`TIME_UNIT_MIN_ROWS` moving rows, is not checked.  The distance
+    between rows: the chord on the WGS84 radii of curvature."""
+    t = sol.time
+    n = len(t)
+    if n < 3:
+        return
+    k = np.unique(np.linspace(0, n - 2, min(n - 1, TIME_UNIT_MAX_PAIRS)).astype(np.int64))
+    dt = t[k + 1] - t[k]
+    from ..earth import principal_radii
+
+    lat = sol.lla[:, 0]
+    mid = 0.5 * (lat[k] + lat[k + 1])
+    rn, re = principal_radii(mid, 0.5 * (sol.lla[k, 2] + sol.lla[k + 1, 2]))
+    dn = (lat[k + 1] - lat[k]) * rn
+    de = np.angle(np.exp(1j * (sol.lla[k + 1, 1] - sol.lla[k, 1]))) * np.cos(mid) * re
+    pos_speed = np.hypot(dn, de) / dt
+    v = 0.5 * (np.hypot(sol.v_n[k, 0], sol.v_n[k, 1]) + np.hypot(sol.v_n[k + 1, 0], sol.v_n[k + 1, 1]))
+    m = (v > TIME_UNIT_MIN_SPEED_M_S) & (dt > 0) & np.isfinite(pos_speed)
+    if m.sum() < TIME_UNIT_MIN_ROWS or not np.median(pos_speed[m]) > 0.0:  # positions held: no time to judge
+        return
+    ratio = float(np.median(v[m] / np.maximum(pos_speed[m], 1e-300)))
+    if ratio > TIME_UNIT_RATIO_MAX:
+        if abs(ratio / np.degrees(1.0) - 1.0) < 0.1:
+            why = "latitude and longitude hold radians under the _deg headers (57.3 times too small)"
+        elif abs(ratio / 1000.0 - 1.0) < 0.1:
+            why = "the time column holds milliseconds, not seconds (1000 times too long)"
+        else:
+            why = "time_s is not in seconds, or lat_deg and lon_deg are not in degrees"
+        raise InputError(f"{path}: its positions move {ratio:.4g} times slower than its velocity columns say (median "
+                         f"over {int(m.sum())} moving rows): {why}")
+
+
+def _read_solution(path, *, until_s=None, ranges=True) -> NavSolution:
     """Read a navigation solution or truth file: CSV (``.csv``, gzip-compressed
     ``.csv.gz``) or Parquet (``.parquet``, as ``inskit navigate`` writes at
     full rate), told apart by content (Parquet's ``PAR1`` magic), not name.
