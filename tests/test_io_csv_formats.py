@@ -699,3 +699,116 @@ def test_seconds_of_week_restarting_at_a_week_boundary_are_named(tmp_path):
     with pytest.raises(InputError, match=r"goes back in time from line 3 \(604799\.0\); timestamps must strictly "
                                          r"increase$"):
         io.read_gnss(p)
+
+
+def _gnss_frame(n=40):
+    import pandas as pd
+
+    return pd.DataFrame({"time_s": 0.2 * np.arange(n), "lat_deg": 45.0 + 1e-6 * np.arange(n), "lon_deg": 7.0,
+                         "height_m": 300.0, "sigma_n_m": 0.5, "sigma_e_m": 0.5, "sigma_d_m": 1.0, "vn_m_s": 1.0,
+                         "ve_m_s": 0.0, "vd_m_s": 0.0, "sigma_vn_m_s": 0.1, "sigma_ve_m_s": 0.1,
+                         "sigma_vd_m_s": 0.1})
+
+
+@pytest.mark.parametrize("column, value, match", [
+    ("height_m", 1e300, r"height_m=1e\+300 is beyond \+-100 km of the ellipsoid \(a height in metres\)"),
+    ("height_m", "mm", r"height_m=300000\.0 is beyond \+-100 km of the ellipsoid"),
+    ("vn_m_s", 1e300, r"vn_m_s=1e\+300 is beyond \+-12000 m/s \(faster than the Earth's escape speed\)"),
+    ("vd_m_s", -25_000.0, r"vd_m_s=-25000\.0 is beyond \+-12000 m/s"),
+])
+@pytest.mark.parametrize("kind", ["lean", "pandas", "parquet"])
+def test_a_gnss_height_or_speed_beyond_reason_is_refused(tmp_path, column, value, match, kind):
+    """read_gnss took a fix whose height_m and vn_m_s held 1e300, and heights in millimetres, without a word
+    (read_solution refuses them): the same limits, +-100 km and +-12 km/s, naming the file, the line (CSV) or
+    row (Parquet) and the column, on every way a GNSS file is read."""
+    df = _gnss_frame()
+    if value == "mm":
+        df["height_m"] *= 1000.0  # every height: the first row is named
+        row = 0
+    else:
+        df.loc[7, column] = value
+        row = 7
+    if kind == "pandas":
+        df["note"] = "x"  # a text column: not the lean path
+    p = tmp_path / ("gnss.parquet" if kind == "parquet" else "gnss.csv")
+    df.to_parquet(p) if kind == "parquet" else df.to_csv(p, index=False)
+    where = f"row {row}" if kind == "parquet" else f"line {row + 2}"
+    with pytest.raises(InputError, match=rf"gnss\.(csv|parquet): {where}: {match}.*; another unit or column\?"):
+        io.read_gnss(p)
+    ok = _gnss_frame()
+    ok.loc[7, column] = {"height_m": -99_000.0}.get(column, -11_000.0)  # within the bounds: read
+    p.unlink()
+    ok.to_parquet(p) if kind == "parquet" else ok.to_csv(p, index=False)
+    g = io.read_gnss(p)
+    assert g.lla[7, 2] == ok.loc[7, "height_m"] and np.array_equal(g.v_n[:, 0], ok["vn_m_s"])
+
+
+def _imu_table(n=400):
+    """A turning rate log and the same motion as increments, as columns of one table."""
+    t = 0.01 * np.arange(n)
+    w = np.column_stack([0.1 * np.sin(t), 0.05 * np.cos(t), 0.2 + 0.0 * t])
+    f = np.column_stack([0.1 + 0.0 * t, 0.0 * t, -9.8 + 0.0 * t])
+    cols = {"time_s": t}
+    cols.update({f"gyro_{a}_rad_s": w[:, j] for j, a in enumerate("xyz")})
+    cols.update({f"accel_{a}_m_s2": f[:, j] for j, a in enumerate("xyz")})
+    dth, dv = np.vstack([np.zeros((1, 3)), 0.01 * w[1:]]), np.vstack([np.zeros((1, 3)), 0.01 * f[1:]])
+    cols.update({f"dtheta_{a}_rad": dth[:, j] for j, a in enumerate("xyz")})
+    cols.update({f"dv_{a}_m_s": dv[:, j] for j, a in enumerate("xyz")})
+    return cols
+
+
+RATES = ["time_s"] + [f"gyro_{a}_rad_s" for a in "xyz"] + [f"accel_{a}_m_s2" for a in "xyz"]
+INCREMENTS = ["time_s"] + [f"dtheta_{a}_rad" for a in "xyz"] + [f"dv_{a}_m_s" for a in "xyz"]
+
+
+@pytest.mark.parametrize("clash, named", [
+    ("units", r"the rotation is given by gyro_x_rad_s, gyro_y_rad_s, gyro_z_rad_s and by gyro_x_deg_s"),
+    ("rates+increments", r"the rotation is given by gyro_x_rad_s, gyro_y_rad_s, gyro_z_rad_s and by dtheta_x_rad, "
+                         r"dtheta_y_rad, dtheta_z_rad; the specific force is given by accel_x_m_s2, accel_y_m_s2, "
+                         r"accel_z_m_s2 and by dv_x_m_s, dv_y_m_s, dv_z_m_s"),
+    ("increments+accel_g", r"the specific force is given by accel_x_g, accel_y_g, accel_z_g and by dv_x_m_s"),
+])
+@pytest.mark.parametrize("kind", ["csv", "pandas", "parquet"])
+def test_imu_columns_that_give_a_sensor_twice_are_refused_naming_them(tmp_path, clash, named, kind):
+    """gyro_x_rad_s beside a disagreeing gyro_x_deg_s was read in rad/s, and a file of rates and increments
+    was read by its increments (the lean path) or its rates (the pandas path), without a word: which one is
+    meant is not guessed."""
+    import pandas as pd
+
+    cols = _imu_table()
+    if clash == "units":
+        df = pd.DataFrame({c: cols[c] for c in RATES})
+        df["gyro_x_deg_s"] = np.degrees(df["gyro_x_rad_s"]) + 1.0  # and disagreeing
+    elif clash == "rates+increments":
+        df = pd.DataFrame({c: cols[c] for c in RATES + INCREMENTS[1:]})
+    else:
+        df = pd.DataFrame({c: cols[c] for c in INCREMENTS})
+        for a in "xyz":
+            df[f"accel_{a}_g"] = cols[f"accel_{a}_m_s2"] / 9.80665
+    if kind == "pandas":
+        df["note"] = "x"  # a text column: not the lean path
+    p = tmp_path / ("imu.parquet" if kind == "parquet" else "imu.csv")
+    df.to_parquet(p) if kind == "parquet" else df.to_csv(p, index=False)
+    with pytest.raises(InputError, match=rf"imu\.(csv|parquet): columns that give the same measurement twice: "
+                                         rf"{named}.*keep one set of columns"):
+        io.read_imu(p)
+    for one in (RATES, INCREMENTS):  # each set alone: read, and both give the same motion
+        q = tmp_path / "one.csv"
+        pd.DataFrame({c: cols[c] for c in one}).to_csv(q, index=False)
+        imu = io.read_imu(q, check_units=False)
+        assert np.allclose(imu.rates()[0][1:, 2], 0.2)
+
+
+def test_a_solution_with_an_extra_column_named_as_a_navigation_column_is_not_written(tmp_path):
+    """A solution built without checks whose extra column is named time_s: write_solution refuses it, both
+    formats, and leaves no file (it wrote time_s = -5 over the times)."""
+    from inskit.types import NavSolution
+
+    t = np.arange(3.0)
+    sol = NavSolution._trusted(t, np.tile([0.7, 0.1, 0.0], (3, 1)), np.zeros((3, 3)), np.tile([1.0, 0, 0, 0], (3, 1)),
+                               {"time_s": np.full(3, -5.0)})
+    for name in ("sol.csv", "sol.parquet"):
+        with pytest.raises(InputError, match=r"extra column `time_s` would overwrite the column 'time_s'"):
+            io.write_solution(tmp_path / name, sol)
+        assert not (tmp_path / name).exists()
+    assert C.SOLUTION_COLUMNS == list(NavSolution(t, sol.lla, sol.v_n, sol.q_nb).columns())

@@ -224,3 +224,26 @@ def test_a_path_argument_that_is_no_path_is_named(tmp_path):
         inskit.write_solution(tmp_path / "sol.csv", {"time_s": [0.0]})
     assert not (tmp_path / "sol.csv").exists()
     assert len(inskit.read_gnss(DRIVE_POS)) == len(inskit.read_gnss(str(DRIVE_POS)))
+
+
+def test_an_array_option_of_another_format_is_refused_by_name_not_a_numpy_error(tmp_path):
+    """read_imu("imu.csv", mount_rpy=np.zeros(3)) on an inskit file raised numpy's 'The truth value of an
+    array with more than one element is ambiguous' (the option compared with `!=`); a list gave the message."""
+    from inskit.io.formats import _refuse_options
+
+    p = tmp_path / "imu.csv"
+    p.write_text("time_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s,accel_x_m_s2,accel_y_m_s2,accel_z_m_s2\n"
+                 "0,0,0,0,0,0,-9.8\n0.01,0,0,0,0,0,-9.8\n")
+    for rpy in (np.zeros(3), np.zeros((1, 3)), [0.0, 0.0, 0.0]):
+        with pytest.raises(InputError, match=r"imu\.csv: mount_rpy does not apply to the 'inskit' format"):
+            io.read_imu(p, mount_rpy=rpy)
+    g = tmp_path / "gnss.csv"
+    g.write_text("time_s,lat_deg,lon_deg,height_m,sigma_n_m,sigma_e_m,sigma_d_m\n0,45,7,300,0.5,0.5,1\n")
+    with pytest.raises(InputError, match=r"gnss\.csv: quality, week0 do not apply to the 'inskit' format"):
+        io.read_gnss(g, quality=np.array([1, 2]), week0=np.int64(2374))
+    # a value this format always has may be given, as text or as an array equal to it; another is refused
+    _refuse_options(p, "x", {"sampled": "average", "rpy": np.zeros(3)}, fixed={"sampled": "average", "rpy": [0, 0, 0]})
+    with pytest.raises(InputError, match=r"imu\.csv: rpy does not apply to the 'x' format"):
+        _refuse_options(p, "x", {"rpy": np.ones(3)}, fixed={"rpy": [0, 0, 0]})
+    with pytest.raises(InputError, match=r"imu\.csv: sampled does not apply to the 'x' format"):
+        _refuse_options(p, "x", {"sampled": np.array(["average", "average"])}, fixed={"sampled": "average"})

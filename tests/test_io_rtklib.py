@@ -385,3 +385,44 @@ def test_geodetic_heights_are_noted(tmp_path):
         info = {}
         g, _ = read_pos(p, info=info)
         assert info["pos_heights"] == want and len(g.time) == 3
+
+
+@pytest.mark.parametrize("line, sow", [(2, "-5"), (2, "943261"), (102, "604800"), (102, "nan")])
+def test_an_imu_log_second_of_week_outside_the_week_is_refused(tmp_path, line, sow):
+    """gps_sow_s = -5 or 943261 on the first row of an rtklibexplorer log was read (the .pos reader refuses
+    seconds of week outside [0, 604800) naming the line): the same range, the same line numbers."""
+    from inskit.io.rtklib import read_rtklibexplorer_imu
+
+    imu = Path(__file__).resolve().parents[1] / "data" / "drive_0708" / "imu_1934_gpst.csv.gz"
+    lines = gzip.decompress(imu.read_bytes()).decode().splitlines(True)[:400]
+    row = lines[line - 1].split(",")
+    row[1] = sow
+    lines[line - 1] = ",".join(row)
+    p = tmp_path / "imu.csv"
+    p.write_text("".join(lines))
+    if sow == "nan":  # not a number at all: the reader's cell message, naming the same line
+        with pytest.raises(InputError, match=rf"imu\.csv: line {line}: column 'gps_sow_s' has 'nan'"):
+            read_rtklibexplorer_imu(p)
+        return
+    with pytest.raises(InputError, match=rf"imu\.csv: line {line}: gps_sow_s={float(sow)!r}; expected seconds of "
+                                         r"the GPS week in \[0, 604800\)"):
+        read_rtklibexplorer_imu(p)
+
+
+@pytest.mark.parametrize("field, value, named", [
+    (4, "1601474.0", r"height\(m\)=1601474\.0 is beyond \+-100 km of the ellipsoid"),  # a height in mm
+    (4, "-1e300", r"height\(m\)=-1e\+300 is beyond \+-100 km"),
+    (15, "1e300", r"vn\(m/s\)=1e\+300 is beyond \+-12000 m/s"),
+    (17, "-15000", r"vu\(m/s\)=-15000\.0 is beyond \+-12000 m/s"),
+])
+def test_a_pos_height_or_velocity_beyond_reason_is_refused(tmp_path, field, value, named):
+    """A .pos row whose height or velocity is another unit or column was read (read_solution refuses them):
+    the same +-100 km and +-12 km/s, naming the line and the column."""
+    header, rows = _pos_rows(20)
+    rows[5][field] = value
+    p = _write_pos(tmp_path / "f.pos", header, rows)
+    with pytest.raises(InputError, match=rf"f\.pos: line 7: {named}.*; another unit or column\?"):
+        read_pos(p)
+    rows[5][field] = {4: "-99000", 15: "11000", 17: "-11000"}[field]  # within the bounds: read
+    g, _ = read_pos(_write_pos(p, header, rows))
+    assert len(g) == 20

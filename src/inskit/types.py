@@ -157,6 +157,33 @@ def _as_vector(name, x, size):
     return a.reshape(size)
 
 
+def check_time_precision(name, t):
+    """Refuse a time array ``t`` held in floats narrower than float64
+    (float32, float16), naming ``name``: such a time has lost its precision
+    before it arrives (a float32 holds 24 bits, so a time of 1e4 s steps by
+    0.98 ms and a 100 Hz log at that time reads as alternating 9.8 and
+    10.7 ms steps), which no conversion gives back.  Integers, float64 and
+    wider pass (they are converted to float64 as :func:`as_float_array`
+    converts them); so do lists and tuples of Python numbers."""
+    dtype = getattr(t, "dtype", None)
+    if dtype is None and isinstance(t, (list, tuple)):  # a list of numpy float32 scalars is float32 too
+        try:
+            dtype = np.asarray(t).dtype
+        except (TypeError, ValueError):  # ragged: check_time says so
+            return
+    if dtype is None:
+        return
+    dtype = np.dtype(dtype)
+    if dtype.kind == "f" and dtype.itemsize < 8:
+        a = np.asarray(t)
+        top = float(np.nanmax(np.abs(a[np.isfinite(a)]))) if np.isfinite(a).any() else 0.0
+        step = float(np.spacing(dtype.type(top))) if top > 0 else float(np.finfo(dtype).tiny)
+        raise InputError(f"`{name}` holds {dtype} values; time must be float64 seconds: a {dtype} time of "
+                         f"{top:.6g} s is only resolved to {step:.3g} s, so its steps are wrong before they "
+                         "arrive (convert the source data, not this array: np.asarray(t, dtype=np.float64) "
+                         "cannot give back the lost digits)")
+
+
 def check_time(name, t):
     """Validate a strictly increasing, finite time vector; return it as float64."""
     t = as_float_array(name, t)
@@ -190,7 +217,8 @@ class ImuData:
     Attributes
     ----------
     time : (n,) ndarray
-        Sample times [s], strictly increasing.
+        Sample times [s], strictly increasing; float64 (integers are
+        converted, float32 is refused: :func:`check_time_precision`).
     dtheta_b : (n, 3) ndarray
         Angle increments of the body rate ``omega_ib_b`` [rad].
     dv_b : (n, 3) ndarray
@@ -202,6 +230,7 @@ class ImuData:
     dv_b: np.ndarray
 
     def __post_init__(self):
+        check_time_precision("time", self.time)
         t = check_time("time", self.time)
         object.__setattr__(self, "time", t)
         object.__setattr__(self, "dtheta_b", _as_array("dtheta_b", self.dtheta_b, (3,), len(t)))
@@ -228,6 +257,7 @@ class ImuData:
             ``"average"``: each sample is the mean over the preceding interval
             (what most MEMS output after their anti-alias filter).
         """
+        check_time_precision("time", time)
         t = check_time("time", time)
         w = _as_array("gyro_b", gyro_b, (3,), len(t))
         f = _as_array("accel_b", accel_b, (3,), len(t))
@@ -309,6 +339,7 @@ class NavState:
     def __post_init__(self):
         lla, v, q = (_as_vector(name, x, size) for name, x, size in
                      (("lla", self.lla, 3), ("v_n", self.v_n, 3), ("q_nb", self.q_nb, 4)))
+        check_time_precision("time", self.time)
         time = as_float_array("time", self.time)
         if time.ndim != 0 and time.shape != (1,):
             raise InputError(f"`time` must be one number [s], got shape {time.shape}")
@@ -351,8 +382,26 @@ def _query_times(t):
     return t
 
 
+#: the navigation columns of a solution, in order, as :meth:`NavSolution.columns`, ``to_dataframe`` and the
+#: solution files name them (:mod:`inskit.io` reads and writes these names); no ``extra`` column may take one
+NAVIGATION_COLUMNS = ("time_s", "lat_deg", "lon_deg", "height_m", "vn_m_s", "ve_m_s", "vd_m_s",
+                      "roll_deg", "pitch_deg", "yaw_deg")
+
+
+def _column_names(name, a) -> list:
+    """The column names extra ``a`` named ``name`` takes in a table: its own
+    name (one value per row), ``name_0 .. name_{k-1}`` (``(n, k)``)."""
+    return [name] if a.ndim == 1 else [f"{name}_{j}" for j in range(a.shape[1])]
+
+
 def _extra_columns(extra, n) -> dict:
-    """``extra`` as a new dict of arrays of ``n`` rows each (None: no column)."""
+    """``extra`` as a new dict of arrays of ``n`` rows each (None: no column).
+
+    A name that is a navigation column's (:data:`NAVIGATION_COLUMNS`), or
+    that another extra column's table names would take (``b`` of shape
+    ``(n, 2)`` is written as ``b_0, b_1``, so no ``b_1`` beside it), is
+    refused: in a table or a file one of them would overwrite the other.
+    """
     if extra is None:
         return {}
     if not isinstance(extra, dict):
@@ -367,6 +416,19 @@ def _extra_columns(extra, n) -> dict:
         if len(a) != n:
             raise InputError(f"extra column `{k}` has {len(a)} rows, expected {n}")
         out[k] = a
+    owner = dict.fromkeys(NAVIGATION_COLUMNS, None)  # table name -> the extra column that takes it (None: navigation)
+    for k, a in out.items():
+        for c in _column_names(k, a):
+            if c in owner:
+                if owner[c] is None:
+                    raise InputError(f"extra column `{k}` has the name of a navigation column "
+                                     f"({', '.join(NAVIGATION_COLUMNS)}), which tables and solution files hold "
+                                     "already: one would overwrite the other; give it another name (units in the "
+                                     "name: 'truth_height_m')")
+                raise InputError(f"extra columns `{owner[c]}` and `{k}` would both be the column {c!r} of a table "
+                                 f"or a file (an (n, k) extra `b` is written as b_0 .. b_k-1): one would overwrite "
+                                 "the other; rename one of them")
+            owner[c] = k
     return out
 
 
@@ -377,7 +439,7 @@ class NavSolution:
     Attributes
     ----------
     time : (n,) ndarray
-        [s].
+        [s], strictly increasing; float64 (:func:`check_time_precision`).
     lla : (n, 3) ndarray
         Latitude, longitude [rad], height [m].
     v_n : (n, 3) ndarray
@@ -387,6 +449,9 @@ class NavSolution:
     extra : dict of str -> ndarray
         Further per-epoch columns (sigmas, wander angle, biases ...), each with
         ``n`` rows; names carry their unit (``sigma_n_m``, ``alpha_rad``).
+        A name of :data:`NAVIGATION_COLUMNS`, or one another extra column's
+        table names take (``b_1`` beside a ``b`` of shape ``(n, 2)``), is
+        refused: in a table or a file one would overwrite the other.
     """
 
     time: np.ndarray
@@ -396,6 +461,7 @@ class NavSolution:
     extra: dict = field(default_factory=dict)
 
     def __post_init__(self):
+        check_time_precision("time", self.time)
         t = check_time("time", self.time)
         lla = _as_array("lla", self.lla, (3,), len(t))
         check_lla("lla", lla)
@@ -457,21 +523,21 @@ class NavSolution:
         sl = slice(None) if rows is None else np.asarray(rows)
         rpy = rot.euler_from_quat(self.q_nb[sl]) / DEG
         lla, v = self.lla[sl], self.v_n[sl]
-        cols = {
-            "time_s": self.time[sl],
-            "lat_deg": lla[:, 0] / DEG,
-            "lon_deg": -((-lla[:, 1] + np.pi) % (2.0 * np.pi) - np.pi) / DEG,
-            "height_m": lla[:, 2],
-            "vn_m_s": v[:, 0], "ve_m_s": v[:, 1], "vd_m_s": v[:, 2],
-            "roll_deg": rpy[:, 0], "pitch_deg": rpy[:, 1], "yaw_deg": rpy[:, 2],
-        }
+        nav = (self.time[sl], lla[:, 0] / DEG, -((-lla[:, 1] + np.pi) % (2.0 * np.pi) - np.pi) / DEG, lla[:, 2],
+               v[:, 0], v[:, 1], v[:, 2], rpy[:, 0], rpy[:, 1], rpy[:, 2])
+        cols = dict(zip(NAVIGATION_COLUMNS, nav))
         for k, a in self.extra.items():
             a = np.asarray(a)[sl]
+            names = _column_names(k, a)
+            clash = [c for c in names if c in cols]
+            if clash:  # a solution built by _trusted (no checks) with such a name: refused, not written over
+                raise InputError(f"extra column `{k}` would overwrite the column {clash[0]!r} of the solution "
+                                 f"({', '.join(NAVIGATION_COLUMNS)} and the other extra columns); rename it")
             if a.ndim == 1:
                 cols[k] = a
             else:
-                for j in range(a.shape[1]):
-                    cols[f"{k}_{j}"] = a[:, j]
+                for j, c in enumerate(names):
+                    cols[c] = a[:, j]
         return cols
 
     def to_dataframe(self):
@@ -576,7 +642,8 @@ class GnssData:
     Attributes
     ----------
     time : (n,) ndarray
-        [s], on the same time base as the IMU.
+        [s], on the same time base as the IMU, strictly increasing; float64
+        (:func:`check_time_precision`).
     lla : (n, 3) ndarray
         Antenna latitude, longitude [rad], height [m].
     sigma_ned : (n, 3) ndarray
@@ -594,6 +661,7 @@ class GnssData:
     sigma_v_ned: np.ndarray | None = None
 
     def __post_init__(self):
+        check_time_precision("time", self.time)
         t = check_time("time", self.time)
         lla = _as_array("lla", self.lla, (3,), len(t))
         check_lla("lla", lla)

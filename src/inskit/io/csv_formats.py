@@ -22,7 +22,7 @@ import numpy as np
 from .. import rotations as rot
 from ..errors import InputError
 from ..files import require_file, write_csv
-from ..types import GnssData, ImuData, NavSolution
+from ..types import NAVIGATION_COLUMNS, GnssData, ImuData, NavSolution
 from ..units import DEG, DEG_PER_HOUR, G0, MAX_HEIGHT_M, MAX_SPEED_M_S
 from ..types import plain_number
 
@@ -32,8 +32,8 @@ ACCEL_UNITS = {"m_s2": 1.0, "g": G0}
 DTHETA_UNITS = {"rad": 1.0, "deg": DEG}
 DV_UNITS = {"m_s": 1.0}
 
-SOLUTION_COLUMNS = ["time_s", "lat_deg", "lon_deg", "height_m", "vn_m_s", "ve_m_s", "vd_m_s",
-                    "roll_deg", "pitch_deg", "yaw_deg"]
+#: the columns every solution file holds: :data:`inskit.types.NAVIGATION_COLUMNS`, which no extra column may take
+SOLUTION_COLUMNS = list(NAVIGATION_COLUMNS)
 GNSS_COLUMNS = ["time_s", "lat_deg", "lon_deg", "height_m", "sigma_n_m", "sigma_e_m", "sigma_d_m"]
 GNSS_VEL_COLUMNS = ["vn_m_s", "ve_m_s", "vd_m_s", "sigma_vn_m_s", "sigma_ve_m_s", "sigma_vd_m_s"]
 
@@ -765,6 +765,36 @@ def check_imu_time(path, t, column="time_s", check_units=True):
         )
 
 
+#: the IMU column families of each sensor: (prefix, units) of its rates and of its increments
+_IMU_FAMILIES = {"rotation": (("gyro", GYRO_UNITS), ("dtheta", DTHETA_UNITS)),
+                 "specific force": (("accel", ACCEL_UNITS), ("dv", DV_UNITS))}
+
+
+def refuse_imu_column_clash(path, names):
+    """Refuse a header (``names``) that gives one sensor's motion twice: in
+    two units (``gyro_x_rad_s`` and ``gyro_x_deg_s``), or as rates and as
+    increments (``gyro_*`` and ``dtheta_*``, ``accel_*`` and ``dv_*``).
+    The reader would read one and ignore the other without a word (which
+    one depended on the path it took), though they may disagree; the
+    message names the clashing columns, and the user says which one is
+    meant by removing the others."""
+    names = set(names)
+    clashes = []
+    for sensor, families in _IMU_FAMILIES.items():
+        found = []  # the columns of each (prefix, unit) family the header holds
+        for prefix, units in families:
+            for u in units:
+                cols = [f"{prefix}_{a}_{u}" for a in AXES if f"{prefix}_{a}_{u}" in names]
+                if cols:
+                    found.append(cols)
+        if len(found) > 1:
+            clashes.append(f"the {sensor} is given by " + " and by ".join(", ".join(c) for c in found))
+    if clashes:
+        raise InputError(f"{path}: columns that give the same measurement twice: {'; '.join(clashes)}; which one "
+                         "is meant is not guessed (they may disagree): keep one set of columns, one unit, rates "
+                         "(gyro_*, accel_*) or increments (dtheta_*, dv_*) (docs/formats.md)")
+
+
 def _find_triplet(df, prefix, units):
     """Unit of the first complete x/y/z column triplet ``prefix_<axis>_<unit>``."""
     for u in units:
@@ -900,6 +930,7 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", 
         return lean
     path, df = read_table(path)
     require_columns(path, df, ["time_s"], f" (the inskit IMU format; {OTHER_IMU_FORMATS_HINT})")
+    refuse_imu_column_clash(path, df.columns)
     t = numeric_columns(path, df, ["time_s"])[:, 0]
     check_time_column(path, t)
     gu, au = _find_triplet(df, "gyro", GYRO_UNITS), _find_triplet(df, "accel", ACCEL_UNITS)
@@ -989,6 +1020,7 @@ def _read_imu_lean(path, check_units, first_row):
     names = _header_names(path)
     if names is None or "time_s" not in names or first_row == "increment":
         return None
+    refuse_imu_column_clash(path, names)
     header = LeanFrame(names, {})
     du, vu = _find_triplet(header, "dtheta", DTHETA_UNITS), _find_triplet(header, "dv", DV_UNITS)
     if not (du and vu):
@@ -1230,12 +1262,14 @@ def read_gnss(path) -> GnssData:
     a = numeric_columns(path, df, GNSS_COLUMNS)
     check_time_column(path, a[:, 0])
     _check_latlon(path, a[:, 1], a[:, 2])
+    check_ranges(path, {"height_m": a[:, 3]})
     _check_positive(path, df, a[:, 4:7], GNSS_COLUMNS[4:7])
     v = sv = None
     have = [c in df.columns for c in GNSS_VEL_COLUMNS]
     if any(have):
         require_columns(path, df, GNSS_VEL_COLUMNS, " (velocity needs all six velocity columns)")
         b = numeric_columns(path, df, GNSS_VEL_COLUMNS)
+        check_ranges(path, dict(zip(GNSS_VEL_COLUMNS[:3], b[:, :3].T)))
         _check_positive(path, df, b[:, 3:], GNSS_VEL_COLUMNS[3:])
         v, sv = b[:, :3], b[:, 3:]
     lla = np.column_stack([a[:, 1] * DEG, a[:, 2] * DEG, a[:, 3]])
@@ -1257,25 +1291,55 @@ def _check_latlon(path, lat, lon):
 SOLUTION_ANGLE_LIMIT_DEG = 360.0
 
 
-def _check_height_attitude(path, cols):
-    """Heights within +-:data:`~inskit.units.MAX_HEIGHT_M`, velocity
-    components within +-:data:`~inskit.units.MAX_SPEED_M_S` and attitude
-    angles within a full turn either way, else refused naming the row and
-    the column: beyond them the number is another unit or column (a height
-    in mm, a pressure; a yaw of 1e6), which the scoring would wrap or
-    square into nonsense (a height of 1e300: an RMS of inf)."""
-    checks = [("height_m", MAX_HEIGHT_M, f"+-{MAX_HEIGHT_M / 1000:g} km of the ellipsoid (a height in metres)")]
-    checks += [(c, MAX_SPEED_M_S, f"+-{MAX_SPEED_M_S:g} m/s (faster than the Earth's escape speed)")
-               for c in ("vn_m_s", "ve_m_s", "vd_m_s")]
-    checks += [(c, SOLUTION_ANGLE_LIMIT_DEG, f"+-{SOLUTION_ANGLE_LIMIT_DEG:g} degrees (no attitude needs more than "
-                                            "a full turn)") for c in ("roll_deg", "pitch_deg", "yaw_deg")]
-    for c, lim, what in checks:
-        v = cols[c]
+#: the plausibility limit of each height, velocity and attitude column of a solution or GNSS file:
+#: column -> (largest magnitude, what it is) (:func:`check_ranges`)
+RANGE_LIMITS = {"height_m": (MAX_HEIGHT_M, f"+-{MAX_HEIGHT_M / 1000:g} km of the ellipsoid (a height in metres)")}
+RANGE_LIMITS.update({c: (MAX_SPEED_M_S, f"+-{MAX_SPEED_M_S:g} m/s (faster than the Earth's escape speed)")
+                     for c in ("vn_m_s", "ve_m_s", "vd_m_s")})
+RANGE_LIMITS.update({c: (SOLUTION_ANGLE_LIMIT_DEG, f"+-{SOLUTION_ANGLE_LIMIT_DEG:g} degrees (no attitude needs more "
+                                                   "than a full turn)") for c in ("roll_deg", "pitch_deg", "yaw_deg")})
+
+
+def check_ranges(path, cols, *, kinds=None, where=None):
+    """Refuse a value of a height, velocity or attitude column beyond its
+    :data:`RANGE_LIMITS`, naming the file, the line (CSV) or row (Parquet)
+    and the column: beyond them the number is another unit or column (a
+    height in mm, a pressure; a yaw of 1e6), which the scoring would wrap
+    or square into nonsense (a height of 1e300: an RMS of inf).
+
+    Parameters
+    ----------
+    path : Path
+        For the message.
+    cols : dict of str -> (n,) ndarray
+        Columns by name; those with no limit (time, latitude, sigmas ...)
+        are not looked at, and a limited column the file lacks is not
+        asked for.
+    kinds : dict of str -> str, optional
+        The :data:`RANGE_LIMITS` name of a column named otherwise (a .pos
+        file's ``"height(m)"`` is ``"height_m"``; its ``"vu(m/s)"``,
+        the negative of a down velocity, ``"vd_m_s"``).
+    where : callable, optional
+        Row index -> the place a message names (default :func:`at_row`:
+        ``line k`` of a CSV, ``row i`` of a Parquet file).
+    """
+    kinds = kinds or {}
+    for c, v in cols.items():
+        limit = RANGE_LIMITS.get(kinds.get(c, c))
+        if limit is None:
+            continue
+        lim, what = limit
         bad = np.abs(v) > lim
         if bad.any():
             i = int(np.argmax(bad))
-            raise InputError(f"{path}: {at_row(path, i)}: {c}={plain_number(v[i])} is beyond {what}; another unit "
-                             "or column?")
+            at = where(i) if where is not None else at_row(path, i)
+            raise InputError(f"{path}: {at}: {c}={plain_number(v[i])} is beyond {what}; another unit or column?")
+
+
+def _check_height_attitude(path, cols):
+    """:func:`check_ranges` of a solution's columns: height, velocity and
+    attitude (checked in that order)."""
+    check_ranges(path, {c: cols[c] for c in RANGE_LIMITS})
 
 
 def _check_positive(path, df, a, columns):

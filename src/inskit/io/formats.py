@@ -28,6 +28,8 @@ formats.  These functions only forward: the readers do all the checking.
 
 from __future__ import annotations
 
+import numpy as np
+
 from ..errors import InputError
 from ..types import GnssData, ImuData, check_euler
 
@@ -127,11 +129,24 @@ def _check_format(kind, fmt, formats):
         raise InputError(f"unknown {kind} format {fmt!r}; the formats are {_format_list(formats)}")
 
 
+def _same_option(v, w) -> bool:
+    """Is option value ``v`` the value ``w``?  Text compares as text; numbers,
+    sequences and arrays by value (``np.zeros(3)`` is ``[0, 0, 0]``), never
+    by ``!=``, whose answer for an array is an array (which ``if`` refuses
+    with numpy's 'truth value ... is ambiguous')."""
+    if isinstance(v, str) or isinstance(w, str):
+        return isinstance(v, str) and isinstance(w, str) and v == w
+    try:
+        return bool(np.array_equal(np.asarray(v, dtype=object), np.asarray(w, dtype=object)))
+    except (TypeError, ValueError):  # ragged nesting: not the value
+        return False
+
+
 def _refuse_options(path, fmt, given: dict, fixed=None):
     """Refuse options of another format (``fixed``: the value this format
     always has, which may be given)."""
     fixed = fixed or {}
-    bad = [k for k, v in given.items() if v is not None and v != fixed.get(k)]
+    bad = [k for k, v in given.items() if v is not None and not (k in fixed and _same_option(v, fixed[k]))]
     if bad:
         raise InputError(f"{path}: {', '.join(bad)} {'does' if len(bad) == 1 else 'do'} not apply to the {fmt!r} "
                          "format")

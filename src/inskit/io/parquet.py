@@ -31,14 +31,10 @@ import numpy as np
 from ..errors import ConfigError, InputError
 from ..files import CSV_DIGITS, CSV_EXPONENT_BELOW, format_column, round_significant, write_csv_fast  # noqa: F401 (re-exported)
 from ..files import arrow_array, atomic_write, require_file
-from ..types import NavSolution
+from ..types import NAVIGATION_COLUMNS, NavSolution  # the navigation columns, always written (the readers need them)
 
 #: the first four bytes (and the last four) of every Parquet file
 PARQUET_MAGIC = b"PAR1"
-
-#: the navigation columns, always written (the readers need them)
-NAVIGATION_COLUMNS = ("time_s", "lat_deg", "lon_deg", "height_m", "vn_m_s", "ve_m_s", "vd_m_s",
-                      "roll_deg", "pitch_deg", "yaw_deg")
 
 #: column groups of ``[output] columns`` (besides column names)
 COLUMN_GROUPS = ("all", "navigation", "navigation+sigma", "sigma", "estimates")

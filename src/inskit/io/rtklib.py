@@ -18,11 +18,11 @@ from .. import earth
 from .. import rotations as rot
 from ..errors import InputError
 from ..files import require_file
-from ..types import GnssData, ImuData, check_euler
+from ..types import GnssData, ImuData, check_euler, plain_number
 from ..units import DEG, G0, MAX_HEIGHT_M
 from .csv_formats import (GZIP_ERRORS, CheckedBytes, TextFault, _header_names, at_row, check_imu_time,
-                          check_imu_units, check_time_column, cut_short_note, gzip_damage_message, lean_columns,
-                          numeric_columns, read_table, repeated_rows, require_columns)
+                          check_imu_units, check_ranges, check_time_column, cut_short_note, gzip_damage_message,
+                          lean_columns, numeric_columns, read_table, repeated_rows, require_columns)
 from .time_tags import smooth_time_tags
 
 GPS_EPOCH = datetime(1980, 1, 6, tzinfo=timezone.utc)
@@ -72,6 +72,14 @@ def gps_week_seconds(stamps):
     return _week_sow(ns)
 
 
+def outside_week(sow):
+    """Where seconds of week ``sow`` fall outside [0, 604800) (a NaN too): the
+    range every GPS week and seconds of week stamp has (.pos files,
+    the rtklibexplorer IMU log), a later time being a later week."""
+    sow = np.asarray(sow, float)
+    return ~((sow >= 0) & (sow < WEEK_S))
+
+
 def _week_sow(ns):
     week_ns = int(WEEK_S) * 1_000_000_000
     week = ns // week_ns
@@ -103,7 +111,7 @@ def _pos_times_ns(path, tsys, d0, d1, linenos):
             raise InputError(f"{path}: line {linenos[i]}: time {d0[i] + ' ' + d1[i]!r}: expected {expected}") from None
     else:
         sow = _floats(d1)
-        bad = ~np.char.isdigit(d0) | ~((sow >= 0) & (sow < WEEK_S))
+        bad = ~np.char.isdigit(d0) | outside_week(sow)
         if bad.any():
             i = int(np.argmax(bad))
             raise InputError(f"{path}: line {linenos[i]}: time {d0[i] + ' ' + d1[i]!r}: expected {expected}, "
@@ -226,6 +234,9 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0, info=None):
             raise InputError(f"{path}: line {linenos[i]}: column '{c}' has {str(table[i, j])!r}; expected a "
                              f"finite number{cut}")
         num[c] = col
+    # heights and velocities within the limits of the inskit files (an xyz position's height: _pos_from_ecef)
+    check_ranges(path, {c: num[c] for c in _POS_RANGE_KINDS if c in num}, kinds=_POS_RANGE_KINDS,
+                 where=lambda i: f"line {linenos[i]}")
     if form == "dms":
         for c in ("latitude", "longitude"):
             num[f"{c}(deg)"] = _dms_degrees(path, c, table, names, num, linenos)
@@ -334,6 +345,12 @@ _POS_NEED = {
 #: the velocity columns of each form (an xyz file's are rotated into the llh ones: :func:`_pos_from_ecef`)
 _POS_VELOCITY = {"llh": ["vn(m/s)", "ve(m/s)", "vu(m/s)", "sdvn", "sdve", "sdvu"],
                  "xyz": ["vx(m/s)", "vy(m/s)", "vz(m/s)", "sdvx", "sdvy", "sdvz"]}
+
+
+#: the columns of a .pos file with a plausibility limit, as the limit's column of the inskit files
+#: (:data:`inskit.io.csv_formats.RANGE_LIMITS`): the height, and each velocity component (NED or ECEF)
+_POS_RANGE_KINDS = {"height(m)": "height_m", "vn(m/s)": "vn_m_s", "ve(m/s)": "ve_m_s", "vu(m/s)": "vd_m_s",
+                    "vx(m/s)": "vn_m_s", "vy(m/s)": "ve_m_s", "vz(m/s)": "vd_m_s"}
 
 
 def _pos_fields(line, sep):
@@ -480,6 +497,11 @@ def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0
         i = int(np.argmax(bad))
         raise InputError(f"{path}: {at_row(path, i)}: gps_week={float(a[i, 0]):g}; expected a whole GPS week "
                          "number >= 0")
+    bad = outside_week(a[:, 1])
+    if bad.any():  # a later time is a later gps_week: a second of week beyond it is another column or unit
+        i = int(np.argmax(bad))
+        raise InputError(f"{path}: {at_row(path, i)}: gps_sow_s={plain_number(a[i, 1])}; expected seconds of the "
+                         f"GPS week in [0, {WEEK_S:.0f}) (a later time counts in the next gps_week)")
     week = a[:, 0].astype(int)
     if week0 is None:
         week0 = int(week[0])
