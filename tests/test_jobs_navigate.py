@@ -997,6 +997,25 @@ def ship_files(tmp_path_factory):
     return d
 
 
+def test_a_fast_imu_log_in_milliseconds_is_refused_against_the_fixes_span(ship_files, tmp_path):
+    """A 1 kHz rate log stamped in ms steps by exactly 1 "s": the reader's step check lets 1 Hz through (Allan
+    logs), and navigate ran it as a 1 Hz IMU 100 times longer than the fixes, ten 'recovered from a lost state'
+    warnings and an unhealthy verdict that never named the time unit.  Against the fixes' span it is refused."""
+    from inskit.errors import InputError
+    from inskit.jobs.config import config_from_dict
+    from inskit.jobs.navigate import load_inputs
+
+    t = np.arange(0.0, 6001.0)  # 6 s at 1 kHz, in ms: 20 times the fixes' 300 s
+    head = "time_s,gyro_x_rad_s,gyro_y_rad_s,gyro_z_rad_s,accel_x_m_s2,accel_y_m_s2,accel_z_m_s2\n"
+    rows = np.column_stack([t, np.zeros((len(t), 5)), np.full(len(t), -9.8)])
+    (tmp_path / "imu_ms.csv").write_text(head + "\n".join(",".join(f"{x:g}" for x in r) for r in rows) + "\n")
+    cfg = config_from_dict({"imu": {"file": str(tmp_path / "imu_ms.csv")}, "gnss": {"file": str(ship_files / "gnss.csv")},
+                            "output": {"dir": str(tmp_path / "out"), "plots": False}})
+    with pytest.raises(InputError, match=r"^imu_ms\.csv: the IMU steps by 1 s \(median\) and spans 6000 s, 20 times "
+                                         r"the fixes' 300 s \(gnss\.csv\): is its time column in milliseconds"):
+        load_inputs(cfg)
+
+
 def test_the_default_constraint_is_dropped_when_it_does_not_hold(ship_files):
     """A ship navigated with the default settings kept the land vehicle's non-holonomic constraint, took its
     heave for a pitch error and was lost from its sixth second (an 8 h log stopped hours later 'within 0.1 deg

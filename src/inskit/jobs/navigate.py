@@ -410,6 +410,13 @@ def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = N
             + (" With RINEX the IMU time must be GPS seconds of week." if raw is not None else "")
             + time_unit_hint(gnss.time, imu.time)
         )
+    span_g, span_i = float(gnss.time[-1] - gnss.time[0]), float(imu.time[-1] - imu.time[0])
+    if (len(imu) > 1 and float(np.median(np.diff(imu.time[:1001]))) >= 1.0 and span_g > 0.0
+            and span_i >= IMU_SLOW_SPAN_RATIO * span_g):  # a 1 kHz log in ms passes the reader's step check
+        raise InputError(
+            f"{ipath.name}: the IMU steps by {float(np.median(np.diff(imu.time[:1001]))):.4g} s (median) and spans "
+            f"{span_i:.6g} s, {span_i / span_g:.4g} times the fixes' {span_g:.6g} s ({gpath.name}): is its time "
+            "column in milliseconds (a 1 kHz log steps by 1 ms)? times must be seconds")
     start = max(gnss.time[0], cfg.imu.start_s if cfg.imu.start_s is not None else -np.inf)
     k0 = int(np.searchsorted(imu.time, start))
     if len(imu) - k0 < 10:
@@ -420,6 +427,9 @@ def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = N
 #: GNSS fixes and an IMU log of one run whose spans differ more than this many times have a time column in
 #: another unit (milliseconds: a thousand times)
 TIME_SPAN_RATIO_UNIT = 200.0
+#: an IMU log stepping by 1 s or more (the reader's step check lets 1 Hz through, for Allan logs) that spans this
+#: many times the fixes' span is a fast log in milliseconds
+IMU_SLOW_SPAN_RATIO = 20.0
 
 
 def time_unit_hint(t_gnss, t_imu) -> str:
