@@ -344,6 +344,17 @@ def _segments(tmp_path, *segs, head=_HEAD, extra=""):
     return load_scenario(p)
 
 
+@pytest.mark.parametrize("kind", ["climb", "descend"])
+def test_a_climb_at_rest_is_refused(tmp_path, kind):
+    """A climb at speed 0 was a silent no-op (height and pitch stayed 0), while a turn by radius at rest was
+    refused: now it is refused too, naming the segment."""
+    sc = _segments(tmp_path, {"type": kind, "angle_deg": 5, "duration_s": 10}, head=_HEAD.replace("speed_m_s = 10\n", ""))
+    with pytest.raises(ConfigError, match=rf"segment 1 \({kind}\): the vehicle is at rest \(speed 0 m/s\): a climb "
+                                          r"or descent at rest changes neither height nor attitude; accelerate first"):
+        build_trajectory(sc)
+    build_trajectory(_segments(tmp_path, {"type": kind, "angle_deg": 5, "duration_s": 10}))  # at 10 m/s
+
+
 def test_the_rule_table_covers_every_segment_type_and_the_docs():
     from inskit.simulation.scenario import SEGMENT_RULES, SegmentSpec, segment_keys_text
 

@@ -435,6 +435,9 @@ class SegmentTrajectory:
         beyond it backwards and upside down (and down: the height follows
         ``sin(angle)``), which no climb means."""
         tr = self.transition if transition is None else transition
+        if abs(self._v()) <= 1e-9:  # as a turn by radius: at rest a flight path moves nothing (it was a silent no-op)
+            raise ConfigError(f"{self._where('climb')}: the vehicle is at rest (speed 0 m/s): a climb or descent at "
+                              "rest changes neither height nor attitude; accelerate first")
         if not abs(angle) < 0.5 * np.pi:
             raise ConfigError(f"{self._where('climb')}: the flight-path angle must be within (-90, 90) deg "
                               f"(negative: descend), got {np.degrees(angle):g} deg")
