@@ -587,3 +587,26 @@ def test_bench_long_refuses_the_flags_it_would_ignore(flags, given):
     assert r.returncode == 2 and r.stdout == ""
     assert r.stderr.strip() == (f"inskit: error: --long runs only the long navigate figures (whole commands, "
                                 f"minutes): {given} would be ignored; give --long alone, or {given} without it")
+
+
+def test_an_output_folder_of_other_files_is_said_to_hold_them_not_results(capsys, tmp_path):
+    """`--out` on a folder holding only a user's notes.txt was refused as 'already holds results': the
+    refusal is right (nothing of the user's is written among), its words now say what the folder holds
+    and what --force would do there; a folder with an earlier run's summary.json still holds results."""
+    cfg = tmp_path / "c.toml"
+    cfg.write_text('name = "x"\n[imu]\nfile = "nope.csv"\n[gnss]\nfile = "g.csv"\n')  # refused before any read
+    out = tmp_path / "mine"
+    out.mkdir()
+    (out / "notes.txt").write_text("mine")
+    code, _, err = _in_process(capsys, "navigate", cfg, "--out", out)
+    assert code == 2 and err.count("\n") == 1, err
+    assert f"{out}: holds other files (notes.txt) and no results of a run" in err
+    assert "already holds results" not in err and "--force to write the results beside them" in err
+    for name in ("a.csv", "b.csv", "c.csv"):
+        (out / name).write_text("x")
+    code, _, err = _in_process(capsys, "navigate", cfg, "--out", out)
+    assert "holds other files (a.csv, b.csv, c.csv, ...)" in err
+    (out / "summary.json").write_text("{}")
+    code, _, err = _in_process(capsys, "navigate", cfg, "--out", out)
+    assert code == 2 and f"{out}: already holds results (" in err and "--force to replace them" in err
+    assert (out / "notes.txt").read_text() == "mine"

@@ -559,6 +559,31 @@ def test_an_unsolvable_file_names_the_cause():
             spp(obs, other_day)
 
 
+def test_the_mask_hint_names_the_setting_of_the_caller():
+    """"lower --mask (or [gnss] mask_deg)" was said by `inskit navigate` too, which has no --mask: each caller
+    names its own setting (the library its argument, `inskit spp` --mask, `inskit navigate` [gnss] mask_deg)."""
+    from inskit.errors import InputError
+    from inskit.gnss.rinex import read_nav, read_obs
+    from inskit.gnss.spp import spp
+    from inskit.jobs import navigate as N
+    from inskit.jobs.config import config_from_dict
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        obs = read_obs(EXCERPTS / "abpo0080_0000-0200.15o")
+        nav = read_nav(EXCERPTS / "abpo0080.15n")
+        with pytest.raises(InputError, match=r"fewer than the 4 a fix needs .*; lower the mask_deg argument"):
+            spp(obs, nav, mask_deg=60.0)
+        with pytest.raises(InputError, match=r"; lower --mask$"):
+            spp(obs, nav, mask_deg=60.0, settings={"mask": "--mask", "iono": "--iono klobuchar"})
+    cfg = config_from_dict({"imu": {"file": "imu.csv"}, "gnss": {"obs": str(EXCERPTS / "abpo0080_0000-0200.15o"),
+                                                                  "nav": str(EXCERPTS / "abpo0080.15n"),
+                                                                  "mask_deg": 60.0}})
+    with pytest.raises(InputError, match=r"; lower \[gnss\] mask_deg$") as e:
+        N.load_raw_gnss(cfg)
+    assert "--mask" not in str(e.value)
+
+
 def test_satellites_without_a_usable_ephemeris_are_named_by_cause():
     """Observed satellites whose ranges go unused for want of a broadcast
     record were dropped without a word (the walk: 8 Galileo and 5 GPS

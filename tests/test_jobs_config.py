@@ -3,6 +3,7 @@ complete, keys that would be ignored are errors naming the key, the CLI's
 --outages spec maps onto [outages], and [output] dir is relative to the
 config file."""
 
+import re
 from pathlib import Path
 
 import pytest
@@ -517,3 +518,128 @@ def test_a_section_that_is_no_table_is_said_beside_an_override():
         config_from_dict({"imu": 3}, overrides={"imu": {"file": "a.csv"}})
     with pytest.raises(ConfigError, match=r"config: a configuration is a dict of sections .*got list"):
         config_from_dict([("imu", {})])
+
+
+# --- keys a switched-off feature would ignore (an adversarial review: each ran with exit 0 and the results of
+# the run without the key) ----------------------------------------------------------------------------------
+@pytest.mark.parametrize("sections, field, why", [
+    ({"gnss": {"velocity_delay_s": 0.1}}, "gnss.velocity_delay_s", r"use_velocity = false .*use_velocity = true"),
+    ({"gnss": {"velocity_sigma_scale": 2.0}}, "gnss.velocity_sigma_scale", r"use_velocity = false"),
+    ({"gnss": {"quality": [1]}}, "gnss.quality", r"format = \"inskit\" has no quality column.*\"rtklib-pos\""),
+    ({"init": {"sigma_lever_arm_m": 0.5}}, "init.sigma_lever_arm_m", r"filter\.lever_arm = false .*= true"),
+    ({"init": {"sigma_time_offset_s": 0.1}}, "init.sigma_time_offset_s", r"filter\.time_offset = false"),
+    ({"noise": {"time_offset_rw_s_sqrt_s": 1e-4}}, "noise.time_offset_rw_s_sqrt_s", r"filter\.time_offset = false"),
+    ({"init": {"sigma_scale_factor": 0.01}, "filter": {"scale_factors": False}}, "init.sigma_scale_factor",
+     r"filter\.scale_factors = false"),
+    ({"noise": {"scale_factor_rw_ppm_sqrt_s": 5.0}, "filter": {"scale_factors": False}},
+     "noise.scale_factor_rw_ppm_sqrt_s", r"filter\.scale_factors = false"),
+    ({"constraints": {"zupt": False, "zupt_sigma_m_s": 0.05}}, "constraints.zupt_sigma_m_s", r"zupt = false"),
+    ({"constraints": {"nhc": False, "nhc_sigma_m_s": 0.3}}, "constraints.nhc_sigma_m_s", r"nhc = false"),
+    ({"constraints": {"nhc": False, "nhc_lever_arm_b_m": [0.1, 0.0, 0.8]}}, "constraints.nhc_lever_arm_b_m",
+     r"nhc = false"),
+    ({"constraints": {"nhc": False, "zupt": False, "rate_hz": 5.0}}, "constraints.rate_hz", r"apply neither"),
+    ({"noise": {"from_static_per_axis": True}, "init": {"mode": "in-motion"}}, "noise.from_static_per_axis",
+     r"init\.mode = \"in-motion\" has none"),
+    ({"noise": {"from_static_per_axis": True},
+      "init": {"mode": "given", "lat_deg": 45.0, "lon_deg": 7.0, "height_m": 300.0, "rpy_deg": [0, 0, 90]}},
+     "noise.from_static_per_axis", r"init\.mode = \"given\" has none"),
+])
+def test_a_key_of_a_switched_off_feature_is_refused_naming_it(sections, field, why):
+    with pytest.raises(ConfigError, match=rf"^c\.toml: field '{re.escape(field)}': {re.escape(field)}.* would be "
+                                          rf"ignored: .*{why}"):
+        _cfg(LOOSE, **sections)
+
+
+def test_the_same_keys_with_their_feature_on_or_at_their_defaults_load():
+    assert _cfg(LOOSE, gnss={"use_velocity": True, "velocity_delay_s": 0.1}).gnss.velocity_delay_s == 0.1
+    assert _cfg(LOOSE, gnss={"format": "rtklib-pos", "quality": [1]}).gnss.quality == [1]
+    assert _cfg(LOOSE, gnss={"quality": [1, 2], "velocity_sigma_scale": 1.0}).gnss.quality == [1, 2]  # defaults
+    assert _cfg(LOOSE, init={"sigma_lever_arm_m": 0.5}, filter={"lever_arm": True}).init.sigma_lever_arm_m == 0.5
+    assert _cfg(LOOSE, init={"sigma_time_offset_s": 0.1}, noise={"time_offset_rw_s_sqrt_s": 1e-4},
+                filter={"time_offset": True}).filter.time_offset
+    assert _cfg(LOOSE, init={"sigma_scale_factor": 0.01}).init.sigma_scale_factor == 0.01  # scale_factors: default on
+    assert _cfg(LOOSE, constraints={"nhc": False, "zupt_sigma_m_s": 0.05, "rate_hz": 5.0}).constraints.rate_hz == 5.0
+    assert _cfg(LOOSE, constraints={"zupt": False, "nhc_sigma_m_s": 0.3}).constraints.nhc_sigma_m_s == 0.3
+    # "auto" measures on the static start when the log starts at rest
+    assert _cfg(LOOSE, noise={"from_static_per_axis": True}, init={"mode": "auto"}).noise.from_static_per_axis
+    assert _cfg(LOOSE, noise={"from_static_per_axis": True},
+                init={"mode": "static-then-track"}).noise.from_static_per_axis
+
+
+def test_every_navigate_example_loads():
+    """The examples that are navigate configs (not scenarios or studies) still load under the rules."""
+    import tomllib
+
+    loaded = []
+    for f in sorted((ROOT / "examples").glob("*.toml")):
+        data = tomllib.loads(f.read_text())
+        if "imu" in data and "gnss" in data and "segment" not in data and "study" not in data:
+            load_config(f)
+            loaded.append(f.name)
+    assert {"drive_0708.toml", "walk_0827.toml", "walk_0827_tight.toml"} <= set(loaded)
+
+
+def test_a_tune_grid_that_switches_a_feature_off_names_the_key_left_on(tmp_path):
+    """inskit tune builds each candidate from the config and its --grid overrides: a candidate whose switch
+    leaves a key of the file unused is refused like the file would be, naming the key."""
+    with pytest.raises(ConfigError, match=r"drive_0708\.toml: field 'constraints\.nhc_sigma_m_s': .*nhc = false"):
+        load_config(ROOT / "examples" / "drive_0708.toml", {"constraints": {"nhc": False}})
+
+
+# --- [output] columns: checked when the config is loaded ----------------------------------------------------
+def test_output_columns_typo_is_refused_when_the_config_is_loaded(tmp_path):
+    p = _config(tmp_path, '[output]\ncolumns = ["bogus"]\n')
+    with pytest.raises(ConfigError, match=r"c\.toml: field 'output\.columns': 'bogus' is neither a group \(all, "
+                                          r"navigation, .*\) nor a column of the solution of this configuration; "
+                                          r"its columns are time_s, .*sg_x"):
+        load_config(p)
+    # a column of an estimated state this configuration does not have
+    with pytest.raises(ConfigError, match=r"field 'output\.columns': 'lever_x_m' is neither"):
+        _cfg(LOOSE, output={"columns": ["navigation", "lever_x_m"]})
+    assert _cfg(LOOSE, output={"columns": ["navigation", "lever_x_m"]},
+                filter={"lever_arm": True}).output.columns == ["navigation", "lever_x_m"]
+    assert _cfg(LOOSE, output={"columns": "sigma"}).output.columns == ["sigma"]
+    tight = _cfg(TIGHT, output={"columns": ["clock_bias_m", "isb_E_m", "clock_drift_m_s"]})
+    assert tight.output.columns[1] == "isb_E_m"
+    with pytest.raises(ConfigError, match=r"field 'output\.columns': 'isb_E_m' is neither"):
+        _cfg(TIGHT, gnss={"systems": ["G"]}, output={"columns": ["isb_E_m"]})
+
+
+def test_output_columns_typo_is_refused_by_navigate_before_any_data_is_read(tmp_path, captured):
+    from inskit.cli import cli
+
+    p = _config(tmp_path, '[output]\ncolumns = ["navigation", "bogus"]\n')  # imu.csv and gnss.csv do not exist
+    r = CliRunner().invoke(cli, ["navigate", str(p), "--out", str(tmp_path / "o")])
+    assert isinstance(r.exception, ConfigError) and not captured
+    assert "field 'output.columns': 'bogus' is neither" in str(r.exception) and str(p) in str(r.exception)
+
+
+# --- outage windows: said where they came from -----------------------------------------------------------------
+def test_overlapping_windows_of_the_command_line_are_said_of_outages(tmp_path, captured):
+    from inskit.cli import cli
+
+    r = CliRunner().invoke(cli, ["navigate", str(_config(tmp_path)), "--outages", "windows:15-25,20-40",
+                                 "--out", str(tmp_path / "o")])
+    assert isinstance(r.exception, InputError) and not captured
+    msg = str(r.exception)
+    assert msg.startswith("--outages windows:15-25,20-40: outage windows [15, 25] and [20, 40] overlap"), msg
+    assert "c.toml" not in msg and "windows_s" not in msg
+    with pytest.raises(InputError, match=r"^--outages windows:15-25,25-40: outage windows \[15, 25\] and \[25, 40\] "
+                                         r"touch: .*merge them into \[15, 40\]"):
+        outages_from_spec("windows:15-25,25-40")
+
+
+def test_touching_windows_in_the_file_are_refused_when_it_is_loaded(tmp_path):
+    p = _config(tmp_path, '[outages]\nprotocol = "windows"\nwindows_s = [[100, 110], [110, 120]]\n')
+    with pytest.raises(ConfigError, match=r"c\.toml: field 'outages\.windows_s': outage windows \[100, 110\] and "
+                                          r"\[110, 120\] touch: they are one outage.*merge them into \[100, 120\]"):
+        load_config(p)
+
+
+@pytest.mark.parametrize("text", ["[100.0, 110.0]", "100.0", "[[100, 110, 120]]", "[[100, 110], 120]"])
+def test_windows_that_are_no_list_of_pairs_say_what_is_expected(tmp_path, text):
+    p = _config(tmp_path, f'[outages]\nprotocol = "windows"\nwindows_s = {text}\n')
+    with pytest.raises(ConfigError, match=r"c\.toml: field 'outages\.windows_s': .* windows_s is a list of \[start, "
+                                          r"end\] pairs in seconds after the first GNSS epoch, e\.g\. windows_s = "
+                                          r"\[\[100, 110\]"):
+        load_config(p)

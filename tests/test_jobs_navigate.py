@@ -632,7 +632,8 @@ def test_an_odometer_in_the_wrong_unit_is_refused_by_its_speed():
         check_odometer_speed("odo.csv", to, v * 2.237, gnss)
 
 
-@pytest.mark.parametrize("windows", [[[100.0, 120.0], [120.0, 140.0]],    # touching: the fix at 120 s withheld twice
+@pytest.mark.parametrize("windows", [[[100.0, 120.0], [120.5, 140.0]],    # 0.5 s apart, no fix between (touching
+                                     # windows are refused when the config is loaded: test_jobs_config)
                                      [[130.0, 140.0], [100.0, 120.0], [120.5, 129.0]],  # unsorted, 0.5 s apart
                                      [[100.0, 120.0], [121.0, 140.0]]])   # 1 s apart: the fix at 121 s is withheld
 def test_outage_windows_without_a_used_fix_between_are_refused(windows):
@@ -651,7 +652,7 @@ def test_outage_windows_without_a_used_fix_between_are_refused(windows):
                                          r"first GNSS epoch leave no used fix between them .*merge them"):
         outage_windows(cfg, gnss)
     ok = load_config(EXAMPLE, {"outages": {"protocol": "windows", "windows_s": [[100.0, 120.0], [121.5, 140.0],
-                                                                              [500.0, 600.0], [600.0, 700.0]]}})
+                                                                              [500.0, 600.0], [600.5, 700.0]]}})
     assert outage_windows(ok, gnss)[:2] == [(1100.0, 1120.0), (1121.5, 1140.0)]  # the fix at 121 s is used;
     # beyond the fixes the windows withhold nothing and are reported as not scored, not refused
 
@@ -754,6 +755,17 @@ def test_aiding_warnings_name_the_log_and_why_it_made_no_update():
                  "filter, so it fuses nothing but the fixes): the run is as if it had none"]
 
 
+def test_the_columns_known_from_the_config_are_the_run_s(drive_inputs):
+    """[output] columns is checked when the config is loaded against solution_column_names(cfg): they must be
+    the columns the run's solution has (the drive: scale factors, mounting, the fixes' correlated error)."""
+    from inskit.jobs.navigate import solution_column_names
+
+    cfg, _, _, clean = drive_inputs
+    names = solution_column_names(cfg)
+    assert list(clean.forward.solution.columns()) == names
+    assert {"sg_x", "mounting_yaw_rad", "gnss_err_n_m", "sigma_att_d_rad"} <= set(names)
+
+
 def test_the_uncoupled_scheme_writes_its_solution_without_sigmas(drive_inputs, tmp_path):
     """[filter] scheme = "uncoupled" has no covariance: its sigma columns were NaN and the Parquet writer refused
     the whole solution ('refusing to write nan (column 'sigma_n_m', row 0)') after the run.  Now the solution
@@ -764,12 +776,18 @@ def test_the_uncoupled_scheme_writes_its_solution_without_sigmas(drive_inputs, t
 
     _, imu, gnss, _ = drive_inputs
     cfg = load_config(EXAMPLE, {"output": {"plots": True}, "filter": {"scheme": "uncoupled"},
-                                "constraints": {"mounting": False, "nhc": False, "zupt": False}})
+                                "constraints": {"mounting": False, "nhc": False, "zupt": False,
+                                                # the example's NHC keys back at their defaults (with nhc = false
+                                                # they would be ignored, and are refused)
+                                                "nhc_sigma_m_s": 0.1, "nhc_lever_arm_b_m": [0.0, 0.0, 0.0]}})
     res = navigate(cfg, inputs=(imu, gnss))
     s = summary(res)
     files = write_outputs(res, tmp_path, s)
     t = pq.read_table(tmp_path / "solution_forward.parquet")
     assert not [c for c in t.column_names if c.startswith("sigma_")], t.column_names
+    from inskit.jobs.navigate import solution_column_names
+
+    assert sorted(t.column_names) == sorted(solution_column_names(cfg))  # what [output] columns is checked against
     assert {"lat_deg", "lon_deg", "height_m", "roll_deg"} <= set(t.column_names)
     assert all(np.isfinite(t.column(c).to_numpy()).all() for c in t.column_names)
     assert t.num_rows == len(res.forward.nav.time) and (tmp_path / "summary.json") in files

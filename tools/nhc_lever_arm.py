@@ -34,7 +34,11 @@ def _mean(x, k=10):
 
 
 def main(config, min_speed=3.0, margin_s=1.0):
-    run = api.navigate(config, smooth=True, constraints={"nhc": False, "mounting": False},
+    from inskit.jobs.config import ConstraintsSection
+
+    # the constraint's own keys back at their defaults: with nhc = false they would be ignored (and are refused)
+    off = {k: ConstraintsSection.model_fields[k].default for k in ("nhc_sigma_m_s", "nhc_lever_arm_b_m")}
+    run = api.navigate(config, smooth=True, constraints={"nhc": False, "mounting": False, **off},
                        output={"stream": "off"})
     sol, imu, windows = run.smoothed, run.details.imu, run.details.windows
     dt = np.diff(imu.time, prepend=imu.time[0] - np.median(np.diff(imu.time)))

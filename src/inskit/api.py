@@ -154,8 +154,10 @@ def navigate(config, *, smooth=False, truth=None, out_dir=None, overwrite=False,
         config's ``[output] dir`` (``out/<name>`` without one).  Default
         None: nothing is written.
     overwrite : bool
-        Write into an ``out_dir`` that already holds files (the files an
-        earlier run listed are removed first, as ``--force`` does).
+        Write into an ``out_dir`` that already holds files (files of the
+        same names are replaced, and the files an earlier run listed in its
+        summary removed once the new set is in place, as ``--force`` does;
+        other files stay).
     progress : callable, optional
         Called with the number of IMU epochs done, now and then.
     log : callable, optional
@@ -173,7 +175,8 @@ def navigate(config, *, smooth=False, truth=None, out_dir=None, overwrite=False,
     ------
     ConfigError, InputError
         A bad config (naming the key) or input file (naming file and line);
-        an ``out_dir`` that holds results without ``overwrite``.
+        an ``out_dir`` that is not empty without ``overwrite`` (the message
+        says what it holds: an earlier run's results, or other files).
     """
     from . import io
     from .files import check_folder_writable
@@ -194,8 +197,9 @@ def navigate(config, *, smooth=False, truth=None, out_dir=None, overwrite=False,
             target = cfg.resolve(cfg.output.dir) if cfg.output.dir else Path("out") / cfg.name
         else:
             target = out_dir
-        if target.is_dir() and any(target.iterdir()) and not overwrite:
-            raise InputError(f"{target}: already holds results; refusing to overwrite them (overwrite=True)")
+        occupied = None if overwrite else N.occupied_folder_message(target, "overwrite=True", "another out_dir")
+        if occupied:
+            raise InputError(occupied)
         check_folder_writable(target)  # before the computation, not after it; a file there: 'is a file; ...'
     if truth is not None and not isinstance(truth, NavSolution):
         truth = io.read_solution(truth)

@@ -328,7 +328,8 @@ def bench(quick, no_cli, long_runs, as_json):
               help="First find the IMU time offset that minimises the GNSS innovations, then run with it "
               "(sets [imu] time_offset_search = \"calibrate\").")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Output folder (default from config).")
-@click.option("--force", is_flag=True, help="Overwrite an output folder that already holds results.")
+@click.option("--force", is_flag=True, help="Write into an output folder that is not empty: files of the same "
+              "names are replaced, and those an earlier run there listed in its summary.json go; other files stay.")
 @click.option("--no-plots", is_flag=True, help="Skip the PNG plots.")
 @click.option("--output-format", type=click.Choice(["parquet", "csv", "both"]),
               help="Solution files: Parquet at every IMU epoch, CSV at --output-rate, or both (default: the "
@@ -396,8 +397,9 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
     from .files import check_folder_writable, same_file
 
     target = Path(out_dir) if out_dir else (cfg.resolve(cfg.output.dir) if cfg.output.dir else Path("out") / cfg.name)
-    if target.is_dir() and any(target.iterdir()) and not force:  # a file there: check_folder_writable says so
-        raise InputError(f"{target}: already holds results; refusing to overwrite them (use --force or --out)")
+    occupied = None if force else N.occupied_folder_message(target)  # a file there: check_folder_writable says so
+    if occupied:
+        raise InputError(occupied)
     for name in ("solution_forward.csv", "solution_smoothed.csv", "solution_forward.parquet",
                  "solution_smoothed.parquet", "summary.json"):
         inputs = [cfg.resolve(f) for f in (cfg.imu.file, cfg.gnss.file, cfg.gnss.obs, cfg.gnss.nav) if f is not None]

@@ -786,8 +786,13 @@ def _approx_ok(r):
     return r.shape == (3,) and bool(np.isfinite(r).all()) and 6.2e6 < float(np.linalg.norm(r)) < 6.6e6
 
 
+#: how a caller of :func:`spp` sets the elevation mask and the ionospheric model, for its messages: the
+#: function's own arguments (``inskit spp`` says --mask and --iono, ``inskit navigate`` its [gnss] keys)
+SPP_SETTINGS = {"mask": "the mask_deg argument", "iono": "iono=\"klobuchar\""}
+
+
 def spp(obs, nav, *, mask_deg=10.0, iono="klobuchar", tropo="saastamoinen", raim=True, systems=("G", "E"),
-        code="C1C", doppler="D1C", alpha=None, beta=None, p_fa=1e-3, max_hdop=10.0, timing=None):
+        code="C1C", doppler="D1C", alpha=None, beta=None, p_fa=1e-3, max_hdop=10.0, timing=None, settings=None):
     """Single-point positioning of every epoch of an observation file.
 
     Two passes, because the tropospheric and ionospheric corrections and the
@@ -821,12 +826,19 @@ def spp(obs, nav, *, mask_deg=10.0, iono="klobuchar", tropo="saastamoinen", raim
         ``dropped`` (the final range table's dropped-row counts by reason)
         and ``no_ephemeris`` (satellite -> ranges unused for want of an
         ephemeris).
+    settings : dict, optional
+        How the caller sets the elevation mask (``"mask"``) and the
+        ionospheric model (``"iono"``), named in the messages that suggest
+        changing them (default :data:`SPP_SETTINGS`, this function's
+        arguments; a command names its own options or config keys).
 
     Returns
     -------
     SppSolution
     """
     from .ranges import range_table
+
+    settings = {**SPP_SETTINGS, **(settings or {})}
 
     systems = tuple(systems)
     kw = {"code": code, "doppler": doppler, "systems": systems, "alpha": alpha, "beta": beta}
@@ -871,7 +883,7 @@ def spp(obs, nav, *, mask_deg=10.0, iono="klobuchar", tropo="saastamoinen", raim
     if not np.isfinite(rx).any():
         raise InputError(f"{getattr(obs, 'path', 'observations')}: no epoch could be solved ({n_ep} epochs, "
                          f"{len(tab.pseudorange_m)} usable {code} ranges without elevation mask; "
-                         f"{_unsolvable_hint(obs, nav, tab)}{_with(ephemeris_note(obs, nav, tab))}")
+                         f"{_unsolvable_hint(obs, nav, tab, settings=settings)}{_with(ephemeris_note(obs, nav, tab))}")
     if header_note is not None:
         far = float(np.median(np.linalg.norm(rx[np.isfinite(rx).all(axis=1)] - header_note, axis=1)))
         header_note = None if far < _HEADER_FAR_M else (
@@ -893,7 +905,7 @@ def spp(obs, nav, *, mask_deg=10.0, iono="klobuchar", tropo="saastamoinen", raim
     if not (sol.status > 0).any():
         raise InputError(f"{getattr(obs, 'path', 'observations')}: no epoch could be solved ({n_ep} epochs, "
                          f"{len(tab.pseudorange_m)} usable {code} ranges above the {mask_deg:g} deg elevation mask; "
-                         f"{_unsolvable_hint(obs, nav, tab, mask_deg)}{_with(ephemeris_note(obs, nav, tab))}")
+                         f"{_unsolvable_hint(obs, nav, tab, mask_deg, settings)}{_with(ephemeris_note(obs, nav, tab))}")
     eph_note = ephemeris_note(obs, nav, tab)
     code_note = codes_note(obs, tab)
     for n_ in (code_note, eph_note):
@@ -1098,10 +1110,13 @@ def _span(t):
     return a if a == b else f"{a} .. {b}"
 
 
-def _unsolvable_hint(obs, nav, tab, mask_deg=None):
+def _unsolvable_hint(obs, nav, tab, mask_deg=None, settings=None):
     """Why no epoch could be solved, from the range table's dropped rows
     (a pass without mask): the navigation file's ephemeris span against
-    the observation span, or too few satellites per epoch."""
+    the observation span, or too few satellites per epoch.  ``settings``
+    names how the caller sets the mask and the ionospheric model
+    (:data:`SPP_SETTINGS`)."""
+    settings = {**SPP_SETTINGS, **(settings or {})}
     dropped = dict(getattr(tab, "dropped", {}) or {})
     text = ", ".join(f"{k} {v}" for k, v in dropped.items() if v) or "none"
     if dropped.get("no_ephemeris") and not dropped.get("below_mask") and len(tab.pseudorange_m) == 0:
@@ -1114,13 +1129,13 @@ def _unsolvable_hint(obs, nav, tab, mask_deg=None):
                f"{_span(nav.toe)}, the observations {_span(obs.time)} GPS time")
         return f"rows dropped: {text}): {why}"
     if dropped.get("no_second_code") and len(tab.pseudorange_m) == 0:
-        return f"rows dropped: {text}): iono-free needs a second-frequency code; use --iono klobuchar"
+        return f"rows dropped: {text}): iono-free needs a second-frequency code; use {settings['iono']}"
     ep = np.asarray(getattr(tab, "epoch", np.zeros(0, int)), dtype=np.int64)
     most = int(np.bincount(ep).max()) if ep.size else 0
     if most < 4 and mask_deg is not None and dropped.get("below_mask"):
         return (f"rows dropped: {text}): the elevation mask of {mask_deg:g} deg leaves at most {most} "
-                "satellite(s) at any epoch, fewer than the 4 a fix needs (position and one clock); lower --mask "
-                "(or [gnss] mask_deg)")
+                f"satellite(s) at any epoch, fewer than the 4 a fix needs (position and one clock); lower "
+                f"{settings['mask']}")
     if most < 4:
         return (f"rows dropped: {text}): at most {most} satellite(s) with an ephemeris at any epoch, fewer than "
                 "the 4 a fix needs (position and one clock); does the navigation file cover the observation time "
@@ -1136,6 +1151,7 @@ __all__ = [
     "REFUSAL_NAMES",
     "SINGULAR",
     "SOLVED",
+    "SPP_SETTINGS",
     "STATUS_NAMES",
     "TOO_FEW",
     "UNSOLVED",

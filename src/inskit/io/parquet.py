@@ -175,6 +175,9 @@ def select_columns(names, spec=("all",)) -> list:
     """
     spec = [spec] if isinstance(spec, str) else list(spec)
     names = list(names)
+    bad = column_spec_error(names, spec)
+    if bad:
+        raise ConfigError(f"[output] columns: {bad}")
     nav = set(NAVIGATION_COLUMNS)
     want = set(nav)
     for s in spec:
@@ -186,12 +189,25 @@ def select_columns(names, spec=("all",)) -> list:
             want.update(n for n in names if n.startswith("sigma_"))
         elif s == "estimates":
             want.update(n for n in names if n not in nav and not n.startswith("sigma_"))
-        elif s in names:
-            want.add(s)
         else:
-            raise ConfigError(f"[output] columns: {s!r} is neither a group ({', '.join(COLUMN_GROUPS)}) nor a "
-                              f"column of this solution; its columns are {', '.join(names)}")
+            want.add(s)
     return [n for n in names if n in want]
+
+
+def column_spec_error(names, spec, of="this solution") -> str | None:
+    """Why the ``[output] columns`` spec ``spec`` (groups and column names)
+    does not fit a solution whose columns are ``names``: the first entry
+    that is neither a group (:data:`COLUMN_GROUPS`) nor one of ``names``,
+    said with the groups and the columns there are (``of`` names the
+    solution); None when every entry is one.  The check of
+    :func:`select_columns`, and of a navigate config before its run."""
+    spec = [spec] if isinstance(spec, str) else list(spec)
+    names = list(names)
+    for s in spec:
+        if s not in COLUMN_GROUPS and s not in names:
+            return (f"{s!r} is neither a group ({', '.join(COLUMN_GROUPS)}) nor a column of {of}; its columns are "
+                    f"{', '.join(names)}")
+    return None
 
 
 def decimation_index(time, rate_hz=None) -> np.ndarray:

@@ -10,7 +10,12 @@ not a silent no-op (:class:`~inskit.errors.ConfigError` naming the key):
 without windows or without tight coupling, ``[gnss]`` RINEX and tight-coupling
 keys changed from their defaults where no RINEX is read or no pseudorange is
 fused, loose-coupling keys with tight coupling, ``[init]`` keys of the other
-start-up mode.  The reference of every key is ``docs/config.md``, generated
+start-up mode, the velocity keys without ``use_velocity``, ``quality``
+without a .pos file, the keys of an optional state (scale factors, lever
+arm, time offset) with the state off, a constraint's keys with the
+constraint off.  Only a key changed from its default counts (:func:`_changed`).
+``[output] columns`` are checked against the columns the configuration's
+solution has.  The reference of every key is ``docs/config.md``, generated
 from these models by ``python -m inskit.jobs.config_doc --write``.
 """
 
@@ -141,6 +146,10 @@ GNSS_LOOSE_KEYS = ("use_velocity", "velocity_delay_s", "velocity_sigma_scale", "
                    "error_tau_s")
 #: [gnss] keys that describe how ``file`` is read
 GNSS_FILE_KEYS = ("format", "quality", "time_offset_s")
+#: [gnss] formats of ``file`` with a quality column (``quality`` selects its rows)
+GNSS_QUALITY_FORMATS = ("rtklib-pos",)
+#: [gnss] keys of the fixes' velocity updates (they need use_velocity)
+GNSS_VELOCITY_KEYS = ("velocity_delay_s", "velocity_sigma_scale")
 
 
 def _names(keys, section="gnss"):
@@ -163,7 +172,10 @@ class GnssSection(_Strict):
     tight-coupling keys with loose coupling from RINEX; the loose-coupling keys
     (use_velocity, velocity_delay_s, velocity_sigma_scale, sigma_floor_m,
     error_sigma_m, error_tau_s) with tight coupling; format, quality and
-    time_offset_s without a ``file``; error_tau_s without error_sigma_m.
+    time_offset_s without a ``file``; quality with a format other than
+    "rtklib-pos" (only a .pos file has a quality column); velocity_delay_s
+    and velocity_sigma_scale without use_velocity; error_tau_s without
+    error_sigma_m.
     """
 
     coupling: Literal["loose", "tight"] = Field(
@@ -176,18 +188,19 @@ class GnssSection(_Strict):
         "inskit", description="layout of `file`: 'inskit' (our CSV of fixes, docs/formats.md) or 'rtklib-pos' "
         "(an RTKLIB .pos solution, GPS time)")
     time_offset_s: float = Field(0.0, description="added to every time tag of `file`")
-    quality: list[int] = Field([1, 2], description="rtklib-pos: the Q flags kept (1 fix, 2 float, 5 single, ...); "
-                               "other rows are dropped")
+    quality: list[int] = Field([1, 2], description="format 'rtklib-pos' only (the one with a quality column): "
+                               "the Q flags kept (1 fix, 2 float, 5 single, ...); other rows are dropped")
     height_offset_m: float = Field(0.0, description="added to the fixes' heights (e.g. the geoid separation, "
                                    "-21.4 m on walk_0827, turns u-blox heights above sea level into ellipsoidal)")
     lever_arm_b_m: tuple[float, float, float] = Field(
         (0.0, 0.0, 0.0), description="antenna position relative to the IMU in body axes (forward, right, down)")
     use_velocity: bool = Field(False, description="loose coupling: fuse the fixes' velocity as well as their "
                                "position")
-    velocity_delay_s: float = Field(0.0, description="loose coupling: a fix's velocity describes the antenna this "
-                                    "long before its time tag (a lagging receiver velocity)")
-    velocity_sigma_scale: float = Field(1.0, gt=0, description="loose coupling: multiplies the fixes' velocity "
-                                        "sigmas")
+    velocity_delay_s: float = Field(0.0, description="loose coupling with use_velocity: a fix's velocity "
+                                    "describes the antenna this long before its time tag (a lagging receiver "
+                                    "velocity)")
+    velocity_sigma_scale: float = Field(1.0, gt=0, description="loose coupling with use_velocity: multiplies "
+                                        "the fixes' velocity sigmas")
     sigma_floor_m: float = Field(0.0, ge=0, description="loose coupling: lower bound on the fixes' position sigmas "
                                  "(0: as the file gives them)")
     error_sigma_m: float | None = Field(None, gt=0, description="loose coupling: steady-state sigma of a "
@@ -271,6 +284,18 @@ class GnssSection(_Strict):
                 raise _key_error(bad[0], f"{_names(bad)} would be ignored: "
                                  f"{_they(bad, 'it describes', 'they describe')} how gnss.file is read, and no "
                                  "`file` is given (the fixes are our single-point solution of obs and nav)")
+        elif self.format not in GNSS_QUALITY_FORMATS and _changed(self, ("quality",)):
+            raise _key_error("quality", f"gnss.quality would be ignored: it selects rows by the quality flag Q of "
+                             f"an RTKLIB .pos file (format = \"rtklib-pos\"), and format = \"{self.format}\" has "
+                             "no quality column; remove it, or set format = \"rtklib-pos\" if gnss.file is a .pos "
+                             "solution")
+        if self.coupling == "loose" and not self.use_velocity:
+            bad = _changed(self, GNSS_VELOCITY_KEYS)
+            if bad:
+                raise _key_error(bad[0], f"{_names(bad)} would be ignored: "
+                                 f"{_they(bad, 'it describes', 'they describe')} the fixes' velocity, and "
+                                 "use_velocity = false fuses only their position; set gnss.use_velocity = true, or "
+                                 f"remove {_they(bad, 'it', 'them')}")
         return self
 
 
@@ -292,7 +317,10 @@ class NoiseSection(_Strict):
     ``accel_turn_on_bias_mg``; the older ``[init]`` keys
     ``sigma_gyro_bias_deg_s`` and ``sigma_accel_bias_m_s2`` still work
     (their defaults apply when neither spelling is given), and giving both
-    spellings of one is an error.
+    spellings of one is an error.  ``from_static_per_axis = true`` needs
+    ``from_static`` and a start-up that can measure on a static start
+    (init.mode "static-then-track" or "auto"; "in-motion" and "given" have
+    none).
     """
 
     gyro_arw_deg_sqrt_h: float = Field(0.3, gt=0, description="gyro angle random walk (white rate noise)")
@@ -334,7 +362,8 @@ class NoiseSection(_Strict):
         "(init.mode = \"static-then-track\")"
     )
     from_static_per_axis: bool = Field(
-        False, description="with from_static: measure the white noise of each body axis on its own (each raised "
+        False, description="with from_static (init.mode \"static-then-track\" or \"auto\"): measure the white "
+        "noise of each body axis on its own (each raised "
         "to gyro_arw_deg_sqrt_h / accel_vrw_m_s_sqrt_h) and rotate it into NED at every step, instead of one "
         "quadratic mean over the three axes for every axis (a car's gyro shakes about its pitch axis: 14 against "
         "0.7 deg/sqrt(h) about yaw on drive_0708)")
@@ -493,7 +522,9 @@ class ConstraintsSection(_Strict):
 
     Rules: sigma_mounting_deg and mounting_rw_deg_sqrt_h need mounting =
     true; mounting = true needs nhc = true or odometer.with_nhc = true, and a
-    filter (not the uncoupled scheme).
+    filter (not the uncoupled scheme); zupt_sigma_m_s needs zupt = true,
+    nhc_sigma_m_s and nhc_lever_arm_b_m need nhc = true, rate_hz needs one
+    of them (changed from their defaults, they would be ignored).
     """
 
     zupt: bool = Field(True, description="zero-velocity updates while the GNSS fixes show the vehicle at rest")
@@ -521,9 +552,35 @@ class ConstraintsSection(_Strict):
                              "only with constraints.mounting = true")
         return self
 
+    @model_validator(mode="after")
+    def _constraint_keys(self):
+        if not self.zupt and _changed(self, ("zupt_sigma_m_s",)):
+            raise _key_error("zupt_sigma_m_s", "constraints.zupt_sigma_m_s would be ignored: it is the sigma of the "
+                             "zero-velocity updates, and zupt = false applies none; set constraints.zupt = true, or "
+                             "remove it")
+        bad = [] if self.nhc else _changed(self, ("nhc_sigma_m_s", "nhc_lever_arm_b_m"))
+        if bad:
+            raise _key_error(bad[0], f"{_names(bad, 'constraints')} would be ignored: "
+                             f"{_they(bad, 'it tunes', 'they tune')} the non-holonomic constraint, and nhc = false "
+                             "applies none (odometer.with_nhc has its own nhc_sigma_m_s and takes the wheel point "
+                             "odometer.lever_arm_b_m); set constraints.nhc = true, or remove "
+                             f"{_they(bad, 'it', 'them')}")
+        if not self.zupt and not self.nhc and _changed(self, ("rate_hz",)):
+            raise _key_error("rate_hz", "constraints.rate_hz would be ignored: it is the rate of the zero-velocity "
+                             "and non-holonomic updates, and zupt = false and nhc = false apply neither; remove it")
+        return self
+
 
 class FilterSection(_Strict):
-    """The integration scheme and the error state."""
+    """The integration scheme and the error state.
+
+    Rules: the keys of other sections that describe an optional state are
+    refused, changed from their defaults, when the state is off (they would
+    be ignored): init.sigma_scale_factor and
+    noise.scale_factor_rw_ppm_sqrt_s need scale_factors = true,
+    init.sigma_lever_arm_m needs lever_arm = true, init.sigma_time_offset_s
+    and noise.time_offset_rw_s_sqrt_s need time_offset = true.
+    """
 
     scheme: Literal["closed", "open", "uncoupled"] = Field(
         "closed", description="closed: estimated errors fed back into the INS; open: the INS runs free and its "
@@ -548,12 +605,37 @@ class FilterSection(_Strict):
                                      "integrates every IMU row whatever it is; 0: at every IMU row")
 
 
+_WINDOWS_EXAMPLE = "windows_s = [[100, 110], [130, 145]]"
+
+
+def _shown_window(v):
+    return "a table" if isinstance(v, dict) else repr(v)
+
+
+def windows_conflict(windows):
+    """Why the outage windows ``windows`` (``[start, end]`` pairs) cannot be
+    taken as they are, or None: two that overlap (their fixes would be
+    scored twice) or touch (one outage, the first without an end of its
+    own); the words name no source (the caller says where they came from)."""
+    w = sorted((float(a), float(b)) for a, b in windows)
+    for (a0, b0), (a1, b1) in zip(w, w[1:]):
+        if a1 < b0:
+            return (f"outage windows [{a0:g}, {b0:g}] and [{a1:g}, {b1:g}] overlap (their fixes would be scored "
+                    f"twice); merge them into [{a0:g}, {max(b0, b1):g}]")
+        if a1 == b0:
+            return (f"outage windows [{a0:g}, {b0:g}] and [{a1:g}, {b1:g}] touch: they are one outage, and the first "
+                    f"would have no end of its own; merge them into [{a0:g}, {b1:g}] or leave a gap with a fix "
+                    "between them")
+    return None
+
+
 class OutagesSection(_Strict):
     """GNSS outages: fixes (or satellites) withheld to score the coasting INS.
 
     Rules: windows_s needs protocol = "windows", and protocol = "windows"
-    needs windows_s; keep_satellites needs windows (protocol "windows" or
-    "rtklibexplorer") and tight coupling.
+    needs windows_s; its windows may neither overlap nor touch (merge them);
+    keep_satellites needs windows (protocol "windows" or "rtklibexplorer")
+    and tight coupling.
     """
 
     protocol: Literal["none", "rtklibexplorer", "windows"] = Field(
@@ -565,20 +647,31 @@ class OutagesSection(_Strict):
     keep_satellites: int = Field(0, ge=0, le=12, description="tight coupling: satellites kept inside each "
                                  "window (the highest ones), 0 for a full outage")
 
+    @field_validator("windows_s", mode="before")
+    @classmethod
+    def _pairs(cls, v):
+        if isinstance(v, (list, tuple)):
+            for w in v:
+                if not isinstance(w, (list, tuple)) or len(w) != 2:
+                    raise ValueError(f"{_shown_window(w)} is not a window: windows_s is a list of [start, end] pairs "
+                                     f"in seconds after the first GNSS epoch, e.g. {_WINDOWS_EXAMPLE}")
+        else:
+            raise ValueError(f"{_shown_window(v)} is not a list of windows: windows_s is a list of [start, end] "
+                             f"pairs in seconds after the first GNSS epoch, e.g. {_WINDOWS_EXAMPLE}")
+        return v
+
     @field_validator("windows_s")
     @classmethod
     def _ordered(cls, v):
         for a, b in v:
             if not b > a:
-                raise ValueError(f"outage window [{a}, {b}] must end after it starts")
+                raise ValueError(f"outage window [{a:g}, {b:g}] must end after it starts")
             if a < 0:
-                raise ValueError(f"outage window [{a}, {b}] starts before the first GNSS epoch (times are seconds "
-                                 "after it, >= 0)")
-        w = sorted(v)
-        for (a0, b0), (a1, b1) in zip(w, w[1:]):
-            if a1 < b0:
-                raise ValueError(f"outage windows [{a0}, {b0}] and [{a1}, {b1}] overlap (their fixes would be "
-                                 "scored twice); merge them")
+                raise ValueError(f"outage window [{a:g}, {b:g}] starts before the first GNSS epoch (times are "
+                                 "seconds after it, >= 0)")
+        clash = windows_conflict(v)
+        if clash:
+            raise ValueError(clash)
         return v
 
     @model_validator(mode="after")
@@ -623,7 +716,8 @@ class OutputSection(_Strict):
         ["all"], description="columns of the solution files: groups \"all\", \"navigation\" (time, position, "
         "velocity, attitude), \"navigation+sigma\", \"sigma\", \"estimates\" (biases, scale factors, lever arm, "
         "clock ...) and column names, combined (a single string is a one-element list); the navigation columns "
-        "are always written")
+        "are always written. A name that is neither a group nor a column the solution of this configuration has "
+        "(its states: filter.scale_factors, gnss.coupling ...) is refused when the config is loaded")
 
     @field_validator("columns", mode="before")
     @classmethod
@@ -762,6 +856,17 @@ class HeightSection(_Strict):
         return self
 
 
+#: the [filter] switches of optional states, the keys of other sections that describe each state (they would be
+#: ignored without it) and what the state is
+FILTER_STATE_KEYS = (
+    ("scale_factors", (("init", ("sigma_scale_factor",)), ("noise", ("scale_factor_rw_ppm_sqrt_s",))),
+     "scale-factor errors"),
+    ("lever_arm", (("init", ("sigma_lever_arm_m",)),), "lever arm"),
+    ("time_offset", (("init", ("sigma_time_offset_s",)), ("noise", ("time_offset_rw_s_sqrt_s",))),
+     "IMU-GNSS time offset"),
+)
+
+
 class NavigateConfig(_Strict):
     """The whole ``inskit navigate`` configuration."""
 
@@ -832,6 +937,38 @@ class NavigateConfig(_Strict):
                              "heights into (use filter.scheme = \"closed\" or \"open\")")
         return self
 
+    @model_validator(mode="after")
+    def _state_keys_need_their_state(self):
+        for switch, keys, what in FILTER_STATE_KEYS:
+            if getattr(self.filter, switch):
+                continue
+            bad = [f"{sect}.{k}" for sect, ks in keys for k in _changed(getattr(self, sect), ks)]
+            if bad:
+                raise _key_error(bad[0], f"{', '.join(bad)} would be ignored: "
+                                 f"{_they(bad, 'it describes', 'they describe')} "
+                                 f"the estimated {what}, and filter.{switch} = false estimates none; set "
+                                 f"filter.{switch} = true, or remove {_they(bad, 'it', 'them')}")
+        if self.noise.from_static_per_axis and self.init.mode in ("in-motion", "given"):
+            raise _key_error("noise.from_static_per_axis", "noise.from_static_per_axis = true would be ignored: it "
+                             "measures the white noise per axis on the static start, and init.mode = "
+                             f"\"{self.init.mode}\" has none (only \"static-then-track\", or \"auto\" when the log "
+                             "starts at rest, measures it); use init.mode = \"static-then-track\" or \"auto\", or "
+                             "remove it")
+        return self
+
+    @model_validator(mode="after")
+    def _columns_of_this_run(self):
+        if not _changed(self.output, ["columns"]):  # every column: nothing to look up (nor the writers to import)
+            return self
+        from ..io.parquet import column_spec_error
+        from .navigate import solution_column_names
+
+        bad = column_spec_error(solution_column_names(self), self.output.columns,
+                                of="the solution of this configuration")
+        if bad:
+            raise _key_error("output.columns", bad)
+        return self
+
     def resolve(self, p: Path) -> Path:
         """``p`` relative to the config file's folder (absolute paths unchanged)."""
         p = Path(p)
@@ -877,6 +1014,9 @@ def outages_from_spec(spec: str, option: str = "--outages") -> dict:
         if not b > a:
             raise InputError(f"{option}: the window {item.strip()!r} must end after it starts; use {_OUTAGES_EXAMPLE}")
         windows.append([a, b])
+    clash = windows_conflict(windows)
+    if clash:
+        raise InputError(f"{option} {spec}: {clash}")
     return {"protocol": "windows", "windows_s": windows}
 
 

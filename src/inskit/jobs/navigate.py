@@ -275,7 +275,8 @@ def load_raw_gnss(cfg: NavigateConfig, log=None) -> RawGnss:
         warnings.simplefilter("always")
         obs = read_obs(cfg.resolve(g.obs), systems=systems)
         nav = read_nav(cfg.resolve(g.nav), systems=systems)
-        sol = spp(obs, nav, mask_deg=g.mask_deg, iono=g.iono, tropo=g.tropo, systems=systems)
+        sol = spp(obs, nav, mask_deg=g.mask_deg, iono=g.iono, tropo=g.tropo, systems=systems,
+                  settings={"mask": "[gnss] mask_deg", "iono": "[gnss] iono = \"klobuchar\""})
     notes = []
     files = tuple(str(p) for p in (g.obs, g.nav, cfg.resolve(g.obs), cfg.resolve(g.nav)))
     for w in said:
@@ -720,6 +721,40 @@ def build_settings(cfg: NavigateConfig, startup: Startup | None, measured=None, 
         covariance_step_s=f.covariance_step_s,
         extra_blocks=tuple(extra_blocks), gravity=cfg.earth.gravity,
     )
+
+
+def solution_column_names(cfg: NavigateConfig) -> list:
+    """The columns the solution files of a run of ``cfg`` can hold, known
+    from the configuration alone (before any data is read): the navigation
+    columns, the sigmas of position, velocity and attitude (with a filter:
+    the uncoupled scheme has none), and the estimates of every state the
+    configuration asks for (the blocks
+    :func:`navigate` builds; tight coupling: the inter-system bias of each
+    system of ``gnss.systems`` after the first, which the data may lack).
+    ``[output] columns`` is checked against them when the config is loaded
+    (:func:`inskit.io.parquet.column_spec_error`)."""
+    from ..integration import GnssPositionError, HeightBias, Mounting, OdometerScale, ins_blocks
+    from ..integration.blocks import ReceiverClock, SystemTimeOffset
+    from ..integration.engine import NAV_SIGMA_BLOCKS
+    from ..io.parquet import NAVIGATION_COLUMNS
+
+    f, tight = cfg.filter, cfg.gnss.coupling == "tight"
+    blocks = ins_blocks(scale_factors=f.scale_factors, lever_arm=f.lever_arm, time_offset=f.time_offset)
+    if cfg.odometer is not None and cfg.odometer.estimate_scale:
+        blocks.append(OdometerScale())
+    if cfg.constraints.mounting:
+        blocks.append(Mounting())
+    if cfg.gnss.error_sigma_m is not None and not tight:
+        blocks.append(GnssPositionError(cfg.gnss.error_sigma_m, cfg.gnss.error_tau_s))
+    if cfg.height is not None and cfg.height.estimate_bias:
+        blocks.append(HeightBias())
+    if tight:
+        blocks += [ReceiverClock()] + [SystemTimeOffset(sys_) for sys_ in cfg.gnss.systems[1:]]
+    names = list(NAVIGATION_COLUMNS)
+    if f.scheme != "uncoupled":  # no covariance: no sigma column (:attr:`Track.solution`)
+        names += [nm for b in blocks if b.name in NAV_SIGMA_BLOCKS for nm in b.sigma_names()]
+    names += [nm for b in blocks if b.has_estimate for nm in b.estimate_names()]
+    return names
 
 
 def _uncoupled_track(imu, initial, gnss, used, lever, settings):
@@ -2009,6 +2044,31 @@ def bank_line(bank: dict) -> str:
     return (f"yaw bank: {len(bank['scores'])} hypotheses over {bank['span_s']:.0f} s in {bank['elapsed_s']:.1f} s; "
             f"kept {bank['chosen_yaw_deg']:.1f} deg (mean NIS per dof {bank['score']:.3f}, next best "
             + (f"{runner_up:.3f})" if runner_up is not None else "none)"))
+
+
+def occupied_folder_message(folder, force="--force", other="--out") -> str | None:
+    """Why a run may not write into ``folder`` unasked, or None (no folder,
+    or an empty one): the words say what it holds, a run's results (its
+    ``summary.json``) or other files, named (the first few), and what
+    ``force`` does there (``--force`` on the command line,
+    ``overwrite=True`` in Python; ``other`` is how to choose another
+    folder): it writes the new set in, replacing files of the same names
+    and the files an earlier run listed in its summary, and keeps any
+    other file."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        return None
+    names = sorted(p.name for p in folder.iterdir())
+    if not names:
+        return None
+    shown = ", ".join(names[:3]) + (", ..." if len(names) > 3 else "")
+    if "summary.json" in names:
+        return (f"{folder}: already holds results ({shown}: an earlier run's); refusing to overwrite them: choose "
+                f"another folder ({other}), or {force} to replace them (the files that run listed go, other files "
+                "stay)")
+    return (f"{folder}: holds other files ({shown}) and no results of a run; refusing to write among them: choose "
+            f"an empty or new folder ({other}), or {force} to write the results beside them (files of the same "
+            "names are replaced)")
 
 
 def previous_run_files(out_dir: Path) -> list:

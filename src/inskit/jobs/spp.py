@@ -221,7 +221,8 @@ def run_spp(obs_path, nav_path, *, reference=None, mask_deg=10.0, iono="klobucha
     timing = {}
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        sol = spp(obs, nav, mask_deg=mask_deg, iono=iono, tropo=tropo, raim=raim, systems=systems, timing=timing)
+        sol = spp(obs, nav, mask_deg=mask_deg, iono=iono, tropo=tropo, raim=raim, systems=systems, timing=timing,
+                  settings={"mask": "--mask", "iono": "--iono klobuchar"})
     t2 = time.perf_counter()
     notes = [str(w.message) for w in read_warnings] + list(sol.notes)
     from ..gnss.spp import clock_jump_note, receiver_clock_jumps
