@@ -579,9 +579,9 @@ def test_every_navigate_example_loads():
     assert {"drive_0708.toml", "walk_0827.toml", "walk_0827_tight.toml"} <= set(loaded)
 
 
-def test_a_tune_grid_that_switches_a_feature_off_names_the_key_left_on(tmp_path):
-    """inskit tune builds each candidate from the config and its --grid overrides: a candidate whose switch
-    leaves a key of the file unused is refused like the file would be, naming the key."""
+def test_an_override_that_switches_a_feature_off_names_the_key_left_on(tmp_path):
+    """An override (the CLI's, the API's) whose switch leaves a key of the file unused is refused like the file
+    would be, naming the key (inskit tune's candidates reset such keys: tests/test_jobs_tune.py)."""
     with pytest.raises(ConfigError, match=r"drive_0708\.toml: field 'constraints\.nhc_sigma_m_s': .*nhc = false"):
         load_config(ROOT / "examples" / "drive_0708.toml", {"constraints": {"nhc": False}})
 

@@ -26,7 +26,11 @@ def test_grid_parsing_and_snippet():
     assert g == {"noise.bias_tau_s": [300, 1e5], "constraints.nhc": [True, False], "earth.gravity": ["j2"]}
     assert len(T.candidates(g)) == 4
     snip = T.toml_snippet({"noise.bias_tau_s": 300, "constraints.nhc": False})
-    assert snip == "[noise]\nbias_tau_s = 300\n[constraints]\nnhc = false\n"
+    assert snip == ("# and remove from the config those it sets of (they serve what is switched off): "
+                    "constraints.mounting, constraints.mounting_rw_deg_sqrt_h, constraints.nhc_lever_arm_b_m, "
+                    "constraints.nhc_sigma_m_s, constraints.sigma_mounting_deg\n"
+                    "[noise]\nbias_tau_s = 300\n[constraints]\nnhc = false\n")
+    assert T.toml_snippet({"constraints.nhc": True}) == "[constraints]\nnhc = true\n"
     g = T.parse_grid(["constraints.nhc_lever_arm_b_m=[0,0,0], [0.06, 0, 0.81]"])
     assert g == {"constraints.nhc_lever_arm_b_m": [(0, 0, 0), (0.06, 0, 0.81)]}
     assert T.toml_snippet({"constraints.nhc_lever_arm_b_m": (0.06, 0, 0.81)}) == \
@@ -216,3 +220,21 @@ def test_a_boolean_and_a_number_are_not_a_repeat():
         T.parse_grid(["constraints.nhc_lever_arm_b_m=[0,0,0],[0,0,0.0]"])
     with pytest.raises(ConfigError, match="the value TRUE repeats true"):
         T.parse_grid(["constraints.mounting=true,TRUE"])
+
+
+def test_a_candidate_that_turns_a_switch_off_drops_the_keys_that_serve_it():
+    """drive_0708 sets nhc_sigma_m_s and nhc_lever_arm_b_m for its constraint: a config that sets them with
+    nhc = false is refused (they would be ignored), so --grid constraints.nhc=true,false refused its 'false'
+    candidate.  The candidate now resets those keys to their defaults (what turning the switch off means) and
+    loads; a key the candidate sets itself is kept (and refused, as the user asked for both)."""
+    from pathlib import Path
+
+    from inskit.jobs.config import load_config
+
+    ex = Path(__file__).resolve().parents[1] / "examples" / "drive_0708.toml"
+    cfg = load_config(ex, T.overrides_of({"constraints.nhc": False, "filter.scale_factors": False}))
+    assert not cfg.constraints.nhc and not cfg.filter.scale_factors and not cfg.constraints.mounting
+    assert cfg.constraints.nhc_sigma_m_s == 0.1 and tuple(cfg.constraints.nhc_lever_arm_b_m) == (0.0, 0.0, 0.0)
+    assert load_config(ex, T.overrides_of({"constraints.nhc": True})).constraints.nhc_sigma_m_s == 0.2
+    with pytest.raises(ConfigError, match=r"field 'constraints\.nhc_sigma_m_s'"):
+        load_config(ex, T.overrides_of({"constraints.nhc": False, "constraints.nhc_sigma_m_s": 0.3}))

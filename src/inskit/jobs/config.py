@@ -867,6 +867,39 @@ FILTER_STATE_KEYS = (
 )
 
 
+#: switches and the keys that only count with the switch on ("section.key" -> keys): a config that sets one of
+#: those keys with its switch off is refused (the key would be ignored); ``inskit tune`` resets them to their
+#: defaults in a candidate that turns the switch off (:func:`switched_off_overrides`)
+SWITCH_KEYS = {
+    "constraints.zupt": ("constraints.zupt_sigma_m_s",),
+    # the mounting is estimated through the NHC (odometer.with_nhc aside): off with it, and its own keys with it
+    "constraints.nhc": ("constraints.nhc_sigma_m_s", "constraints.nhc_lever_arm_b_m", "constraints.mounting"),
+    "constraints.mounting": ("constraints.sigma_mounting_deg", "constraints.mounting_rw_deg_sqrt_h"),
+    "gnss.use_velocity": ("gnss.velocity_delay_s", "gnss.velocity_sigma_scale"),
+    **{f"filter.{switch}": tuple(f"{sect}.{k}" for sect, ks in keys for k in ks)
+       for switch, keys, _ in FILTER_STATE_KEYS},
+}
+
+
+def switched_off_overrides(params: dict) -> dict:
+    """``{"section.key": default}`` for the keys of :data:`SWITCH_KEYS` whose
+    switch ``params`` (``{"section.key": value}``, a tune candidate) turns
+    off, unless ``params`` sets them itself: the candidate then runs without
+    the feature instead of being refused for the keys the config sets for it
+    (``--grid constraints.nhc=true,false`` on drive_0708, whose
+    ``nhc_sigma_m_s`` serves the ``true`` candidate)."""
+    out = {}
+    off = [k for k, v in params.items() if k in SWITCH_KEYS and v is False]
+    while off:  # a reset switch whose default is off resets its own keys too (nhc -> mounting -> its sigmas)
+        for k in SWITCH_KEYS[off.pop()]:
+            if k not in params and k not in out:
+                sect, key = k.split(".")
+                out[k] = NavigateConfig.model_fields[sect].annotation.model_fields[key].default
+                if k in SWITCH_KEYS and out[k] is False:
+                    off.append(k)
+    return out
+
+
 class NavigateConfig(_Strict):
     """The whole ``inskit navigate`` configuration."""
 

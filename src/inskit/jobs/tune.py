@@ -132,7 +132,16 @@ def candidates(grid: dict) -> list[dict]:
 
 
 def overrides_of(params: dict) -> dict:
-    """``{"a.b": v}`` as the nested override dict of the config loader."""
+    """``{"a.b": v}`` as the nested override dict of the config loader; a
+    switch turned off also resets the keys that only count with it on
+    (:func:`inskit.jobs.config.switched_off_overrides`)."""
+    from .config import switched_off_overrides
+
+    return _nested({**params, **switched_off_overrides(params)})
+
+
+def _nested(params: dict) -> dict:
+    """``{"a.b": v}`` as ``{"a": {"b": v}}``."""
     out = {}
     for k, v in params.items():
         sect, key = k.split(".")
@@ -418,9 +427,16 @@ def tune(config_path, grid: dict, *, hold_s=None, reaid_s=None, start_after_s=60
 
 
 def toml_snippet(params: dict) -> str:
-    """The chosen keys as TOML sections."""
+    """The chosen keys as TOML sections (a switch turned off: with the keys
+    of the config that serve it, which go, named in a comment)."""
+    from .config import switched_off_overrides
+
     lines = []
-    for sect, keys in overrides_of(params).items():
+    drop = sorted(switched_off_overrides(params))
+    if drop:
+        lines.append(f"# and remove from the config those it sets of (they serve what is switched off): "
+                     f"{', '.join(drop)}")
+    for sect, keys in _nested(params).items():
         lines.append(f"[{sect}]")
         for k, v in keys.items():
             lines.append(f"{k} = {_toml_value(v)}")
