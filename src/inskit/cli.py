@@ -130,11 +130,13 @@ def _height_ref(text, imu):
 @click.option("--first-row", type=click.Choice(["initial", "increment", "discard"]), default="initial",
               show_default=True, help="Increment files: the first row is the initial epoch (zero increments), a "
               "real increment (an initial epoch is prepended), or to be dropped (docs/formats.md).")
+@click.option("--mount-rpy", help="Sensor mounting roll,pitch,yaw [deg]: the IMU's axes against the body's, as "
+              "[imu] mount_rpy_deg of navigate and of a scenario (a simulated IMU mounted so writes its own axes).")
 @click.option("--out", "out_file", type=click.Path(dir_okay=False), help="Write the solution CSV here.")
 @click.option("--force", is_flag=True, help="Overwrite --out if it exists.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON summary object on stdout.")
-def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coning, gravity, no_unit_check, first_row, out_file,
-              force, as_json):
+def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coning, gravity, no_unit_check, first_row,
+              mount_rpy, out_file, force, as_json):
     """Free-inertial navigation from an IMU file and an initial state."""
     from . import io
     from .strapdown import mechanize as run_mech
@@ -148,7 +150,18 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
     from .jobs.warm import warm_compiled_code
 
     warm_compiled_code()  # numba's set-up beside the reading
+    mount = None
+    if mount_rpy:  # checked before the reading
+        from .config_files import check_option_angles
+
+        mount = check_option_angles("--mount-rpy", _numbers("--mount-rpy", mount_rpy, 3, "roll,pitch,yaw [deg]"))
     imu = io.read_imu(imu_file, check_units=not no_unit_check, first_row=first_row)
+    if mount is not None and np.any(np.asarray(mount, float) != 0.0):
+        from .io.rtklib import mount_dcm
+        from .types import ImuData
+
+        C_bs = mount_dcm(np.radians(np.asarray(mount, float)))  # sensor axes -> body axes, as navigate's
+        imu = ImuData(imu.time, imu.dtheta_b @ C_bs.T, imu.dv_b @ C_bs.T)
     if init_text and init_from:
         raise InputError("give either --init or --init-from, not both")
     if init_from:
