@@ -812,3 +812,14 @@ def test_a_solution_with_an_extra_column_named_as_a_navigation_column_is_not_wri
             io.write_solution(tmp_path / name, sol)
         assert not (tmp_path / name).exists()
     assert C.SOLUTION_COLUMNS == list(NavSolution(t, sol.lla, sol.v_n, sol.q_nb).columns())
+
+
+def test_an_unknown_sampled_mode_is_refused_for_every_file(tmp_path):
+    """read_imu(path, sampled="bogus") was accepted on an increment file (which does not use it), while options
+    that do not apply are refused: a value outside the modes is refused whatever the file holds."""
+    p = _write_rates(tmp_path / "rates.csv", 0.01 * np.arange(50))
+    imu = C.read_imu(p)
+    io.write_imu(tmp_path / "inc.csv", imu)
+    for f in (p, tmp_path / "inc.csv"):
+        with pytest.raises(InputError, match=r"^`sampled` must be one of 'instant', 'average', got 'bogus'$"):
+            io.read_imu(f, sampled="bogus")

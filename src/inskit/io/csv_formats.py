@@ -920,6 +920,8 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", 
     """
     if first_row not in FIRST_ROW_MODES:
         raise InputError(f"`first_row` must be one of {', '.join(map(repr, FIRST_ROW_MODES))}, got {first_row!r}")
+    if sampled not in SAMPLED_MODES:  # checked whatever the file holds (increment files do not use it)
+        raise InputError(f"`sampled` must be one of {', '.join(map(repr, SAMPLED_MODES))}, got {sampled!r}")
     _check_repeated_mode(repeated)
     from .time_tags import check_smoothing_samples, smooth_time_tags
 
@@ -976,6 +978,8 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", 
 
 #: what the first row of an increment file is (:func:`first_row_rule`)
 FIRST_ROW_MODES = ("initial", "increment", "discard")
+#: how a rate file's rates were sampled (:meth:`inskit.types.ImuData.from_rates`)
+SAMPLED_MODES = ("instant", "average")
 #: a first row whose increments are all at most this fraction of the median increment of the other rows is
 #: empty (the initial epoch); exactly zero when there are no other rows or they are all zero
 FIRST_ROW_EMPTY = 1e-9
