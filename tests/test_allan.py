@@ -163,6 +163,18 @@ def test_a_constant_channel_is_named_and_left_unfitted():
     assert r["gyro_fit"][:2] == ref["gyro_fit"][:2] and r["accel_fit"][1:] == ref["accel_fit"][1:]
 
 
+def test_a_channel_varying_by_rounding_only_is_constant():
+    """An ideal simulated IMU at rest varies in its last digits (3e-12 of the increment through a CSV): allan
+    fitted that rounding and wrote gyro_arw_deg_sqrt_h = 3.9e-15 into the [noise] section as if measured.
+    A spread within 1e-9 of the increment is constant; the noise of a real log is not."""
+    imu = _static_log()
+    dth, dv = imu.dtheta_b.copy(), imu.dv_b.copy()
+    dth[1:, 0] = 5.156e-7 * (1.0 + 3e-12 * np.sin(np.arange(len(dth) - 1)))  # earth rate, rounding-level wiggle
+    r = allan_imu(ImuData(imu.time, dth, dv))
+    assert r["constant"] == ["gyro x"] and r["gyro_fit"][0] is None
+    assert allan_imu(imu)["constant"] == []
+
+
 @pytest.mark.parametrize("sensor", ["gyro", "accel"])
 def test_three_constant_axes_of_a_sensor_are_refused_naming_it(sensor):
     from inskit.errors import InputError

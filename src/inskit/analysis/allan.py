@@ -108,6 +108,10 @@ def allan_deviation(increments, dt, taus_per_decade=10, min_clusters=9):
 GM_PEAK = 0.6174
 #: shortest log the Allan analysis accepts [s]
 MIN_DURATION_S = 100.0
+#: a channel whose increments spread by at most this fraction of their largest is constant: an ideal sensor
+#: varies by rounding (3e-12 through a CSV's digits), a real one by its noise or its quantisation (a 16-bit
+#: converter: 1.5e-5; a navigation-grade gyro at rest: 1e-1 of its increment)
+CONSTANT_RELATIVE_SPREAD = 1e-9
 #: fewest increments (samples after the first) the Allan analysis accepts: a curve of five cluster times
 #: (:func:`allan_deviation` asks for 27 at least, which give one); 1 Hz over :data:`MIN_DURATION_S`
 MIN_SAMPLES = 100
@@ -268,8 +272,10 @@ def fit_allan(tau, adev, duration_s=None):
 def allan_imu(imu: ImuData):
     """Allan deviations and fits of the six IMU axes.
 
-    A channel whose increments are all the same (a stuck axis, or one
-    quantised coarser than its noise: a gyro reading 0 at rest) has an
+    A channel whose increments are all the same, to within
+    :data:`CONSTANT_RELATIVE_SPREAD` of their size (a stuck axis, one
+    quantised coarser than its noise: a gyro reading 0 at rest, or an ideal
+    simulated sensor varying only by rounding) has an
     Allan deviation of zero and no measurable noise: it is not fitted (its
     fit is None, its curve zero) and is named in ``constant``.  The other
     channels are fitted as usual.
@@ -305,10 +311,13 @@ def allan_imu(imu: ImuData):
     _check_static(imu, dtm)
     out = {"constant": []}
     for sensor, inc in (("gyro", imu.dtheta_b[1:]), ("accel", imu.dv_b[1:])):
-        flat = np.ptp(inc, axis=0) == 0  # every increment the same: the deviation is zero (rounding aside)
+        # every increment the same, to rounding: no noise (an ideal simulated IMU varied in its last bits and
+        # reported an ARW of 4e-15 deg/sqrt(h) as if measured)
+        flat = np.ptp(inc, axis=0) <= CONSTANT_RELATIVE_SPREAD * np.abs(inc).max(axis=0)
         if flat.all():
-            raise InputError(f"{sensor} x, y, z are constant over the log (every increment the same): no {sensor} "
-                             "noise is measurable (a stuck sensor, or one quantised coarser than its noise?)")
+            raise InputError(f"{sensor} x, y, z are constant over the log (every increment the same, to "
+                             f"rounding): no {sensor} noise is measurable (a stuck sensor, one quantised coarser than "
+                             "its noise, or an ideal simulated one?)")
         tau, adev = allan_deviation(inc, dtm)
         adev[:, flat] = 0.0
         out["tau"] = tau
