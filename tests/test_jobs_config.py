@@ -295,6 +295,17 @@ def test_height_needs_a_file_or_a_constant_and_refuses_ignored_keys():
         _cfg(LOOSE, height={"file": "b.csv", "bias_model": "constant", "bias_rw_m_sqrt_h": 1.0})
     with pytest.raises(ConfigError, match=r"field 'height': \[height\] would be ignored: the uncoupled scheme"):
         _cfg(LOOSE, height={"file": "b.csv"}, filter={"scheme": "uncoupled"})
+    # the uncoupled scheme resets the INS to each fix: what only a filter fuses or estimates is refused, named
+    for sect, kv, key in (("gnss", {"use_velocity": True}, "gnss.use_velocity"),
+                          ("gnss", {"error_sigma_m": 0.03}, "gnss.error_sigma_m"),
+                          ("filter", {"time_offset": True}, "filter.time_offset"),
+                          ("constraints", {"rate_hz": 5.0}, "constraints.rate_hz")):
+        over = {"filter": {"scheme": "uncoupled"}}
+        over[sect] = {**over.get(sect, {}), **kv}
+        with pytest.raises(ConfigError, match=rf"field '{re.escape(key)}': {re.escape(key)} would be ignored: the "
+                                              r"uncoupled scheme resets the INS to each position fix"):
+            _cfg(LOOSE, **over)
+    assert _cfg(LOOSE, filter={"scheme": "uncoupled"}).filter.scheme == "uncoupled"
     h = _cfg(LOOSE, height={"file": "b.csv", "bias_model": "gauss-markov", "bias_tau_s": 600.0}).height
     assert h.bias_tau_s == 600.0 and h.estimate_bias
 

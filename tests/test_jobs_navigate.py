@@ -776,6 +776,8 @@ def test_the_uncoupled_scheme_writes_its_solution_without_sigmas(drive_inputs, t
 
     _, imu, gnss, _ = drive_inputs
     cfg = load_config(EXAMPLE, {"output": {"plots": True}, "filter": {"scheme": "uncoupled"},
+                                # no GNSS error states: the uncoupled scheme has no filter (refused, would be ignored)
+                                "gnss": {"error_sigma_m": None, "error_tau_s": 10.0},
                                 "constraints": {"mounting": False, "nhc": False, "zupt": False,
                                                 # the example's NHC keys back at their defaults (with nhc = false
                                                 # they would be ignored, and are refused)

@@ -579,7 +579,11 @@ class FilterSection(_Strict):
     be ignored): init.sigma_scale_factor and
     noise.scale_factor_rw_ppm_sqrt_s need scale_factors = true,
     init.sigma_lever_arm_m needs lever_arm = true, init.sigma_time_offset_s
-    and noise.time_offset_rw_s_sqrt_s need time_offset = true.
+    and noise.time_offset_rw_s_sqrt_s need time_offset = true.  The
+    uncoupled scheme (no filter) refuses what only a filter fuses or
+    estimates: gnss.use_velocity, gnss.error_sigma_m, gnss.speed_course,
+    [odometer], [height], lever_arm, time_offset and the constraints'
+    sigmas, lever arm and rate changed from their defaults.
     """
 
     scheme: Literal["closed", "open", "uncoupled"] = Field(
@@ -968,6 +972,20 @@ class NavigateConfig(_Strict):
         if self.height is not None and self.filter.scheme == "uncoupled":
             raise _key_error("height", "[height] would be ignored: the uncoupled scheme has no filter to fuse "
                              "heights into (use filter.scheme = \"closed\" or \"open\")")
+        if self.filter.scheme == "uncoupled":  # the INS reset to each fix: no filter, so none of these is applied
+            bad = ([k for k, on in (("gnss.use_velocity", self.gnss.use_velocity),
+                                    ("gnss.error_sigma_m", self.gnss.error_sigma_m is not None),
+                                    ("gnss.speed_course", self.gnss.speed_course is not None),
+                                    ("odometer", self.odometer is not None),
+                                    ("filter.lever_arm", self.filter.lever_arm),
+                                    ("filter.time_offset", self.filter.time_offset)) if on]
+                   + [f"constraints.{k}" for k in _changed(self.constraints, ("zupt_sigma_m_s", "nhc_sigma_m_s",
+                                                                               "nhc_lever_arm_b_m", "rate_hz"))])
+            if bad:
+                raise _key_error(bad[0], f"{', '.join(bad)} would be ignored: the uncoupled scheme resets the INS to "
+                                 "each position fix and has no filter to fuse velocities, wheel speed or "
+                                 "constraints into, nor states to estimate; use filter.scheme = \"closed\" or "
+                                 f"\"open\", or remove {_they(bad, 'it', 'them')}")
         return self
 
     @model_validator(mode="after")
