@@ -215,6 +215,28 @@ def test_an_innovations_file_cut_mid_row_is_refused(run_dir, tmp_path):
         build_report(d, tmp_path / "cut.html")
 
 
+def test_an_innovations_file_cut_at_a_whole_field_or_line_is_refused(run_dir, tmp_path):
+    """innovations.csv cut inside its last field (`head -c 100000`: '...,1,accept') parsed whole and the report
+    plotted 151 s of a 549 s run without a word; cut at a line end it still did.  The missing line end, and a
+    count of used updates below the summary's, are refused."""
+    d = tmp_path / "cut"
+    d.mkdir()
+    for f in ("summary.json", "solution_forward.csv"):
+        shutil.copy(run_dir / f, d / f)
+    text = (run_dir / "innovations.csv").read_text()
+    lines = text.splitlines(True)
+    (d / "innovations.csv").write_text("".join(lines[:400])[:-3])  # the last field's end gone, no line end
+    with pytest.raises(InputError, match=r"innovations\.csv: the last line has no line end: the file seems cut short"):
+        build_report(d, tmp_path / "cut.html")
+    (d / "innovations.csv").write_text("".join(lines[: len(lines) // 3]))
+    with pytest.raises(InputError, match=r"innovations\.csv: holds \d+ used update\(s\) of \w+ where the run's "
+                                         r"summary\.json counts \d+: the file seems cut short"):
+        build_report(d, tmp_path / "cut.html")
+    assert not (tmp_path / "cut.html").exists()
+    (d / "innovations.csv").write_text(text)
+    build_report(d, tmp_path / "whole.html")
+
+
 def test_an_unreadable_fix_file_is_said_so_not_missing(run_dir, tmp_path):
     """The fix file the configuration names exists but cannot be read: the note said it 'was not found'; now it
     gives the reader's own message."""

@@ -190,9 +190,15 @@ def _read_json(path, what):
     return obj
 
 
-def read_innovations(path):
+def read_innovations(path, counts=None):
     """``innovations.csv`` as a dict of name -> dict of arrays (``t, row, nu,
-    sigma, accepted``), or None if the file is absent."""
+    sigma, accepted``), or None if the file is absent.
+
+    A file cut short is refused, not plotted as if whole: one whose last
+    line has no line end (cut mid-row: its fields may still parse), or, with
+    ``counts`` (the run summary's ``measurements``: per name ``used``), one
+    holding fewer used updates of a measurement (distinct times of accepted
+    rows) than the run made."""
     import pandas as pd
 
     path = Path(path)
@@ -213,6 +219,21 @@ def read_innovations(path):
 
         raise InputError(f"{path}: line {data_line(path, i)}: empty field(s) in {', '.join(c for c in need if pd.isna(df[c].iloc[i]))}"
                          f"{' (the file ends mid-row: cut short?)' if i == len(df) - 1 else ''}")
+    with open(path, "rb") as fh:
+        fh.seek(0, 2)
+        if fh.tell() > 0:
+            fh.seek(-1, 2)
+            if fh.read(1) != b"\n":
+                raise InputError(f"{path}: the last line has no line end: the file seems cut short (a copy "
+                                 "interrupted, a disk filled); run navigate again or copy the folder again")
+    for name, c in (counts or {}).items():
+        want = int((c or {}).get("used", 0) or 0)  # updates used: each at its own time (tight coupling's rejected
+        if not want:                               # satellites share their epoch's time)
+            continue
+        have = int(df.loc[(df["measurement"] == name) & (df["accepted"] == 1), "t"].nunique())
+        if have < want:
+            raise InputError(f"{path}: holds {have} used update(s) of {name} where the run's summary.json counts "
+                             f"{want}: the file seems cut short; run navigate again or copy the folder again")
     out = {}
     for name, g in df.groupby("measurement", sort=False):
         out[str(name)] = {c: g[c].to_numpy(float) for c in ("t", "row", "nu", "sigma", "accepted")}
@@ -316,7 +337,7 @@ class _Run:
         if self.forward is None:
             raise InputError(f"{d}: solution_forward.parquet or .csv is missing (expected beside summary.json)")
         self.smoothed = solution("solution_smoothed")
-        self.innov = read_innovations(d / "innovations.csv")
+        self.innov = read_innovations(d / "innovations.csv", self.summary.get("measurements"))
         self.config = _read_json(d / "config_used.json", "configuration (config_used.json)") \
             if (d / "config_used.json").exists() else None
         self.fixes, self.fix_file, self.fix_error = None, None, None
