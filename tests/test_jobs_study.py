@@ -300,6 +300,10 @@ def _allan_spec(folder, entry):
     ({"duration_s": 200.0}, '{allan = "log.csv", window_s = [0.0, 500.0]}', ConfigError, "after the end of the log"),
     ({"duration_s": 200.0}, '{allan = "log.csv", window_s = [50.0, 20.0]}', ConfigError,
      r"grades\.1\.window_s.*start < end"),
+    # a window too short for the fit names the window, not 'the log lasts 0.5 s' of a 200 s log
+    ({"duration_s": 200.0}, '{allan = "log.csv", window_s = [0.0, 0.5]}', ConfigError,
+     r"field 'grades\.1\.window_s' \(log\.csv\): window_s \[0\.0, 0\.5\] holds 0\.5 s of the 200\.0 s log; an Allan "
+     r"deviation needs at least 100 s"),
     ({"duration_s": 200.0}, '{allan = "log.csv", name = "tactical"}', ConfigError, "each grade once"),
     ({"duration_s": 200.0}, '{allan = "log.csv", base = "military"}', ConfigError, r"grades\.1\.base"),
     ({"duration_s": 200.0}, '{alan = "log.csv"}', ConfigError, r"grades\.1\.alan.*not permitted"),
@@ -381,6 +385,23 @@ def test_a_folder_of_another_command_is_not_overwritten(tmp_path):
     inside = _spec(tmp_path / "other", TINY, name="summary.json")
     with pytest.raises(InputError, match="is an input of this command"):
         run_study(inside, tmp_path / "other", force=True)
+
+
+def test_a_study_folder_whose_files_are_not_a_study_s_is_refused_before_writing(tmp_path):
+    """study.json holding JSON of another shape ([1, 2]) was an internal error (AttributeError); a file named
+    runs gave '[Errno 17] File exists' after study.json had been written into the user's folder.  Both are one
+    line now, and nothing is written."""
+    spec = _spec(tmp_path, TINY.replace("runs = 4", "runs = 1"))
+    a, b = tmp_path / "a", tmp_path / "b"
+    a.mkdir()
+    b.mkdir()
+    (a / "study.json").write_text("[1, 2]\n")
+    with pytest.raises(InputError, match=r"study\.json: unreadable; it is not a study folder of inskit"):
+        run_study(spec, a, workers=1)
+    (b / "runs").write_text("")
+    with pytest.raises(InputError, match=r"runs: is a file; a study keeps its run parts in a folder of that name"):
+        run_study(spec, b, workers=1)
+    assert sorted(p.name for p in b.iterdir()) == ["runs"] and (a / "study.json").read_text() == "[1, 2]\n"
 
 
 def test_an_outage_between_two_fixes_is_refused_naming_the_key(tmp_path):

@@ -320,8 +320,16 @@ def _read_log(g: AllanGrade):
             raise ConfigError(f"{g._key}: window_s ends at {b:g} s, after the end of the log ({t[-1]:.1f} s "
                               "after its first sample)")
         k = (t >= a) & (t <= b)
+        wkey = g._key.replace(".allan'", ".window_s'", 1)  # the field at fault is the window, not the log
         if k.sum() < 2:
-            raise ConfigError(f"{g._key}: window_s {list(g.window_s)} holds fewer than two samples")
+            raise ConfigError(f"{wkey}: window_s {list(g.window_s)} holds fewer than two samples")
+        from ..analysis.allan import MIN_DURATION_S
+
+        held = float(t[k][-1] - t[k][0])
+        if held < MIN_DURATION_S:  # the Allan fit's own message said 'the log lasts 0.5 s' of a 600 s log
+            raise ConfigError(f"{wkey}: window_s {list(g.window_s)} holds {held:g} s of the {t[-1]:.1f} s log; an "
+                              f"Allan deviation needs at least {MIN_DURATION_S:g} s (hours to see the bias "
+                              "instability)")
         imu = ImuData(imu.time[k], imu.dtheta_b[k], imu.dv_b[k])
     return path, imu
 
@@ -872,11 +880,18 @@ def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None
     if theirs and not meta_path.is_file() and not force:
         raise InputError(f"{out}: holds {', '.join(theirs)} but no study.json: not the folder of a study (another "
                          "command's results?); refusing to overwrite them (use --force or another --out)")
+    runs_dir = out / "runs"
+    if runs_dir.exists() and not runs_dir.is_dir():  # before anything is written (study.json was, then Errno 17)
+        raise InputError(f"{runs_dir}: is a file; a study keeps its run parts in a folder of that name (use another "
+                         "--out)")
     if meta_path.is_file():
         try:
-            old = json.loads(meta_path.read_text()).get("fingerprint")
+            meta = json.loads(meta_path.read_text())
         except (OSError, ValueError):
-            raise InputError(f"{meta_path}: unreadable; it is not a study folder of inskit") from None
+            meta = None
+        if not isinstance(meta, dict):  # unreadable, or JSON of another shape ([1, 2] was an internal error)
+            raise InputError(f"{meta_path}: unreadable; it is not a study folder of inskit")
+        old = meta.get("fingerprint")
         if old != fp:
             raise ConfigError(f"{out}: holds the results of a different study (the spec or its scenario changed); "
                               "use another --out, or delete the folder to start over")
@@ -885,7 +900,7 @@ def run_study(spec_path, out_dir, *, scheduler=None, workers=None, progress=None
     else:
         write_text(meta_path, json.dumps({"fingerprint": fp, "spec": spec.model_dump(mode="json"),
                                           "scenario": str(scenario_path)}, indent=1) + "\n")
-    (out / "runs").mkdir(exist_ok=True)
+    runs_dir.mkdir(exist_ok=True)
     figures = cases[0].figures
     prev = read_parts(out)
     done = set() if prev is None else set(zip(prev["case"].tolist(), prev["run"].tolist()))
