@@ -392,3 +392,12 @@ def test_a_browser_without_decompression_streams_says_so_and_keeps_the_tables(re
     assert 'data-figures-drawn="0"' in dom
     assert dom.count("<p class=\"note\">This browser cannot unpack the figures") == len(report["plots"])
     assert "outage-end horizontal RMS" in dom
+
+
+def test_the_report_is_written_under_an_html_name_only(run_dir, tmp_path):
+    """`inskit report RUN --out x.txt` wrote the HTML page as x.txt; evaluate's --plot refuses a name its
+    format does not match, and so does the report now (before any work)."""
+    for name in ("x.txt", "x.csv", "x"):
+        with pytest.raises(InputError, match=r"the report is an HTML page: its name must end in \.html"):
+            build_report(run_dir, tmp_path / name)
+        assert not (tmp_path / name).exists()

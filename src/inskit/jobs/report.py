@@ -865,8 +865,8 @@ def build_report(run_dir, out=None, overwrite=False):
         A folder written by ``inskit navigate`` (must hold ``summary.json`` and
         ``solution_forward.csv``).
     out : path, optional
-        The HTML file (default ``run_dir/report.html``), written atomically.
-        Never a file the report reads (the run's own: ``summary.json``, the
+        The HTML file (default ``run_dir/report.html``), written atomically;
+        its name ends in ``.html`` or ``.htm``.  Never a file the report reads (the run's own: ``summary.json``, the
         solutions ...; the GNSS fix file its configuration names); an
         existing file only with ``overwrite``.
     overwrite : bool
@@ -891,6 +891,9 @@ def build_report(run_dir, out=None, overwrite=False):
 
     run = _Run(run_dir)
     out = Path(out) if out is not None else run.dir / "report.html"
+    if out.suffix.lower() not in (".html", ".htm"):  # an HTML page under x.txt or x.csv: refused, as evaluate's plot
+        raise InputError(f"{out}: the report is an HTML page: its name must end in .html (or .htm), got "
+                         f"{out.suffix or 'no extension'!r}")
     check_outputs([out], run.inputs, overwrite)
     check_folder_writable(out.resolve().parent)  # a folder not there yet: made (the page was built, then lost)
     figs = [("track", "Track", *_fig_track(run, go), False),
