@@ -184,3 +184,15 @@ def test_satellites_without_ephemeris_are_a_health_warning():
     assert {"E07", "E26", "G18"} <= set(lost) and not {"G10", "G23", "G27", "G32"} & set(lost)
     assert any("without a usable ephemeris" in w and "E07" in w for w in s["health"]["warnings"])
     assert any("no record in the navigation file" in n for n in s["notes"])
+
+
+def test_reproduce_tight_coupling_refuses_a_seed_the_walk_would_ignore(tmp_path, capsys):
+    """`reproduce tight-coupling --experiment walk --seed 7` ran with the seed ignored (the walk is a real
+    log); refused now, naming what it seeds, before anything is written."""
+    from inskit.cli import main
+
+    with pytest.raises(SystemExit) as exc:
+        main(["reproduce", "tight-coupling", "--out", str(tmp_path / "tw"), "--experiment", "walk", "--seed", "7"])
+    assert exc.value.code == 2
+    assert "--seed would be ignored: it seeds the simulated blockage drive" in capsys.readouterr().err
+    assert not (tmp_path / "tw").exists()

@@ -22,6 +22,7 @@ from .cli_output import FINITE
 from .cli_output import log as _log
 from .cli_output import log_health
 from .cli_output import SEED
+from .errors import InputError
 
 
 def _f(x, fmt="8.2f"):
@@ -86,7 +87,8 @@ def spp(obs, nav, reference, mask_deg, iono, tropo, systems, no_raim, out_dir, f
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False), help="Folder for the figures "
               "(and the simulated blockage drive's files).")
 @click.option("--experiment", type=click.Choice(["walk", "blockage", "all"]), default="all", show_default=True)
-@click.option("--seed", type=SEED, default=1, show_default=True, help="Seed of the simulated blockage drive.")
+@click.option("--seed", type=SEED, default=None, help="Seed of the simulated blockage drive [default: 1] (the walk "
+              "is a real log: no seed).")
 @click.option("--force", is_flag=True, help="Write into a folder that already holds files, replacing those of the "
               "figures' and the simulated drive's names.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
@@ -100,6 +102,10 @@ def reproduce_tight(out_dir, experiment, seed, force, as_json):
     from .cli_output import reproduce_into
 
     exps = ("walk", "blockage") if experiment == "all" else (experiment,)
+    if seed is not None and "blockage" not in exps:
+        raise InputError("--seed would be ignored: it seeds the simulated blockage drive, and --experiment walk runs "
+                         "the real walk_0827 log only; drop --seed, or use --experiment blockage or all")
+    seed = 1 if seed is None else seed
     (res, text), files = reproduce_into(out_dir, force, lambda d: run(d, exps, seed=seed, log=_log))
     res["figures"] = res["files"]
     res["files"] = files  # every file written: the simulated drive's too (it listed the figures only)
