@@ -100,7 +100,7 @@ def test_errors_through_main_are_one_line(tmp_path):
     lines = r.stderr.strip().splitlines()
     assert lines[-1].startswith("inskit: error: layout 'six'") and "sign" in lines[-1]
     assert "Traceback" not in r.stderr
-    assert not (tmp_path / "n").exists()  # the refused run leaves no empty output folder behind
+    assert not any((tmp_path / "n").glob("*"))  # nothing written (refused before the solve)  # the refused run leaves no empty output folder behind
 
 
 def test_reproduce_gyrofree_json(tmp_path):
@@ -411,3 +411,29 @@ def test_reproduce_refuses_a_folder_with_files_and_writes_as_a_set(tmp_path, mon
     assert s["figures"] == [str(out / "fig11_euler_angles.png")] and s["tables"] == [str(out / "entries.json")]
     assert sorted(p.name for p in out.iterdir()) == ["entries.json", "fig11_euler_angles.png"]
     assert s["files"] == [str(out / "entries.json"), str(out / "fig11_euler_angles.png")]  # exactly those written
+
+
+def test_a_truth_must_cover_the_run_and_may_be_longer(tmp_path):
+    """--truth with the first 30 s of a 60 s run (Earth frames) was scored: '3d_final_m' at 30 s and a 3.86 m/s^2
+    'force error' from rates held past the truth's end.  Now a truth that does not cover the array's span is
+    refused before the solve, naming both; in the source frame a truth longer than the array (which was refused
+    as 'its times are not those of the array file') is compared at the array's own times."""
+    r = invoke(gyrofree, "simulate", EXAMPLES / "car.toml", "--out", tmp_path / "car", "--rate", 100, "--duration", 4)
+    assert r.exit_code == 0, r.output
+    lines = (tmp_path / "car" / "truth.csv").read_text().splitlines()
+    (tmp_path / "car_2s.csv").write_text("\n".join(lines[:202]) + "\n")  # 0..2 s
+    r = invoke(gyrofree, "navigate", tmp_path / "car" / "array.csv", "--frame", "ned", "--out", tmp_path / "n",
+               "--init-from", tmp_path / "car" / "truth.csv", "--truth", tmp_path / "car_2s.csv")
+    assert isinstance(r.exception, InputError)
+    assert str(r.exception) == (f"{tmp_path / 'car_2s.csv'}: spans 0.000..2.000 s, but {tmp_path / 'car' / 'array.csv'} "
+                                "runs 0.000..4.000 s: the truth must cover the whole run (its errors would be scored "
+                                "against a truth held past its ends)")
+    assert not any((tmp_path / "n").glob("*"))  # nothing written (refused before the solve)
+    r = invoke(gyrofree, "simulate", "source003", "--out", tmp_path / "gf", "--rate", 200, "--duration", 2)
+    assert r.exit_code == 0, r.output
+    lines = (tmp_path / "gf" / "array.csv").read_text().splitlines()
+    (tmp_path / "early.csv").write_text("\n".join(lines[:202]) + "\n")  # the array's first second only
+    r = invoke(gyrofree, "navigate", tmp_path / "early.csv", "--out", tmp_path / "n2", "--init-from",
+               tmp_path / "gf" / "truth.csv", "--truth", tmp_path / "gf" / "truth.csv", "--json")
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.stdout)["truth_errors"]["position_max_m"] < 1e-6
