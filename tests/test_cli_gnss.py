@@ -151,6 +151,12 @@ def test_health_verdict_counts_the_lost_epochs():
     assert many["verdict"] == "unhealthy" and "101 of 1000 epochs (10.1 %) flagged" in many["reasons"][0]
     off = spp_health({**base, "rms_residual_median_m": 40.0, "hdop_median": 8.0})
     assert off["verdict"] == "healthy" and len(off["warnings"]) == 2
+    # walk_0827 with four satellites at every epoch: 'healthy', 'raim' on and residuals of 1e-23 m, yet no epoch
+    # could be checked; said now
+    bare = spp_health({**base, "epochs_solved": 1000, "epochs_without_redundancy": 1000})
+    assert bare["warnings"] == ["1000 of 1000 solved epochs (100.0 %) had no redundant range (as many satellites as "
+                                "unknowns): the residual test and the satellite exclusion could not run there, so "
+                                "their fixes are unchecked (their residuals are zero by construction)"]
 
 
 def test_a_high_mask_run_is_unhealthy_and_strict_exits_3():

@@ -127,7 +127,8 @@ def spp_health(s: dict) -> dict:
     ("healthy" or "unhealthy"), ``reasons`` (each a sentence) and
     ``warnings``.  Unhealthy when more than
     :data:`UNHEALTHY_EPOCH_FRACTION` of the epochs are unsolved or flagged;
-    warned of any unsolved, flagged or excluded epoch, observed satellites
+    warned of any unsolved, flagged or excluded epoch, of solved epochs
+    without a redundant range (unchecked: ``epochs_without_redundancy``), observed satellites
     without a usable ephemeris, a median residual
     above :data:`RESIDUAL_WARN_M` and a median HDOP above :data:`HDOP_WARN`."""
     n = max(int(s["epochs_total"]), 1)
@@ -140,6 +141,11 @@ def spp_health(s: dict) -> dict:
         (reasons if k / n > UNHEALTHY_EPOCH_FRACTION else warns).append(line)
     if s.get("epochs_excluded_sats"):
         warns.append(f"{s['epochs_excluded_sats']} epochs solved only after excluding a satellite (residual test)")
+    k, m = int(s.get("epochs_without_redundancy") or 0), int(s.get("epochs_solved") or 0)
+    if k:  # as many satellites as unknowns: the fix fits them exactly, whatever their errors
+        warns.append(f"{k} of {m} solved epochs ({100.0 * k / max(m, 1):.1f} %) had no redundant range (as many "
+                     "satellites as unknowns): the residual test and the satellite exclusion could not run there, "
+                     "so their fixes are unchecked (their residuals are zero by construction)")
     res = s.get("rms_residual_median_m")
     if res is not None and res > RESIDUAL_WARN_M:
         warns.append(f"median RMS code residual {res:.1f} m (about 1 m is usual): models or data are off")
@@ -240,6 +246,8 @@ def run_spp(obs_path, nav_path, *, reference=None, mask_deg=10.0, iono="klobucha
         "epochs_total": len(sol), "epochs_solved": int(solved.sum()),
         "epochs_flagged": int((sol.status == FLAGGED).sum()), "epochs_unsolved": int((sol.status == UNSOLVED).sum()),
         "epochs_excluded_sats": int((sol.status == EXCLUDED).sum()),
+        # solved with no redundant range: no residual test or exclusion possible (RAIM had nothing to check)
+        "epochs_without_redundancy": int((solved & (np.asarray(sol.redundancy) <= 0)).sum()),
         "epochs_with_velocity": int((solved & np.isfinite(sol.v_e).all(axis=1)).sum()),
         "status_names": {str(k): v for k, v in STATUS_NAMES.items()},
         "hdop_median": _median(sol.hdop[solved]), "n_sats_median": _median(sol.n_sats[solved]),
