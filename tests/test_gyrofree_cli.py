@@ -437,3 +437,13 @@ def test_a_truth_must_cover_the_run_and_may_be_longer(tmp_path):
                tmp_path / "gf" / "truth.csv", "--truth", tmp_path / "gf" / "truth.csv", "--json")
     assert r.exit_code == 0, r.output
     assert json.loads(r.stdout)["truth_errors"]["position_max_m"] < 1e-6
+
+
+def test_a_lever_arm_beyond_the_layout_readers_limit_is_refused(tmp_path):
+    """simulate --d 1000 wrote a layout.csv that navigate refused ('1000 m from the reference point (more than
+    100 m: metres are expected)'); --d is checked against the same limit, for both commands."""
+    for cmd in (("simulate", "source003"), ("navigate", tmp_path / "a.csv")):
+        r = invoke(gyrofree, *cmd, "--d", 1000, "--out", tmp_path / "o")
+        assert isinstance(r.exception, InputError), r.output
+        assert str(r.exception) == ("--d must be within (0, 100] m (the accelerometers' distance from the reference "
+                                    "point; metres are expected), got 1000")

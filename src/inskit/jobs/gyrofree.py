@@ -34,6 +34,12 @@ def layout_from_spec(spec, d=None):
     from ..gyrofree.layout import builtin_layout
 
     if spec in ("ten", "six"):
+        from ..gyrofree.files import MAX_LEVER_ARM_M
+
+        # the layout reader's limit: simulate --d 1000 wrote a layout.csv that navigate then refused
+        if d is not None and not 0.0 < d <= MAX_LEVER_ARM_M:
+            raise InputError(f"--d must be within (0, {MAX_LEVER_ARM_M:g}] m (the accelerometers' distance from the "
+                             f"reference point; metres are expected), got {d:g}")
         return builtin_layout(spec, DEFAULT_D_M if d is None else d)
     p = Path(spec)
     if not p.exists():
