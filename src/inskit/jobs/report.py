@@ -891,10 +891,10 @@ def build_report(run_dir, out=None, overwrite=False):
 
     run = _Run(run_dir)
     out = Path(out) if out is not None else run.dir / "report.html"
+    check_outputs([out], run.inputs, overwrite)  # an input named first: that is what matters most
     if out.suffix.lower() not in (".html", ".htm"):  # an HTML page under x.txt or x.csv: refused, as evaluate's plot
         raise InputError(f"{out}: the report is an HTML page: its name must end in .html (or .htm), got "
                          f"{out.suffix or 'no extension'!r}")
-    check_outputs([out], run.inputs, overwrite)
     check_folder_writable(out.resolve().parent)  # a folder not there yet: made (the page was built, then lost)
     figs = [("track", "Track", *_fig_track(run, go), False),
             ("sigmas", "Position, velocity and attitude sigmas", *_fig_sigmas(run, go, make_subplots), True),
