@@ -185,6 +185,24 @@ def test_height_series_refuses_a_log_off_the_imu_and_a_doubled_sigma(tmp_path):
     assert np.all(height_series(_cfg(tmp_path, file="s.csv"), _imu())[2] == 0.3)
 
 
+def test_a_barometer_in_feet_is_refused_against_the_fixes_heights():
+    """A barometer logged in feet went ahead: the filter refused its non-holonomic constraint as 'not holding'
+    and ended 253 km off.  Its heights change 3.28 times as much as the fixes': refused; an offset of 30 m (the
+    bias state's) is not."""
+    from inskit.jobs.height import check_height_scale
+    from inskit.types import GnssData
+
+    t = np.arange(0.0, 300.0, 1.0)
+    h = 1600.0 + 20.0 * np.sin(t / 50.0)
+    gnss = GnssData(t, np.column_stack([np.full(len(t), 0.7), np.full(len(t), 0.1), h]), np.full((len(t), 3), 0.5))
+    check_height_scale("baro.csv", t, h + 30.0, gnss)
+    with pytest.raises(InputError, match=r"baro\.csv: its heights change 3\.28 times as much as the GNSS fixes' "
+                                         r"heights .*feet read as metres"):
+        check_height_scale("baro.csv", t, h * 3.2808, gnss)
+    check_height_scale("flat.csv", t, np.full(len(t), 5000.0), GnssData(t, np.column_stack(
+        [np.full(len(t), 0.7), np.full(len(t), 0.1), np.full(len(t), 1600.0)]), np.full((len(t), 3), 0.5)))
+
+
 def test_profile_for_mechanize_is_interpolated_and_held_at_its_ends(tmp_path):
     write_csv(tmp_path / "p.csv", {"time_s": [2.0, 4.0], "height_m": [10.0, 30.0]})
     said = []

@@ -633,6 +633,31 @@ def test_an_odometer_in_the_wrong_unit_is_refused_by_its_speed():
         check_odometer_speed("odo.csv", to, v * 2.237, gnss)
 
 
+def test_a_speed_and_course_log_in_the_wrong_units_is_refused_by_the_track():
+    """Speed in km/h and course in radians under speed_m_s / course_deg went ahead to 1746 m and 13.7 km of outage
+    error, blamed on the attitude: both are checked against the fixes' track (a drive north, then east, then
+    north again: radians agree with the track while it heads north, so a quarter of the time is the test)."""
+    from inskit import earth
+    from inskit.errors import InputError
+    from inskit.jobs.navigate import check_speed_course
+    from inskit.types import GnssData
+
+    t = np.arange(0.0, 300.0, 1.0)
+    east = (t >= 100.0) & (t < 200.0)
+    d = np.column_stack([np.where(east, 0.0, 12.0), np.where(east, 12.0, 0.0), 0 * t])
+    ref = np.array([np.radians(45.0), np.radians(7.0), 100.0])
+    gnss = GnssData(t, earth.ned_to_lla(np.cumsum(d, axis=0), ref), np.full((len(t), 3), 0.02))
+    course = np.where(east, np.pi / 2, 0.0)
+    speed = np.full(len(t), 12.0)
+    check_speed_course("sc.csv", t, speed, course + np.radians(1.0), gnss)  # a good log, 1 deg off
+    with pytest.raises(InputError, match=r"sc\.csv: the speed over ground of the speed and course log is 3\.6 times "
+                                         r".*km/h read as m/s"):
+        check_speed_course("sc.csv", t, speed * 3.6, course, gnss)
+    with pytest.raises(InputError, match=r"sc\.csv: the course is 88\.\d deg or more from the GNSS track's course a "
+                                         r"quarter of the time .*radians under the course_deg header"):
+        check_speed_course("sc.csv", t, speed, np.radians(course), gnss)  # the reader's np.radians of radians
+
+
 @pytest.mark.parametrize("windows", [[[100.0, 120.0], [120.5, 140.0]],    # 0.5 s apart, no fix between (touching
                                      # windows are refused when the config is loaded: test_jobs_config)
                                      [[130.0, 140.0], [100.0, 120.0], [120.5, 129.0]],  # unsorted, 0.5 s apart

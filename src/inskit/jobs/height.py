@@ -52,13 +52,51 @@ def height_series(cfg, imu: ImuData):
     return t, z + h.offset_m, s
 
 
-def height_aiding(cfg, imu: ImuData):
+#: a height log whose changes are not the fixes' (the slope of one against the other) outside this band is refused
+HEIGHT_SCALE_BAND = (0.8, 1.25)
+#: the fixes must climb or descend this much [m] (5th to 95th percentile) for the scale to be judged
+HEIGHT_SCALE_MIN_RANGE_M = 5.0
+
+
+def check_height_scale(path, t, z, gnss):
+    """Refuse a height log whose changes are not the GNSS fixes' heights'
+    changes: the least-squares slope of its heights against the fixes'
+    (interpolated to its times) outside :data:`HEIGHT_SCALE_BAND` (a
+    barometer in feet, 3.28, went ahead: the filter refused its NHC as
+    'not holding' and ended 253 km off).  A constant offset is the bias
+    state's; silent when the fixes vary by less than
+    :data:`HEIGHT_SCALE_MIN_RANGE_M` or overlap fewer than 10 readings."""
+    if gnss is None or len(gnss.time) < 3:
+        return
+    inside = (t >= gnss.time[0]) & (t <= gnss.time[-1])
+    if inside.sum() < 10:
+        return
+    hg = np.interp(t[inside], gnss.time, gnss.lla[:, 2])
+    lo5, hi95 = np.percentile(hg, [5, 95])
+    if hi95 - lo5 < HEIGHT_SCALE_MIN_RANGE_M:
+        return
+    zz = np.asarray(z, float)[inside]
+    dg = hg - hg.mean()
+    slope = float(np.dot(dg, zz - zz.mean()) / np.dot(dg, dg))
+    lo, hi = HEIGHT_SCALE_BAND
+    if not lo <= slope <= hi:
+        hint = (" (feet read as metres?)" if abs(slope - 3.2808) < 0.3 else
+                " (metres read as feet?)" if abs(slope - 0.3048) < 0.03 else "")
+        raise InputError(f"{path}: its heights change {slope:.3g} times as much as the GNSS fixes' heights (slope "
+                         f"over {int(inside.sum())} readings, the fixes spanning {hi95 - lo5:.1f} m){hint}; expected "
+                         f"{lo:g}..{hi:g}: heights must be metres (a constant offset is the bias state's)")
+
+
+def height_aiding(cfg, imu: ImuData, gnss=None):
     """The ``[height]`` measurement and its state blocks: ``(Height, [HeightBias])``
-    (no block without ``estimate_bias``)."""
+    (no block without ``estimate_bias``); a height log is checked against the
+    fixes' heights ``gnss`` (:func:`check_height_scale`)."""
     from ..integration import Height, HeightBias
 
     h = cfg.height
     t, z, s = height_series(cfg, imu)
+    if h.file is not None:
+        check_height_scale(cfg.resolve(h.file).name, t, z, gnss)
     meas = Height(t, z, s, lever_arm_b=h.lever_arm_b_m)
     if not h.estimate_bias:
         return meas, []

@@ -454,7 +454,43 @@ def time_unit_hint(t_gnss, t_imu) -> str:
 ODOMETER_SPEED_RATIO = (0.8, 1.25)
 
 
-def check_odometer_speed(path, t, v, gnss: GnssData, min_speed_m_s=2.0):
+def check_speed_course(path, t, speed, course, gnss: GnssData, min_speed_m_s=2.0):
+    """Refuse a speed-and-course log whose speed is not the GNSS track's
+    (as :func:`check_odometer_speed`: km/h under an m/s header went ahead to
+    1746 m of outage error, blamed on the attitude) or whose course is not
+    the track's: the angle between them while moving above
+    :data:`SPEED_COURSE_MAX_DEG` a quarter of the time (radians under the
+    ``course_deg`` header went ahead to 13.7 km; they agree while the track
+    heads north).  Silent
+    when the track gives fewer than 10 moments while moving."""
+    check_odometer_speed(path, t, speed, gnss, min_speed_m_s, what="speed over ground of the speed and course log")
+    if len(gnss.time) < 3:
+        return
+    sp, crs = gnss_speed(gnss)[:2]
+    inside = (t >= gnss.time[0]) & (t <= gnss.time[-1])
+    if inside.sum() < 10:
+        return
+    k = np.clip(np.searchsorted(gnss.time, t[inside]), 0, len(gnss.time) - 1)  # the fix at or after each time
+    moving = (sp[k] > min_speed_m_s) & (np.abs(np.asarray(speed, float)[inside]) > 0.5 * min_speed_m_s)
+    if moving.sum() < 10:
+        return
+    c = np.asarray(course, float)[inside][moving]
+    d = np.degrees(np.abs(np.angle(np.exp(1j * (c - crs[k][moving])))))
+    med = float(np.percentile(d, 75))  # a quarter of the time off: radians agree while the car heads north
+    if med > SPEED_COURSE_MAX_DEG:
+        hint = (" (radians under the course_deg header?)" if np.degrees(np.abs(c)).max() <= np.degrees(2 * np.pi)
+                + 1e-6 and np.abs(c).max() < np.radians(7.0) else "")
+        raise InputError(f"{path}: the course is {med:.3g} deg or more from the GNSS track's course a quarter of "
+                         f"the time ({int(moving.sum())} moments while moving){hint}; expected within "
+                         f"{SPEED_COURSE_MAX_DEG:g} deg: the course column must be degrees clockwise from north")
+
+
+#: a speed-and-course log whose course is further than this [deg] from the GNSS track's (75th percentile while
+#: moving; a good log: 0.5 deg)
+SPEED_COURSE_MAX_DEG = 20.0
+
+
+def check_odometer_speed(path, t, v, gnss: GnssData, min_speed_m_s=2.0, what="odometer speed"):
     """Refuse an odometer log whose speed is not the GNSS track's: the
     median ratio of odometer speed to the speed of the fixes
     (:func:`inskit.alignment.coarse.gnss_speed`, interpolated to the
@@ -480,7 +516,7 @@ def check_odometer_speed(path, t, v, gnss: GnssData, min_speed_m_s=2.0):
     if not lo <= r <= hi:
         hint = (" (km/h read as m/s?)" if abs(r - 3.6) < 0.4 else " (mph read as m/s?)" if abs(r - 2.237) < 0.25
                 else " (m/s read as km/h?)" if abs(r - 1 / 3.6) < 0.05 else "")
-        raise InputError(f"{path}: the odometer speed is {r:.3g} times the GNSS track's speed (median over "
+        raise InputError(f"{path}: the {what} is {r:.3g} times the GNSS track's speed (median over "
                          f"{int(moving.sum())} moments while moving){hint}; expected {lo:g}..{hi:g} (a scale error "
                          "within it is estimated): the speed column must be m/s")
 
@@ -517,16 +553,19 @@ def odometer_measurement(cfg: NavigateConfig, imu: ImuData, gnss: GnssData | Non
                     nhc_sigma_m_s=o.nhc_sigma_m_s)
 
 
-def speed_course_measurement(cfg: NavigateConfig, windows, lever, imu: ImuData):
+def speed_course_measurement(cfg: NavigateConfig, windows, lever, imu: ImuData, gnss: GnssData | None = None):
     """GNSS speed and course over ground as horizontal-velocity updates,
     withheld inside the outage windows like the fixes; refuses a log that
-    does not overlap the IMU's (:func:`refuse_no_overlap`)."""
+    does not overlap the IMU's (:func:`refuse_no_overlap`), and one whose
+    speed or course is not the fixes' track's (:func:`check_speed_course`)."""
     from ..integration import GnssSpeedCourse
 
     path = cfg.resolve(cfg.gnss.speed_course)
     t, s, c, ss, sc = io.read_speed_course(path)
     t = t + cfg.gnss.time_offset_s
     refuse_no_overlap(path, "speed and course", t, imu, "gnss.time_offset_s")
+    if gnss is not None:
+        check_speed_course(path, t, s, c, gnss)
     return GnssSpeedCourse(t, s, c, ss, sc, lever_arm_b=lever, use=~withheld_mask(t, windows),
                            min_speed_m_s=cfg.gnss.speed_course_min_speed_m_s)
 
@@ -965,7 +1004,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     if cfg.height is not None:  # a barometer or a height profile, with its offset state
         from .height import height_aiding
 
-        height, height_blocks = height_aiding(cfg, imu)
+        height, height_blocks = height_aiding(cfg, imu, gnss)
         extra_blocks += height_blocks
         if cfg.height.file is not None:  # a constant height_m has no log to speak of
             aiding.append(("height", cfg.resolve(cfg.height.file), height))
@@ -999,7 +1038,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         if odo is not None:
             meas.append(odo)
         if cfg.gnss.speed_course is not None:
-            meas.append(speed_course_measurement(cfg, windows, lever, imu))
+            meas.append(speed_course_measurement(cfg, windows, lever, imu, gnss))
             aiding.append(("speed and course", cfg.resolve(cfg.gnss.speed_course), meas[-1]))
         if height is not None:
             meas.append(height)
