@@ -244,3 +244,34 @@ def test_init_mode_keys_are_checked():
     given = {"mode": "given", "lat_deg": 45.0, "lon_deg": 7.0, "height_m": 300.0, "rpy_deg": [0, 0, 90]}
     with pytest.raises(ConfigError, match=r"init\.yaw_hypotheses would be ignored"):
         config_from_dict({**base, "init": {**given, "yaw_hypotheses": 4}})
+
+
+def test_a_bank_that_cannot_tell_the_yaws_apart_keeps_the_tracks_course():
+    """On 40 s of straight driving at constant speed every yaw fits the fixes alike: a bank from the track's
+    course (29.9 deg, known to a degree) kept -120 deg for scoring 0.738 against 0.741 and drove backwards
+    (2168 m).  When the start-up's yaw is the track's (keep_first_on_tie), a hypothesis must score more than
+    BANK_TIE better to replace it; a clear winner still does, and a user's guessed yaw keeps the old rule."""
+    from types import SimpleNamespace
+
+    from inskit.alignment.inmotion import BANK_TIE, yaw_bank
+    from inskit.types import ImuData
+
+    imu = ImuData(np.arange(0.0, 50.0, 0.01), np.zeros((5000, 3)), np.zeros((5000, 3)))
+
+    def fake(scores):
+        def run(short, state, meas, settings):
+            k = int(round(((state - 10.0) % 360.0) / 30.0)) % 12  # hypothesis k at 10 + 30 k deg
+            return SimpleNamespace(innovations={"gnss_pos": {"nis": np.array([2.0 * scores[k]]),
+                                                             "dof": np.array([2.0])}})
+        return run
+
+    tied = [0.741] * 12
+    tied[5] = 0.738
+    at = (lambda y: float(np.degrees(y)))
+    b = yaw_bank(imu, at, np.radians(10.0), [], None, run=fake(tied), keep_first_on_tie=True)
+    assert b["chosen"] == 0 and b["tie"] and b["chosen_yaw_deg"] == pytest.approx(10.0)
+    assert yaw_bank(imu, at, np.radians(10.0), [], None, run=fake(tied))["chosen"] == 5  # a guessed yaw: no prior
+    clear = [5.0] * 12
+    clear[3] = 5.0 * (1.0 - 2 * BANK_TIE)
+    b = yaw_bank(imu, at, np.radians(10.0), [], None, run=fake(clear), keep_first_on_tie=True)
+    assert b["chosen"] == 3 and not b["tie"]

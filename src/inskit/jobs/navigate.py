@@ -1049,7 +1049,8 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
 
             bank = yaw_bank(imu, startup.at_yaw, float(initial.euler[2]), meas, settings,
                             n=cfg.init.yaw_hypotheses, span_s=cfg.init.bank_s,
-                            score_measurements=("pseudorange",) if tight else ("gnss_pos",))
+                            score_measurements=("pseudorange",) if tight else ("gnss_pos",),
+                            keep_first_on_tie=i.yaw_deg is None)  # the track's course, not the user's guess
             startup = after_bank(startup, bank)
             initial = startup.state
             if log:
@@ -1726,6 +1727,10 @@ def summary(res: NavigateResult) -> dict:
         constrained=res.config.filter.scheme != "uncoupled" and (c.nhc or (odo is not None and odo.with_nhc)))
     if warn:
         out["health"]["warnings"].append(warn)
+    bank = res.startup.bank if res.startup is not None else None
+    if bank and bank.get("tie"):
+        out["health"]["warnings"].append(f"yaw bank: kept the start-up's own yaw {bank['chosen_yaw_deg']:.1f} deg: "
+                                         + bank_tie_text(min(v for v in bank["scores"] if v is not None)))
     axes = res.startup.axes if res.startup is not None else None
     yaw_warn = unmodelled_yaw_warning(axes, fw, res.config)
     if yaw_warn:
@@ -2116,9 +2121,22 @@ def outage_table_text(s: dict) -> str:
 def bank_line(bank: dict) -> str:
     """The log line of a yaw bank (:func:`inskit.alignment.inmotion.yaw_bank`'s result)."""
     runner_up = bank["runner_up_score"]
-    return (f"yaw bank: {len(bank['scores'])} hypotheses over {bank['span_s']:.0f} s in {bank['elapsed_s']:.1f} s; "
-            f"kept {bank['chosen_yaw_deg']:.1f} deg (mean NIS per dof {bank['score']:.3f}, next best "
+    head = f"yaw bank: {len(bank['scores'])} hypotheses over {bank['span_s']:.0f} s in {bank['elapsed_s']:.1f} s; "
+    if bank.get("tie"):
+        best = min(v for v in bank["scores"] if v is not None)
+        return head + (f"kept the start-up's own {bank['chosen_yaw_deg']:.1f} deg (mean NIS per dof "
+                       f"{bank['score']:.3f}): {bank_tie_text(best)}")
+    return (head + f"kept {bank['chosen_yaw_deg']:.1f} deg (mean NIS per dof {bank['score']:.3f}, next best "
             + (f"{runner_up:.3f})" if runner_up is not None else "none)"))
+
+
+def bank_tie_text(best) -> str:
+    """Why a yaw bank kept its first hypothesis over a best that scored no better by a margin."""
+    from ..alignment.inmotion import BANK_TIE
+
+    return (f"no other fitted the fixes more than {BANK_TIE:.0%} better (best {best:.3f}): the data of the bank's "
+            "span cannot tell the yaws apart (straight driving at constant speed), so its heading rests on the "
+            "start-up's")
 
 
 def occupied_folder_message(folder, force="--force", other="--out") -> str | None:
