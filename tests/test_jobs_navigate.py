@@ -1308,3 +1308,18 @@ def test_a_yaw_mounting_the_start_up_measured_is_said_when_the_filter_does_not_m
     assert unmodelled_yaw_warning(off, modelled, cfg) is None
     assert unmodelled_yaw_warning(off, plain, load_config(EXAMPLE, {"constraints": {
         "mounting": False, "nhc": False, "nhc_sigma_m_s": 0.1, "nhc_lever_arm_b_m": [0.0, 0.0, 0.0]}})) is None
+
+
+def test_an_aiding_log_taken_while_the_fixes_are_refused_is_named_in_the_verdict():
+    """An odometer 0.5 s late was taken in 5995 of 5996 updates while 72 % of the fixes were refused; the verdict
+    blamed the attitude, a constraint or the mounting, never the odometer.  Such a log is named now; a healthy
+    GNSS, or an aiding log itself refused, names none."""
+    from inskit.jobs.navigate import aiding_suspects
+
+    per = {"gnss_pos": {"updates": 600, "rejected_fraction": 0.72},
+           "odometer": {"updates": 5996, "rejected_fraction": 1 / 5996},
+           "height": {"updates": 600, "rejected_fraction": 0.4}}
+    said = aiding_suspects(per)
+    assert len(said) == 1 and said[0].startswith("odometer: the odometer log was taken in 100% of its 5996 updates "
+                                                 "while 72% of the GNSS updates were refused")
+    assert aiding_suspects({**per, "gnss_pos": {"updates": 600, "rejected_fraction": 0.01}}) == []
