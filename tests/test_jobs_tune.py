@@ -238,3 +238,7 @@ def test_a_candidate_that_turns_a_switch_off_drops_the_keys_that_serve_it():
     assert load_config(ex, T.overrides_of({"constraints.nhc": True})).constraints.nhc_sigma_m_s == 0.2
     with pytest.raises(ConfigError, match=r"field 'constraints\.nhc_sigma_m_s'"):
         load_config(ex, T.overrides_of({"constraints.nhc": False, "constraints.nhc_sigma_m_s": 0.3}))
+    # an uncoupled candidate (no filter) drops what only a filter fuses or estimates: drive_0708's GNSS error
+    # states, its NHC settings and mounting (refused with the scheme, and so the candidate was)
+    cfg = load_config(ex, T.overrides_of({"filter.scheme": "uncoupled"}))
+    assert cfg.filter.scheme == "uncoupled" and cfg.gnss.error_sigma_m is None and not cfg.constraints.mounting

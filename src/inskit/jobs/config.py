@@ -885,22 +885,38 @@ SWITCH_KEYS = {
 }
 
 
+#: the keys an uncoupled candidate of ``inskit tune`` resets to their defaults (the scheme has no filter: the
+#: config refuses them set, NavigateConfig._turn_on_once); the switches among them reset their own keys too
+UNCOUPLED_OFF = ("gnss.use_velocity", "gnss.error_sigma_m", "gnss.error_tau_s", "gnss.speed_course",
+                 "filter.lever_arm", "filter.time_offset", "constraints.mounting", "constraints.zupt_sigma_m_s",
+                 "constraints.nhc_sigma_m_s", "constraints.nhc_lever_arm_b_m", "constraints.rate_hz")
+
+
 def switched_off_overrides(params: dict) -> dict:
     """``{"section.key": default}`` for the keys of :data:`SWITCH_KEYS` whose
     switch ``params`` (``{"section.key": value}``, a tune candidate) turns
     off, unless ``params`` sets them itself: the candidate then runs without
     the feature instead of being refused for the keys the config sets for it
     (``--grid constraints.nhc=true,false`` on drive_0708, whose
-    ``nhc_sigma_m_s`` serves the ``true`` candidate)."""
+    ``nhc_sigma_m_s`` serves the ``true`` candidate); a candidate of the
+    uncoupled scheme also resets :data:`UNCOUPLED_OFF`."""
     out = {}
-    off = [k for k, v in params.items() if k in SWITCH_KEYS and v is False]
-    while off:  # a reset switch whose default is off resets its own keys too (nhc -> mounting -> its sigmas)
-        for k in SWITCH_KEYS[off.pop()]:
-            if k not in params and k not in out:
-                sect, key = k.split(".")
-                out[k] = NavigateConfig.model_fields[sect].annotation.model_fields[key].default
-                if k in SWITCH_KEYS and out[k] is False:
-                    off.append(k)
+    todo = [k for k, v in params.items() if k in SWITCH_KEYS and v is False]
+
+    def reset(k):  # to its default; a switch whose default is off resets its own keys too (nhc -> mounting -> ...)
+        if k in params or k in out:
+            return
+        sect, key = k.split(".")
+        out[k] = NavigateConfig.model_fields[sect].annotation.model_fields[key].default
+        if k in SWITCH_KEYS and out[k] is False:
+            todo.append(k)
+
+    if params.get("filter.scheme") == "uncoupled":  # no filter: what only a filter fuses or estimates goes too
+        for k in UNCOUPLED_OFF:
+            reset(k)
+    while todo:
+        for k in SWITCH_KEYS[todo.pop()]:
+            reset(k)
     return out
 
 
