@@ -156,12 +156,10 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
 
         mount = check_option_angles("--mount-rpy", _numbers("--mount-rpy", mount_rpy, 3, "roll,pitch,yaw [deg]"))
     imu = io.read_imu(imu_file, check_units=not no_unit_check, first_row=first_row)
-    if mount is not None and np.any(np.asarray(mount, float) != 0.0):
-        from .io.rtklib import mount_dcm
-        from .types import ImuData
+    if mount is not None:
+        from .io.rtklib import rotate_to_body
 
-        C_bs = mount_dcm(np.radians(np.asarray(mount, float)))  # sensor axes -> body axes, as navigate's
-        imu = ImuData(imu.time, imu.dtheta_b @ C_bs.T, imu.dv_b @ C_bs.T)
+        rotate_to_body(np.radians(np.asarray(mount, float)), imu.dtheta_b, imu.dv_b)  # the reader's arrays, as navigate
     if init_text and init_from:
         raise InputError("give either --init or --init-from, not both")
     if init_from:

@@ -446,6 +446,19 @@ def mount_dcm(mount_rpy):
     return rot.dcm_from_euler(check_euler("mount_rpy", mount_rpy)).T
 
 
+def rotate_to_body(mount_rpy, *vectors_s):
+    """The rows of each ``(n, 3)`` array of ``vectors_s`` (sensor axes:
+    increments, rates) rotated into the body axes, ``x_b = C_bs x_s``
+    (:func:`mount_dcm`), in place (a reader's own arrays: an 8 h, 200 Hz log
+    is 0.32 GB, not copied); nothing is done for a zero mounting.  Returns
+    the arrays."""
+    C_bs = mount_dcm(mount_rpy)
+    if not np.array_equal(C_bs, np.eye(3)):
+        for x in vectors_s:
+            x[:] = x @ C_bs.T
+    return vectors_s
+
+
 def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0.0, 0.0, 0.0),
                             check_units=True, repeated="keep", time_smoothing=1, info=None):
     """Read the rtklibexplorer ``imu_*_gpst.csv`` log.
