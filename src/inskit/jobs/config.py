@@ -150,6 +150,8 @@ GNSS_FILE_KEYS = ("format", "quality", "time_offset_s")
 GNSS_QUALITY_FORMATS = ("rtklib-pos",)
 #: [gnss] keys of the fixes' velocity updates (they need use_velocity)
 GNSS_VELOCITY_KEYS = ("velocity_delay_s", "velocity_sigma_scale")
+#: [constraints] switches and their own keys (ignored, so refused changed, with the switch off)
+CONSTRAINT_SWITCH_KEYS = {"zupt": ("zupt_sigma_m_s",), "nhc": ("nhc_sigma_m_s", "nhc_lever_arm_b_m")}
 
 
 def _names(keys, section="gnss"):
@@ -554,11 +556,11 @@ class ConstraintsSection(_Strict):
 
     @model_validator(mode="after")
     def _constraint_keys(self):
-        if not self.zupt and _changed(self, ("zupt_sigma_m_s",)):
+        if not self.zupt and _changed(self, CONSTRAINT_SWITCH_KEYS["zupt"]):
             raise _key_error("zupt_sigma_m_s", "constraints.zupt_sigma_m_s would be ignored: it is the sigma of the "
                              "zero-velocity updates, and zupt = false applies none; set constraints.zupt = true, or "
                              "remove it")
-        bad = [] if self.nhc else _changed(self, ("nhc_sigma_m_s", "nhc_lever_arm_b_m"))
+        bad = [] if self.nhc else _changed(self, CONSTRAINT_SWITCH_KEYS["nhc"])
         if bad:
             raise _key_error(bad[0], f"{_names(bad, 'constraints')} would be ignored: "
                              f"{_they(bad, 'it tunes', 'they tune')} the non-holonomic constraint, and nhc = false "
@@ -875,18 +877,19 @@ FILTER_STATE_KEYS = (
 #: those keys with its switch off is refused (the key would be ignored); ``inskit tune`` resets them to their
 #: defaults in a candidate that turns the switch off (:func:`switched_off_overrides`)
 SWITCH_KEYS = {
-    "constraints.zupt": ("constraints.zupt_sigma_m_s",),
+    "constraints.zupt": tuple(f"constraints.{k}" for k in CONSTRAINT_SWITCH_KEYS["zupt"]),
     # the mounting is estimated through the NHC (odometer.with_nhc aside): off with it, and its own keys with it
-    "constraints.nhc": ("constraints.nhc_sigma_m_s", "constraints.nhc_lever_arm_b_m", "constraints.mounting"),
+    "constraints.nhc": tuple(f"constraints.{k}" for k in CONSTRAINT_SWITCH_KEYS["nhc"]) + ("constraints.mounting",),
     "constraints.mounting": ("constraints.sigma_mounting_deg", "constraints.mounting_rw_deg_sqrt_h"),
-    "gnss.use_velocity": ("gnss.velocity_delay_s", "gnss.velocity_sigma_scale"),
+    "gnss.use_velocity": tuple(f"gnss.{k}" for k in GNSS_VELOCITY_KEYS),
     **{f"filter.{switch}": tuple(f"{sect}.{k}" for sect, ks in keys for k in ks)
        for switch, keys, _ in FILTER_STATE_KEYS},
 }
 
 
-#: the keys an uncoupled candidate of ``inskit tune`` resets to their defaults (the scheme has no filter: the
-#: config refuses them set, NavigateConfig._turn_on_once); the switches among them reset their own keys too
+#: the keys the uncoupled scheme (no filter) refuses changed from their defaults (NavigateConfig._turn_on_once;
+#: mounting and error_tau_s by their own rules first) and an uncoupled candidate of ``inskit tune`` resets to them;
+#: the switches among them reset their own keys too
 UNCOUPLED_OFF = ("gnss.use_velocity", "gnss.error_sigma_m", "gnss.error_tau_s", "gnss.speed_course",
                  "filter.lever_arm", "filter.time_offset", "constraints.mounting", "constraints.zupt_sigma_m_s",
                  "constraints.nhc_sigma_m_s", "constraints.nhc_lever_arm_b_m", "constraints.rate_hz")
@@ -989,14 +992,8 @@ class NavigateConfig(_Strict):
             raise _key_error("height", "[height] would be ignored: the uncoupled scheme has no filter to fuse "
                              "heights into (use filter.scheme = \"closed\" or \"open\")")
         if self.filter.scheme == "uncoupled":  # the INS reset to each fix: no filter, so none of these is applied
-            bad = ([k for k, on in (("gnss.use_velocity", self.gnss.use_velocity),
-                                    ("gnss.error_sigma_m", self.gnss.error_sigma_m is not None),
-                                    ("gnss.speed_course", self.gnss.speed_course is not None),
-                                    ("odometer", self.odometer is not None),
-                                    ("filter.lever_arm", self.filter.lever_arm),
-                                    ("filter.time_offset", self.filter.time_offset)) if on]
-                   + [f"constraints.{k}" for k in _changed(self.constraints, ("zupt_sigma_m_s", "nhc_sigma_m_s",
-                                                                               "nhc_lever_arm_b_m", "rate_hz"))])
+            bad = [k for k in UNCOUPLED_OFF if _changed(getattr(self, k.split(".")[0]), (k.split(".")[1],))]
+            bad += ["odometer"] if self.odometer is not None else []
             if bad:
                 raise _key_error(bad[0], f"{', '.join(bad)} would be ignored: the uncoupled scheme resets the INS to "
                                  "each position fix and has no filter to fuse velocities, wheel speed or "
