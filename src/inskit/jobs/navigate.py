@@ -460,10 +460,12 @@ def check_speed_course(path, t, speed, course, gnss: GnssData, min_speed_m_s=2.0
     ``course_deg`` header went ahead to 13.7 km; they agree while the track
     heads north).  Silent
     when the track gives fewer than 10 moments while moving."""
-    check_odometer_speed(path, t, speed, gnss, min_speed_m_s, what="speed over ground of the speed and course log")
     if len(gnss.time) < 3:
         return
-    sp, crs = gnss_speed(gnss)[:2]
+    track = gnss_speed(gnss)
+    check_odometer_speed(path, t, speed, gnss, min_speed_m_s, what="speed over ground of the speed and course log",
+                         track=track)
+    sp, crs = track[:2]
     inside = (t >= gnss.time[0]) & (t <= gnss.time[-1])
     if inside.sum() < 10:
         return
@@ -475,8 +477,8 @@ def check_speed_course(path, t, speed, course, gnss: GnssData, min_speed_m_s=2.0
     d = np.degrees(np.abs(np.angle(np.exp(1j * (c - crs[k][moving])))))
     med = float(np.percentile(d, 75))  # a quarter of the time off: radians agree while the car heads north
     if med > SPEED_COURSE_MAX_DEG:
-        hint = (" (radians under the course_deg header?)" if np.degrees(np.abs(c)).max() <= np.degrees(2 * np.pi)
-                + 1e-6 and np.abs(c).max() < np.radians(7.0) else "")
+        # radians read as degrees: no course beyond 2 pi "deg"
+        hint = " (radians under the course_deg header?)" if np.abs(c).max() < np.radians(7.0) else ""
         raise InputError(f"{path}: the course is {med:.3g} deg or more from the GNSS track's course a quarter of "
                          f"the time ({int(moving.sum())} moments while moving){hint}; expected within "
                          f"{SPEED_COURSE_MAX_DEG:g} deg: the course column must be degrees clockwise from north")
@@ -487,7 +489,7 @@ def check_speed_course(path, t, speed, course, gnss: GnssData, min_speed_m_s=2.0
 SPEED_COURSE_MAX_DEG = 20.0
 
 
-def check_odometer_speed(path, t, v, gnss: GnssData, min_speed_m_s=2.0, what="odometer speed"):
+def check_odometer_speed(path, t, v, gnss: GnssData, min_speed_m_s=2.0, what="odometer speed", track=None):
     """Refuse an odometer log whose speed is not the GNSS track's: the
     median ratio of odometer speed to the speed of the fixes
     (:func:`inskit.alignment.coarse.gnss_speed`, interpolated to the
@@ -496,10 +498,11 @@ def check_odometer_speed(path, t, v, gnss: GnssData, min_speed_m_s=2.0, what="od
     :data:`ODOMETER_SPEED_RATIO` (3.6: km/h under an m/s header; 2.24: mph;
     the filter then rejected the GNSS and blamed it).  A scale error of a
     few per cent is the scale-factor state's to estimate, not refused.
-    Silent when the track gives fewer than 10 such moments."""
+    Silent when the track gives fewer than 10 such moments.  ``track``: the
+    fixes' :func:`gnss_speed` when the caller has it already."""
     if len(gnss.time) < 3:
         return
-    sp = gnss_speed(gnss)[0]
+    sp = (gnss_speed(gnss) if track is None else track)[0]
     inside = (t >= gnss.time[0]) & (t <= gnss.time[-1])
     if inside.sum() < 10:
         return
