@@ -138,7 +138,7 @@ def test_report_is_self_contained_and_small(report, run_dir):
     assert "Copyright 2012-" not in text  # no plain copy of the bundle beside the packed one
     s = json.loads((run_dir / "summary.json").read_text())
     rms = s["outage_end_horizontal_rms_m"]
-    assert 1.0 < rms < 3.0  # the drive's outage-end RMS (2.04 m with examples/drive_0708.toml)
+    assert 1.0 < rms < 3.0  # the drive's outage-end RMS (1.98 m with examples/drive_0708.toml)
     assert s["health"]["verdict"] in text and f"{rms:.3f}" in text  # verdict and outage-end RMS on the page
 
 

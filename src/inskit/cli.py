@@ -338,6 +338,10 @@ def bench(quick, no_cli, long_runs, as_json):
 @click.option("--calibrate-time-offset", is_flag=True,
               help="First find the IMU time offset that minimises the GNSS innovations, then run with it "
               "(sets [imu] time_offset_search = \"calibrate\").")
+@click.option("--calibrate-gnss-axes", is_flag=True,
+              help="First shape the fixes' noise, north, east, down, to their innovations on the fixes the filter "
+              "uses, then run with it (sets [gnss] sigma_scale_search = \"calibrate\"; the summary's "
+              "gnss_axes_calibration says what each run measured).")
 @click.option("--out", "out_dir", type=click.Path(file_okay=False), help="Output folder (default from config).")
 @click.option("--force", is_flag=True, help="Write into an output folder that is not empty: files of the same "
               "names are replaced, and those an earlier run there listed in its summary.json go; other files stay.")
@@ -361,7 +365,7 @@ def bench(quick, no_cli, long_runs, as_json):
               "the run (as `inskit report`).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_arm, imu_time_offset, scheme, outages,
-             smooth, calibrate_time_offset, out_dir, force, no_plots, output_format, output_rate, stream, truth_file,
+             smooth, calibrate_time_offset, calibrate_gnss_axes, out_dir, force, no_plots, output_format, output_rate, stream, truth_file,
              gravity, strict, with_report, as_json):
     """INS/GNSS integration from a TOML config file or flags."""
     from .jobs import config as C
@@ -376,6 +380,8 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
         over.setdefault("imu", {})["time_offset_s"] = imu_time_offset
     if calibrate_time_offset:
         over.setdefault("imu", {})["time_offset_search"] = "calibrate"
+    if calibrate_gnss_axes:
+        over.setdefault("gnss", {})["sigma_scale_search"] = "calibrate"
     if gnss_file:
         over.setdefault("gnss", {})["file"] = str(Path(gnss_file).resolve())
     if gnss_format:

@@ -355,12 +355,16 @@ class GnssPositionError(_Named):
     measurement noise (state augmentation, Brown & Hwang 2012 §8.2; Groves
     2013 §14.2.7).  :class:`.measurements.GnssPosition` finds the block by
     its name ``"gnss_err"``: ``h = ... + e``, ``H_e = I``.
+
+    ``sigma`` is one number for the three axes or ``(3,)``, north, east,
+    down (the vertical of a fix is usually the worse).
     """
 
     _est_names = ("gnss_err_n_m", "gnss_err_e_m", "gnss_err_d_m")
     _sig_names = ("sigma_gnss_err_n_m", "sigma_gnss_err_e_m", "sigma_gnss_err_d_m")
 
     def __init__(self, sigma, tau_s):
+        sigma = np.asarray(sigma, dtype=float)
         super().__init__("gnss_err", ("n", "e", "d"), "m", sigma, 2.0 * sigma**2 / tau_s, tau_s,
                          estimate0=np.zeros(3), predict_estimate=True,
                          description="time-correlated error of the GNSS position fixes")

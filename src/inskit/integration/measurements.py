@@ -49,6 +49,7 @@ import numpy as np
 
 from .. import earth
 from ..rotations import dcm_from_quat, quat_from_dcm, skew
+from ..errors import InputError
 from ..types import GnssData
 from . import _kernel as K
 from . import _updates as U
@@ -222,15 +223,25 @@ class GnssPosition:
         Lower bound of each sigma [m].
     lever_arm_b : (3,) array_like
         IMU-to-antenna lever arm, body axes [m], when it is not estimated.
+    sigma_scale_ned : (3,) array_like
+        Multiplies each fix's north, east and down sigma (after the floor):
+        the shape of the fixes' noise where the file's sigmas have the wrong
+        one (a receiver's formal sigmas, equal on all axes, where the
+        vertical really is worse: :func:`inskit.analysis.consistency.axis_scale_step`).
     """
 
     name = "gnss_pos"
     gating = "vector"
 
-    def __init__(self, gnss: GnssData, use=None, sigma_floor_m=0.0, lever_arm_b=(0.0, 0.0, 0.0)):
+    def __init__(self, gnss: GnssData, use=None, sigma_floor_m=0.0, lever_arm_b=(0.0, 0.0, 0.0),
+                 sigma_scale_ned=(1.0, 1.0, 1.0)):
         self.gnss = gnss
         self.use = np.ones(len(gnss), bool) if use is None else np.asarray(use, bool)
-        self.sigma = np.maximum(gnss.sigma_ned, sigma_floor_m)
+        scale = np.asarray(sigma_scale_ned, dtype=float)
+        if scale.shape != (3,) or not (np.all(np.isfinite(scale)) and np.all(scale > 0)):
+            raise InputError(f"sigma_scale_ned must be three finite numbers > 0 (north, east, down), got "
+                             f"{sigma_scale_ned!r}")
+        self.sigma = np.maximum(gnss.sigma_ned, sigma_floor_m) * scale
         self.lever_arm_b = np.asarray(lever_arm_b, dtype=float)
         self._rows = np.nonzero(self.use)[0]
 

@@ -142,8 +142,8 @@ GNSS_RINEX_KEYS = ("obs", "nav", "systems", "mask_deg", "iono", "tropo")
 #: [gnss] keys used only when pseudoranges are fused (tight coupling)
 GNSS_TIGHT_KEYS = ("use_doppler", "pseudorange_sigma_scale", "doppler_sigma_scale", "clock_h0", "clock_h_2")
 #: [gnss] keys that describe fixes fused by loose coupling
-GNSS_LOOSE_KEYS = ("use_velocity", "velocity_delay_s", "velocity_sigma_scale", "sigma_floor_m", "error_sigma_m",
-                   "error_tau_s")
+GNSS_LOOSE_KEYS = ("use_velocity", "velocity_delay_s", "velocity_sigma_scale", "sigma_floor_m", "sigma_scale_ned",
+                   "sigma_scale_search", "error_sigma_m", "error_tau_s")
 #: [gnss] keys that describe how ``file`` is read
 GNSS_FILE_KEYS = ("format", "quality", "time_offset_s")
 #: [gnss] formats of ``file`` with a quality column (``quality`` selects its rows)
@@ -173,7 +173,8 @@ class GnssSection(_Strict):
     clock_h0, clock_h_2) with loose coupling and a ``file``; the
     tight-coupling keys with loose coupling from RINEX; the loose-coupling keys
     (use_velocity, velocity_delay_s, velocity_sigma_scale, sigma_floor_m,
-    error_sigma_m, error_tau_s) with tight coupling; format, quality and
+    sigma_scale_ned, sigma_scale_search, error_sigma_m, error_tau_s) with
+    tight coupling; format, quality and
     time_offset_s without a ``file``; quality with a format other than
     "rtklib-pos" (only a .pos file has a quality column); velocity_delay_s
     and velocity_sigma_scale without use_velocity; error_tau_s without
@@ -205,6 +206,17 @@ class GnssSection(_Strict):
                                         "the fixes' velocity sigmas")
     sigma_floor_m: float = Field(0.0, ge=0, description="loose coupling: lower bound on the fixes' position sigmas "
                                  "(0: as the file gives them)")
+    sigma_scale_ned: tuple[float, float, float] = Field(
+        (1.0, 1.0, 1.0), description="loose coupling: multiplies the fixes' north, east and down position sigmas "
+        "(after sigma_floor_m) and error_sigma_m: the shape of the fixes' noise where the file's sigmas lack it (a "
+        "receiver's formal sigmas, alike on every axis, where the vertical is really the worse). Measured from the "
+        "innovations of the fixes the filter uses: the summary's gnss_axes, sigma_scale_search = \"calibrate\" "
+        "(--calibrate-gnss-axes); docs/guide.md")
+    sigma_scale_search: Literal["off", "calibrate"] = Field(
+        "off", description="loose coupling: \"calibrate\" (--calibrate-gnss-axes) runs the filter first to "
+        "measure the fixes' normalised innovations on each axis (the fixes it uses, never the withheld ones) and "
+        "sets sigma_scale_ned so that the horizontal and the vertical agree, their mean kept (a few runs, until "
+        "they agree within 5 %); the summary's gnss_axes_calibration says what each run measured")
     error_sigma_m: float | None = Field(None, gt=0, description="loose coupling: steady-state sigma of a "
                                         "time-correlated (Gauss-Markov) error of the fixes, north, east, down, "
                                         "estimated as 3 states (default: none, the fixes' errors are white)")
@@ -235,6 +247,13 @@ class GnssSection(_Strict):
                                       "velocity; withheld in outage windows like the fixes")
     speed_course_min_speed_m_s: float = Field(0.5, ge=0, description="below this speed (or 3 sigma of it) the "
                                               "course is meaningless and the reading is skipped [m/s]")
+    @field_validator("sigma_scale_ned")
+    @classmethod
+    def _positive_scales(cls, v):
+        if not all(math.isfinite(x) and x > 0 for x in v):
+            raise ValueError(f"each scale must be a finite number > 0 (north, east, down), got {list(v)}")
+        return v
+
     @field_validator("systems")
     @classmethod
     def _once(cls, v):
@@ -891,6 +910,7 @@ SWITCH_KEYS = {
 #: mounting and error_tau_s by their own rules first) and an uncoupled candidate of ``inskit tune`` resets to them;
 #: the switches among them reset their own keys too
 UNCOUPLED_OFF = ("gnss.use_velocity", "gnss.error_sigma_m", "gnss.error_tau_s", "gnss.speed_course",
+                 "gnss.sigma_scale_ned", "gnss.sigma_scale_search",
                  "filter.lever_arm", "filter.time_offset", "constraints.mounting", "constraints.zupt_sigma_m_s",
                  "constraints.nhc_sigma_m_s", "constraints.nhc_lever_arm_b_m", "constraints.rate_hz")
 

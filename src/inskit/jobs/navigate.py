@@ -999,7 +999,8 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     if cfg.gnss.error_sigma_m is not None and not tight:
         from ..integration import GnssPositionError
 
-        extra_blocks.append(GnssPositionError(cfg.gnss.error_sigma_m, cfg.gnss.error_tau_s))
+        extra_blocks.append(GnssPositionError(cfg.gnss.error_sigma_m * np.asarray(cfg.gnss.sigma_scale_ned),
+                                              cfg.gnss.error_tau_s))
     height = None
     if cfg.height is not None:  # a barometer or a height profile, with its offset state
         from .height import height_aiding
@@ -1023,7 +1024,8 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         if tight:
             meas = list(meas_gnss)
         else:
-            meas = [GnssPosition(gnss, used, cfg.gnss.sigma_floor_m, lever_arm_b=lever)]
+            meas = [GnssPosition(gnss, used, cfg.gnss.sigma_floor_m, lever_arm_b=lever,
+                                 sigma_scale_ned=cfg.gnss.sigma_scale_ned)]
         if cfg.gnss.use_velocity and not tight:
             if not gnss.has_velocity:
                 raise InputError(f"{cfg.gnss.file}: use_velocity is set but the file has no velocity")
@@ -1245,19 +1247,117 @@ def calibrate_time_offset(cfg: NavigateConfig, bounds=(-0.5, 0.2), tol=0.005, lo
     return float(r.x), sorted(evals)
 
 
+#: :func:`calibrate_gnss_axes` stops when the vertical and horizontal normalised innovations agree this well
+GNSS_AXES_TOLERANCE = 0.05
+#: ... or after this many runs
+GNSS_AXES_MAX_RUNS = 5
+#: the summary warns when the vertical and horizontal normalised innovations differ by more than this factor
+GNSS_AXES_WARN_RATIO = 1.3
+#: ... over at least this many updates
+GNSS_AXES_MIN_UPDATES = 30
+
+
+def gnss_axes(fw) -> dict | None:
+    """The fixes' normalised innovations axis by axis
+    (:func:`inskit.analysis.consistency.axis_innovation_rms`: the position
+    updates the filter used, less those within 5 s of a break), or None
+    without position updates (tight coupling, the uncoupled scheme):
+    ``normalized_innovation_rms_ned``, ``horizontal``, ``vertical``,
+    ``vertical_to_horizontal``, ``updates``."""
+    from ..analysis.consistency import axis_innovation_rms, horizontal_vertical
+
+    inn = fw.innovations.get("gnss_pos")
+    if not inn or not len(inn.get("t", [])) or np.asarray(inn["nu"]).ndim != 2:
+        return None
+    rms, n = axis_innovation_rms(inn["t"], inn["nu"], inn["sigma"], inn["accepted"])
+    if n == 0:
+        return None
+    h, v = horizontal_vertical(rms)
+    return {"normalized_innovation_rms_ned": [float(x) for x in rms], "horizontal": h, "vertical": v,
+            "vertical_to_horizontal": v / h if h > 0 else None, "updates": n}
+
+
+def gnss_axes_warning(ax: dict | None, scale) -> str | None:
+    """The summary's warning when the fixes' vertical and horizontal
+    normalised innovations (:func:`gnss_axes`) differ by more than
+    :data:`GNSS_AXES_WARN_RATIO`: the sigmas have the wrong shape."""
+    if not ax or ax["updates"] < GNSS_AXES_MIN_UPDATES or not ax["vertical_to_horizontal"]:
+        return None
+    r = ax["vertical_to_horizontal"]
+    if 1.0 / GNSS_AXES_WARN_RATIO <= r <= GNSS_AXES_WARN_RATIO:
+        return None
+    from ..analysis.consistency import axis_scale_step
+
+    step = np.asarray(scale, float) * axis_scale_step(ax["normalized_innovation_rms_ned"])
+    worse = "vertical" if r > 1 else "horizontal"
+    return (f"GNSS: the fixes' {worse} innovations are {max(r, 1 / r):.2f} times the other axes' for their sigmas "
+            f"(normalised RMS horizontal {ax['horizontal']:.2f}, vertical {ax['vertical']:.2f}, over "
+            f"{ax['updates']} fixes): the sigmas lack the noise's shape, and the filter reads the difference as "
+            f"motion. [gnss] sigma_scale_ned = [{step[0]:.3g}, {step[1]:.3g}, {step[2]:.3g}] is one step towards "
+            "it; --calibrate-gnss-axes finds it")
+
+
+def calibrate_gnss_axes(cfg: NavigateConfig, log=None, tol=GNSS_AXES_TOLERANCE, max_runs=GNSS_AXES_MAX_RUNS,
+                        inputs=None):
+    """``(scale, runs)``: ``[gnss] sigma_scale_ned`` that makes the fixes'
+    horizontal and vertical normalised innovations agree (within ``tol``,
+    relative), by fixed-point steps of
+    :func:`inskit.analysis.consistency.axis_scale_step` from the config's
+    own scale, one forward run each, at most ``max_runs``.  Only the fixes
+    the filter uses enter, never the withheld ones; the files are read
+    once.  ``runs`` lists each run's scale and what it measured."""
+    from ..analysis.consistency import axis_scale_step
+
+    cfg = cfg.model_copy(update={"truth": None})  # the calibration never looks at a truth
+    if inputs is None:
+        inputs = load_inputs(cfg)
+    scale = np.asarray(cfg.gnss.sigma_scale_ned, float)
+    runs = []
+    for _ in range(max_runs):
+        c = cfg.model_copy(update={"gnss": cfg.gnss.model_copy(update={"sigma_scale_ned": tuple(scale)})})
+        ax = gnss_axes(navigate(c, inputs=inputs).forward)
+        if ax is None:
+            raise InputError("gnss.sigma_scale_search = \"calibrate\" needs GNSS position updates to measure: "
+                             "this run made none")
+        runs.append({"sigma_scale_ned": [float(x) for x in scale], **ax})
+        r = ax["vertical_to_horizontal"]
+        if log:
+            log(f"calibrate: sigma_scale_ned [{', '.join(f'{x:.3f}' for x in scale)}] -> normalised innovations "
+                f"horizontal {ax['horizontal']:.3f}, vertical {ax['vertical']:.3f} (ratio {r:.3f})")
+        if abs(r - 1.0) <= tol:
+            return scale, runs
+        scale = scale * axis_scale_step(ax["normalized_innovation_rms_ned"])
+    raise InputError(f"gnss.sigma_scale_search = \"calibrate\": the fixes' vertical and horizontal innovations "
+                     f"still differ by {abs(runs[-1]['vertical_to_horizontal'] - 1):.0%} after {max_runs} runs "
+                     f"(the last scales [{', '.join(f'{x:.3g}' for x in runs[-1]['sigma_scale_ned'])}]); set "
+                     "[gnss] sigma_scale_ned by hand")
+
+
 def calibrated_config(cfg: NavigateConfig, log=None):
-    """``(cfg, extra)``: with ``[imu] time_offset_search = "calibrate"``
-    (``--calibrate-time-offset``), the config with the IMU time offset that
-    fits the fixes best (:func:`calibrate_time_offset`) and the summary's
-    record of the search (``{"time_offset_calibration": {"best_s",
-    "evaluations"}}``); otherwise ``cfg`` unchanged and an empty dict."""
-    if cfg.imu.time_offset_search != "calibrate":
-        return cfg, {}
-    best, evals = calibrate_time_offset(cfg, log=log)
-    if log:
-        log(f"calibrate: best IMU time offset {best:+.4f} s")
-    cfg = cfg.model_copy(update={"imu": cfg.imu.model_copy(update={"time_offset_s": best})})
-    return cfg, {"time_offset_calibration": {"best_s": best, "evaluations": [list(e) for e in evals]}}
+    """``(cfg, extra)``: the config with what its searches calibrate, and the
+    summary's record of each: with ``[imu] time_offset_search =
+    "calibrate"`` (``--calibrate-time-offset``) the IMU time offset that
+    fits the fixes best (:func:`calibrate_time_offset`;
+    ``{"time_offset_calibration": {"best_s", "evaluations"}}``), then with
+    ``[gnss] sigma_scale_search = "calibrate"`` (``--calibrate-gnss-axes``)
+    the fixes' noise shape (:func:`calibrate_gnss_axes`;
+    ``{"gnss_axes_calibration": {"sigma_scale_ned", "runs"}}``); without
+    either, ``cfg`` unchanged and an empty dict."""
+    extra = {}
+    if cfg.imu.time_offset_search == "calibrate":
+        best, evals = calibrate_time_offset(cfg, log=log)
+        if log:
+            log(f"calibrate: best IMU time offset {best:+.4f} s")
+        cfg = cfg.model_copy(update={"imu": cfg.imu.model_copy(update={"time_offset_s": best})})
+        extra["time_offset_calibration"] = {"best_s": best, "evaluations": [list(e) for e in evals]}
+    if cfg.gnss.sigma_scale_search == "calibrate":
+        scale, runs = calibrate_gnss_axes(cfg, log=log)
+        scale = tuple(float(x) for x in scale)
+        if log:
+            log(f"calibrate: [gnss] sigma_scale_ned = [{', '.join(f'{x:.3f}' for x in scale)}]")
+        cfg = cfg.model_copy(update={"gnss": cfg.gnss.model_copy(update={"sigma_scale_ned": scale})})
+        extra["gnss_axes_calibration"] = {"sigma_scale_ned": list(scale), "runs": runs}
+    return cfg, extra
 
 
 #: the IMU time offsets the check of an unhealthy run searches: this far [s] either side of the given one
@@ -1705,6 +1805,12 @@ def summary(res: NavigateResult) -> dict:
     if res.raw is not None:
         out["health"]["warnings"] += list(res.raw.warnings)
     out["health"]["warnings"] += aiding_warnings(res.aiding, fw.counts, res.imu.time, res.settings.scheme)
+    ax = gnss_axes(fw)
+    if ax is not None:
+        out["gnss_axes"] = {**ax, "sigma_scale_ned": [float(x) for x in res.config.gnss.sigma_scale_ned]}
+        warn = gnss_axes_warning(ax, res.config.gnss.sigma_scale_ned)
+        if warn:
+            out["health"]["warnings"].append(warn)
     if res.truth is not None:  # what the truth could not score, said (not silently left out)
         from .. import analysis
         from .evaluate import attitude_unit_warnings, coverage_warnings

@@ -1,0 +1,123 @@
+"""The fixes' noise shape, north, east, down: measured in every run
+(``gnss_axes``), warned about when wrong, and calibrated
+(``[gnss] sigma_scale_search = "calibrate"``, ``--calibrate-gnss-axes``).
+
+A receiver's formal sigmas are often alike on every axis while its vertical
+is the worse (RTKLIB's 0.99 cm on every axis of drive_0708, whose vertical
+innovations are 1.5 times the horizontal for their sigmas).  A simulated
+car whose fixes have 0.5 m of white noise horizontally and 1 m vertically,
+written with a sigma of 0.5 m on every axis: the vertical is twice what
+the file says, and the run must see it, say it, and the calibration must
+find the factor 2 between the vertical and horizontal scales."""
+
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from inskit.errors import InputError
+from inskit.jobs.config import config_from_dict
+from inskit.jobs.navigate import GNSS_AXES_WARN_RATIO, calibrate_gnss_axes, calibrated_config, navigate, summary
+from inskit.jobs.reproduce_tight import BLOCKAGE_NAVIGATE
+from inskit.jobs.simulate import write_simulation
+from inskit.simulation.scenario import Scenario, simulate
+from scenarios import short_car
+
+CAR = short_car("axes car", [{"type": "static", "duration_s": 30.0},
+                             {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 8.0},
+                             {"type": "turn", "angle_deg": 90.0, "radius_m": 40.0},
+                             {"type": "cruise", "duration_s": 60.0},
+                             {"type": "turn", "angle_deg": -180.0, "radius_m": 40.0},
+                             {"type": "cruise", "duration_s": 60.0},
+                             {"type": "turn", "angle_deg": 90.0, "radius_m": 40.0},
+                             {"type": "cruise", "duration_s": 60.0}])
+# the simulated fixes' white noise [m]: short_car's, 0.5 m horizontal and 1 m vertical
+H_M, V_M = 0.5, 1.0
+
+
+@pytest.fixture(scope="module")
+def drive(tmp_path_factory):
+    d = tmp_path_factory.mktemp("axes")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        write_simulation(simulate(Scenario.model_validate(CAR), seed=3), d, plot=False, overwrite=True)
+    g = pd.read_csv(d / "gnss.csv")
+    assert np.allclose(g[["sigma_n_m", "sigma_e_m", "sigma_d_m"]], [H_M, H_M, V_M])  # the premise
+    g["sigma_d_m"] = H_M  # the file now says the vertical is as good as the horizontal
+    g.to_csv(d / "gnss_flat.csv", index=False)
+    return d
+
+
+def config(d, gnss_file="gnss_flat.csv", **gnss):
+    cfg = {k: (dict(v) if isinstance(v, dict) else v) for k, v in BLOCKAGE_NAVIGATE.items()}
+    cfg.update(name="axes car", outages={"protocol": "none"})
+    cfg["gnss"] = {**cfg["gnss"], "file": gnss_file, **gnss}
+    return config_from_dict(cfg, base_dir=d, source=str(d))
+
+
+def test_a_run_measures_each_axis_and_warns_of_a_vertical_noisier_than_its_sigmas(drive):
+    s = summary(navigate(config(drive)))
+    ax = s["gnss_axes"]
+    assert ax["updates"] > 150 and ax["sigma_scale_ned"] == [1.0, 1.0, 1.0]
+    assert ax["vertical_to_horizontal"] > GNSS_AXES_WARN_RATIO, ax
+    warn = [w for w in s["health"]["warnings"] if w.startswith("GNSS: the fixes' vertical innovations")]
+    assert len(warn) == 1 and "--calibrate-gnss-axes" in warn[0] and "sigma_scale_ned" in warn[0], warn
+
+
+def test_the_right_sigmas_give_agreeing_axes_and_no_warning(drive):
+    s = summary(navigate(config(drive, "gnss.csv")))
+    r = s["gnss_axes"]["vertical_to_horizontal"]
+    assert 1 / GNSS_AXES_WARN_RATIO < r < GNSS_AXES_WARN_RATIO, s["gnss_axes"]
+    assert not [w for w in s["health"]["warnings"] if "innovations are" in w]
+
+
+def test_the_calibration_finds_the_vertical_twice_the_horizontal(drive):
+    """The scales' vertical-to-horizontal ratio is the truth's V_M / H_M = 2
+    within 10 % (the filter's own share of each innovation, and 300 fixes'
+    sampling, keep it from being exact); the runs converge within the 5 %
+    tolerance, and the calibrated config's run no longer warns."""
+    cfg = config(drive, sigma_scale_search="calibrate")
+    log = []
+    cal, extra = calibrated_config(cfg, log=log.append)
+    scale = np.array(cal.gnss.sigma_scale_ned)
+    runs = extra["gnss_axes_calibration"]["runs"]
+    assert scale[0] == scale[1] and abs(scale[2] / scale[0] / (V_M / H_M) - 1) < 0.10, (scale, runs)
+    assert abs(runs[-1]["vertical_to_horizontal"] - 1) <= 0.05 and len(runs) >= 2, runs
+    assert runs[0]["sigma_scale_ned"] == [1.0, 1.0, 1.0] and list(scale) == extra["gnss_axes_calibration"][
+        "sigma_scale_ned"]
+    assert any("calibrate: [gnss] sigma_scale_ned" in m for m in log)
+    s = summary(navigate(cal))
+    assert not [w for w in s["health"]["warnings"] if "innovations are" in w]
+    assert s["gnss_axes"]["sigma_scale_ned"] == list(scale)
+
+
+def test_the_calibration_never_reads_the_withheld_fixes(drive):
+    """The fixes withheld by the outage windows are not updates, so they
+    cannot enter: the measured updates are those of a run with the windows."""
+    cfg = config(drive)
+    cfg_w = config_from_dict({**cfg.model_dump(mode="json", exclude_none=True),
+                              "outages": {"protocol": "windows", "windows_s": [[60.0, 80.0], [150.0, 170.0]]}},
+                             base_dir=drive, source=str(drive))
+    _, runs = calibrate_gnss_axes(cfg_w, max_runs=1, tol=10.0)
+    n_all = summary(navigate(cfg))["gnss_axes"]["updates"]
+    assert runs[0]["updates"] < n_all - 30, (runs[0]["updates"], n_all)
+
+
+def test_a_calibration_that_does_not_converge_says_so(drive):
+    with pytest.raises(InputError, match="still differ by .* after 1 runs.*sigma_scale_ned by hand"):
+        calibrate_gnss_axes(config(drive), max_runs=1)
+
+
+def test_scales_must_be_positive_and_need_loose_coupling(drive):
+    with pytest.raises(Exception, match="sigma_scale_ned"):
+        config(drive, sigma_scale_ned=[1.0, 0.0, 1.0])
+    with pytest.raises(Exception, match="sigma_scale_ned"):
+        config(drive, sigma_scale_ned=[1.0, 1.0, float("nan")])
+    with pytest.raises(Exception, match="sigma_scale_ned would be ignored: it describes fixes fused by loose"):
+        config(drive, coupling="tight", obs="a.obs", nav="a.nav", sigma_scale_ned=[1.0, 1.0, 2.0])
+    cfg = {k: (dict(v) if isinstance(v, dict) else v) for k, v in BLOCKAGE_NAVIGATE.items()}
+    cfg.update(filter={"scheme": "uncoupled"}, constraints={"zupt": False, "nhc": False},
+               gnss={"file": "gnss.csv", "sigma_scale_search": "calibrate"})
+    with pytest.raises(Exception, match="sigma_scale_search would be ignored: the uncoupled scheme"):
+        config_from_dict(cfg, base_dir=drive, source=str(drive))
