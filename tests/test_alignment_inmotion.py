@@ -226,7 +226,10 @@ def test_auto_keeps_static_then_track_on_a_static_start(tmp_path):
     assert s.mode == "static-then-track" and s.reason.startswith("auto: static for ")
     # 20 s at rest, then a smooth start: the track passes 0.3 m/s about 2 s later, less 1 s of margin
     assert 19.0 < s.static_end < 23.0
-    assert s.sigma is None  # the configured sigmas stand, as before
+    # the position is the first fix's, and as uncertain: its largest axis sigma (the others stand as configured)
+    assert s.sigma == {"sigma_pos_m": float(np.max(sim.gnss.sigma_ned[0]))} and s.sigma["sigma_pos_m"] > 0.5
+    floored = auto_startup(sim.imu, sim.gnss, (0.0, 0.0, -1.2), floors={"sigma_pos_m": 5.0})
+    assert floored.sigma == {"sigma_pos_m": 5.0}  # the config's sigma_pos_m is a floor
     assert abs(np.degrees(rot.wrap_angle(s.state.euler[2])) - YAW0_DEG) < 1.0
     # the same log cut to start while moving goes in-motion
     k = int(np.searchsorted(sim.imu.time, 25.0))

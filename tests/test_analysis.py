@@ -178,3 +178,29 @@ def test_plot_draws_no_line_across_a_truth_gap_or_a_yaw_wrap(monkeypatch, tmp_pa
     assert (np.abs(np.diff(yy))[ok[1:] & ok[:-1]] < 180).all()  # no segment jumps across the wrap
     assert ok.sum() == len(err.time)                       # every epoch still drawn
     assert np.nanmax(yy) > 175 and np.nanmin(yy) < -175   # the wrap is there, undrawn
+
+
+def test_error_summary_judges_errors_against_the_solutions_own_sigmas():
+    """Errors of 2 m north on a solution claiming 1 m: the ratio's RMS is 2
+    there, 0 elsewhere; summed in parts it is the whole's; one part without
+    sigmas (a solution file without them) drops the figure rather than
+    judging half the run."""
+    from inskit.analysis.errors import SIGMA_COLUMNS, ErrorSummary
+
+    ref = np.array([np.radians(40), np.radians(-105), 1600.0])
+    t = np.arange(0.0, 100.0, 1.0)
+    n = len(t)
+    truth = make(t, ref)
+    extra = {k: np.ones(n) for k in SIGMA_COLUMNS}
+    sol = NavSolution.from_euler(t, np.tile(earth.ned_to_lla([2.0, 0.0, 0.0], ref), (n, 1)), np.zeros((n, 3)),
+                                 np.zeros((n, 3)), extra=extra)
+    whole = analysis.summarize(analysis.nav_error(sol, truth))["consistency"]
+    assert whole["normalized_rms"]["north"] == pytest.approx(2.0, rel=1e-6)
+    assert whole["normalized_rms"]["east"] == pytest.approx(0.0, abs=1e-6)
+    assert whole["beyond_3_sigma_fraction"] == dict.fromkeys(whole["beyond_3_sigma_fraction"], 0.0)
+    err = analysis.nav_error(sol, truth)
+    parts = ErrorSummary().add(err.select(t < 40)).add(err.select(t >= 40)).result()["consistency"]
+    assert parts["normalized_rms"] == pytest.approx(whole["normalized_rms"], rel=1e-12, abs=1e-15)
+    bare = analysis.nav_error(make(t, ref), truth)
+    assert bare.sigma is None
+    assert "consistency" not in ErrorSummary().add(err.select(t < 40)).add(bare.select(t >= 40)).result()

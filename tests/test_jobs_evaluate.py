@@ -278,3 +278,55 @@ def test_attitude_unit_check_keeps_quiet_where_it_cannot_tell(files, turning, tm
         df[c] = df[c] + rng.normal(0.0, 10.0, len(df))
     df.to_csv(tmp_path / "poor.csv", index=False)
     assert _unit_warnings(evaluate(tmp_path / "poor.csv", turning / "truth.csv")) == []
+
+
+def _with_sigmas(d, name, pos_sigma_file, seed=11):
+    """A solution = truth + white errors of 0.2 m per position axis, 0.05 m/s
+    per velocity axis and 0.5 deg of yaw, written with its own sigma columns
+    claiming ``pos_sigma_file`` [m] for the position (right: 0.2) and the
+    true velocity and yaw sigmas."""
+    truth = io.read_solution(d / "truth.csv")
+    n = len(truth.time)
+    rng = np.random.default_rng(seed)
+    dp, dv, dyaw = rng.normal(0, 0.2, (n, 3)), rng.normal(0, 0.05, (n, 3)), rng.normal(0, np.radians(0.5), n)
+    rpy = truth.euler.copy()
+    rpy[:, 2] += dyaw
+    extra = {k: np.full(n, v) for k, v in (("sigma_n_m", pos_sigma_file), ("sigma_e_m", pos_sigma_file),
+                                           ("sigma_d_m", pos_sigma_file), ("sigma_vn_m_s", 0.05),
+                                           ("sigma_ve_m_s", 0.05), ("sigma_vd_m_s", 0.05),
+                                           ("sigma_att_n_rad", np.radians(0.1)), ("sigma_att_e_rad", np.radians(0.1)),
+                                           ("sigma_att_d_rad", np.radians(0.5)))}
+    sol = NavSolution.from_euler(truth.time, earth.ned_to_lla(dp, truth.lla), truth.v_n + dv, rpy, extra=extra)
+    io.write_solution(d / name, sol)
+    return d / name
+
+
+def test_errors_over_the_solutions_own_sigmas(files):
+    """3000 epochs of white errors whose sigmas the file states rightly: the
+    RMS of error over sigma is 1 within 5 % on every channel (its standard
+    error is 1/sqrt(2 n) = 1.3 %) and 0.27 % of epochs lie beyond 3 sigma
+    (binomial: 8 of 3000 expected, 0.6 % allowed); no warning."""
+    s = evaluate(_with_sigmas(files, "sol_sig.csv", 0.2), files / "truth.csv")
+    c = s["consistency"]
+    assert c["epochs"] == 3000
+    assert c["normalized_rms"] == pytest.approx(dict.fromkeys(("north", "east", "down", "vn", "ve", "vd", "yaw"), 1.0),
+                                                rel=0.05)
+    assert max(c["beyond_3_sigma_fraction"].values()) < 0.006
+    assert not [w for w in s["warnings"] if "own sigmas" in w]
+    assert "error over the solution's own sigma, RMS (1 when consistent): north 1.0" in summary_text(s)
+
+
+def test_a_solution_whose_sigmas_understate_its_errors_is_said(files):
+    """Position sigmas of 0.05 m for errors of 0.2 m: 4 times overconfident on
+    the three position axes, named with the GNSS keys that usually cause it."""
+    s = evaluate(_with_sigmas(files, "sol_over.csv", 0.05), files / "truth.csv")
+    z = s["consistency"]["normalized_rms"]
+    assert [z[k] for k in ("north", "east", "down")] == pytest.approx([4.0] * 3, rel=0.05)
+    warn = [w for w in s["warnings"] if "own sigmas" in w]
+    assert len(warn) == 1 and warn[0].startswith("truth: the solution's errors are more than 2 times its own sigmas")
+    assert "north 4." in warn[0] and "position: fixes whose error" in warn[0] and "velocity:" not in warn[0]
+
+
+def test_a_solution_without_sigmas_has_no_consistency(files):
+    s = evaluate(files / "sol.csv", files / "truth.csv")
+    assert "consistency" not in s and "own sigma" not in summary_text(s)

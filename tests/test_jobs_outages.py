@@ -255,7 +255,37 @@ def test_a_streamed_run_scores_every_row_against_the_truth(drive, tmp_path, monk
         for k in ("horizontal_m", "down_m", "yaw_deg", "vn_m_s"):
             for f in ("rms", "max", "final"):
                 assert b[k][f] == pytest.approx(a[k][f], rel=1e-12, abs=1e-15), (label, k, f)
+        ca, cb = a["consistency"], b["consistency"]  # the errors over the run's own sigmas, summed alike
+        assert cb["epochs"] == ca["epochs"] == len(st.imu)
+        for f in ("normalized_rms", "beyond_3_sigma_fraction"):
+            assert cb[f] == pytest.approx(ca[f], rel=1e-12, abs=1e-15), (label, f)
     assert s_s["outage_table"] == s_w["outage_table"]
+
+
+def test_the_truth_errors_are_judged_against_the_runs_own_sigmas(drive):
+    """Fixes of 1 m white noise with sigmas of 1 m: the forward solution's
+    errors against the truth are within its own sigmas (RMS of the ratio
+    below 2 on every channel; the constraints' conservative noise leaves the
+    vertical velocity's near 0.25) and nothing is said.  Before the static
+    start-up took the first fix's sigma for its position's, it started at
+    5 cm from a fix 1 m off, and the forward down error was 7.7 sigma RMS.  The same fixes taken as 0.2 m
+    (``[gnss] sigma_scale_ned = [0.2, 0.2, 0.2]``, five times
+    overconfident): the ratio passes 2 and the summary names the forward
+    solution's position channels and the GNSS keys that cause it."""
+    from inskit.jobs.navigate import navigate, summary
+
+    res, _ = drive
+    s = summary(res)
+    for label in ("forward", "smoothed"):
+        z = s["truth_errors"][label]["consistency"]["normalized_rms"]
+        assert all(0.1 < z[k] < 2.0 for k in ("north", "east", "down", "vn", "ve", "vd", "yaw")), (label, z)
+    assert not [w for w in s["health"]["warnings"] if "own sigmas" in w]
+    over = res.config.model_copy(update={"gnss": res.config.gnss.model_copy(update={"sigma_scale_ned": (0.2,) * 3})})
+    s = summary(navigate(over))
+    z = s["truth_errors"]["forward"]["consistency"]["normalized_rms"]
+    assert max(z["north"], z["east"]) > 2.0, z
+    warn = [w for w in s["health"]["warnings"] if w.startswith("truth: the forward solution's errors are more than 2")]
+    assert len(warn) == 1 and "[gnss] error_sigma_m, sigma_scale_ned" in warn[0], s["health"]["warnings"]
 
 
 def test_a_gap_in_the_gnss_data_is_free_inertial_not_gnss_on(constructed):

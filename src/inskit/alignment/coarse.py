@@ -230,9 +230,12 @@ def startup_state(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), *, 
         p = earth.ned_to_lla(-(rot.dcm_from_euler(rpy) @ np.asarray(lever_arm_b, float)), lla0)
         return NavState.from_euler(imu.time[0], p, np.zeros(3), rpy)
 
+    # the position is the first fix's, as uncertain as it (its largest axis sigma; a fix of 1 m noise taken
+    # as 5 cm kept its error through the static start, the fixes' updates too weak to move it)
+    sigma = {"sigma_pos_m": float(np.max(gnss.sigma_ned[0]))} if np.isfinite(gnss.sigma_ned[0]).all() else None
     return Startup(state, gyro_bias, accel_bias, static_end, t_head, reason=f"static for "
                    f"{static_end - imu.time[0]:.1f} s at the start (at least {min_static_s:g} s needed)",
-                   at_yaw=at_yaw)
+                   sigma=sigma, at_yaw=at_yaw)
 
 
 #: absolute per-window limits of "at rest" (1 s windows, RMS over the axes of the standard deviation):

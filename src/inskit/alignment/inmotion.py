@@ -32,6 +32,8 @@ inside the small-angle model.
 
 from __future__ import annotations
 
+import dataclasses
+
 import time as _time
 
 import numpy as np
@@ -296,16 +298,25 @@ def auto_startup(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), *, m
     """
     if mode not in ("auto", "static-then-track", "in-motion"):
         raise InputError(f"start-up mode must be auto, static-then-track or in-motion, got {mode!r}")
+    floors = inmotion.get("floors") or {}
+
+    def floored(s):  # the static start-up's sigmas (the first fix's position sigma) no smaller than the floors
+        if s.sigma is None:
+            return s
+        return dataclasses.replace(s, sigma={k: max(v, float(floors.get(k, 0.0))) for k, v in s.sigma.items()})
+
     if mode == "static-then-track":
-        return startup_state(imu, gnss, lever_arm_b, min_static_s=min_static_s, heading_speed_m_s=heading_speed_m_s)
+        return floored(startup_state(imu, gnss, lever_arm_b, min_static_s=min_static_s,
+                                     heading_speed_m_s=heading_speed_m_s))
     if mode == "in-motion":
         return inmotion_startup(imu, gnss, lever_arm_b, heading_speed_m_s=heading_speed_m_s,
                                 reason="init.mode = \"in-motion\"", **inmotion)
     rest = static_start_s(imu, gnss)
     if rest >= min_static_s:
-        s = startup_state(imu, gnss, lever_arm_b, min_static_s=min_static_s, heading_speed_m_s=heading_speed_m_s)
+        s = floored(startup_state(imu, gnss, lever_arm_b, min_static_s=min_static_s,
+                                  heading_speed_m_s=heading_speed_m_s))
         return Startup(s.state, s.gyro_bias, s.accel_bias, s.static_end, s.heading_time, mode=s.mode,
-                       reason=f"auto: {s.reason}", at_yaw=s.at_yaw)
+                       reason=f"auto: {s.reason}", sigma=s.sigma, at_yaw=s.at_yaw)
     why = (f"auto: the log starts with {rest:.1f} s of rest (static-then-track needs init.min_static_s = "
            f"{min_static_s:g} s)")
     return inmotion_startup(imu, gnss, lever_arm_b, heading_speed_m_s=heading_speed_m_s, reason=why, **inmotion)

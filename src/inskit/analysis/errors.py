@@ -34,12 +34,18 @@ class NavError:
         [m/s].
     att_rpy : (n, 3) ndarray
         Roll, pitch, yaw differences [rad], wrapped to (-pi, pi].
+    sigma : (n, 7) ndarray or None
+        The solution's own 1-sigma of the same epochs, when it carries them
+        (a filter's solution: its ``sigma_*`` columns, :data:`SIGMA_COLUMNS`):
+        north, east, down [m], vn, ve, vd [m/s], the heading error about
+        down [rad].  None otherwise.
     """
 
     time: np.ndarray
     pos_ned: np.ndarray
     vel_ned: np.ndarray
     att_rpy: np.ndarray
+    sigma: np.ndarray | None = None
 
     @property
     def horizontal(self):
@@ -48,7 +54,8 @@ class NavError:
     def select(self, mask) -> "NavError":
         """The epochs where ``mask`` (n,) is true."""
         m = np.asarray(mask, bool)
-        return NavError(self.time[m], self.pos_ned[m], self.vel_ned[m], self.att_rpy[m])
+        return NavError(self.time[m], self.pos_ned[m], self.vel_ned[m], self.att_rpy[m],
+                        None if self.sigma is None else self.sigma[m])
 
 
 #: a truth is interpolated only across intervals up to this many times its median sampling interval
@@ -162,6 +169,22 @@ def nav_error(sol: NavSolution, truth: NavSolution, gaps=None) -> NavError:
     return _errors_at(sol, truth, inside)
 
 
+#: the solution columns of its own 1-sigma that :class:`NavError` carries, in its ``sigma`` order
+SIGMA_COLUMNS = ("sigma_n_m", "sigma_e_m", "sigma_d_m", "sigma_vn_m_s", "sigma_ve_m_s", "sigma_vd_m_s",
+                 "sigma_att_d_rad")
+#: the names of those channels in :class:`ErrorSummary`'s ``consistency``
+SIGMA_NAMES = ("north", "east", "down", "vn", "ve", "vd", "yaw")
+
+
+def _own_sigma(sol, inside):
+    """``(m, 7)`` of the solution's :data:`SIGMA_COLUMNS` at the rows
+    ``inside``, or None when it lacks one of them."""
+    ex = getattr(sol, "extra", None) or {}
+    if not all(k in ex for k in SIGMA_COLUMNS):
+        return None
+    return np.column_stack([np.asarray(ex[k], dtype=float)[inside] for k in SIGMA_COLUMNS])
+
+
 def _errors_at(sol, truth, inside):
     """:func:`nav_error` at the rows ``inside`` (a non-empty mask)."""
     s = sol if inside.all() else NavSolution(sol.time[inside], sol.lla[inside], sol.v_n[inside], sol.q_nb[inside])
@@ -171,7 +194,7 @@ def _errors_at(sol, truth, inside):
     C_ne = np.swapaxes(earth.dcm_en(tr.lla[:, 0], tr.lla[:, 1]), -1, -2)
     dpos = np.einsum("nij,nj->ni", C_ne, r_s - r_t)
     datt = rot.wrap_angle(s.euler - tr.euler)
-    return NavError(s.time, dpos, s.v_n - tr.v_n, datt)
+    return NavError(s.time, dpos, s.v_n - tr.v_n, datt, _own_sigma(sol, inside))
 
 
 def _components(err: NavError) -> dict:
@@ -196,6 +219,9 @@ class ErrorSummary:
     def __init__(self):
         self.n, self.t0, self.t1 = 0, None, None
         self.sq, self.max, self.final = {}, {}, {}
+        # the errors over the solution's own sigmas: sums of squares and counts beyond 3 sigma per channel,
+        # while every part carried its sigmas (one part without them and the figure is dropped)
+        self.z_sq, self.z_out, self.z_n, self.z_ok = np.zeros(len(SIGMA_NAMES)), np.zeros(len(SIGMA_NAMES)), 0, True
 
     def add(self, err: NavError) -> "ErrorSummary":
         if not len(err.time):
@@ -205,6 +231,16 @@ class ErrorSummary:
             self.sq[k] = self.sq.get(k, 0.0) + float(np.sum(x * x))
             self.max[k] = max(self.max.get(k, 0.0), float(np.max(np.abs(x))))
             self.final[k] = float(x[-1])
+        if err.sigma is None:
+            self.z_ok = False
+        elif self.z_ok:
+            e = np.column_stack([err.pos_ned, err.vel_ned, err.att_rpy[:, 2]])
+            sig = err.sigma
+            good = np.all(np.isfinite(sig) & (sig > 0), axis=1)
+            z = e[good] / sig[good]
+            self.z_sq += np.sum(z * z, axis=0)
+            self.z_out += np.sum(np.abs(z) > 3.0, axis=0)
+            self.z_n += int(good.sum())
         self.n += len(err.time)
         self.t0 = float(err.time[0]) if self.t0 is None else self.t0
         self.t1 = float(err.time[-1])
@@ -219,6 +255,13 @@ class ErrorSummary:
         out["duration_s"] = self.t1 - self.t0
         out["first_epoch_s"] = self.t0
         out["last_epoch_s"] = self.t1
+        if self.z_ok and self.z_n:
+            out["consistency"] = {
+                "normalized_rms": dict(zip(SIGMA_NAMES, (float(x) for x in np.sqrt(self.z_sq / self.z_n)))),
+                "beyond_3_sigma_fraction": dict(zip(SIGMA_NAMES, (float(x) for x in self.z_out / self.z_n))),
+                "epochs": self.z_n,
+                "note": "the errors over the solution's own 1-sigma (1 for a consistent filter; yaw against the "
+                        "heading sigma about down); 0.27 % of epochs beyond 3 sigma for Gaussian errors"}
         return out
 
 
@@ -332,7 +375,7 @@ def remove_offset(err: NavError, offset_ned_m) -> NavError:
     """``err`` with the constant NED offset (3,) [m] subtracted from the
     position errors (velocity and attitude unchanged)."""
     o = np.asarray(offset_ned_m, float).reshape(3)
-    return NavError(err.time, err.pos_ned - o, err.vel_ned, err.att_rpy)
+    return NavError(err.time, err.pos_ned - o, err.vel_ned, err.att_rpy, err.sigma)
 
 
 #: the columns of :func:`per_epoch_columns`, in order

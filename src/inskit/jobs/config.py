@@ -486,7 +486,9 @@ class InitSection(_Strict):
         "into the vehicle's axes (reported, with the imu.mount_rpy_deg that says so; lever arms are taken in the "
         "vehicle's axes); given: the IMU's axes are taken for the vehicle's, and a mismatch makes the run "
         "unhealthy")
-    sigma_pos_m: float = Field(0.05, gt=0, description="initial position sigma per axis")
+    sigma_pos_m: float = Field(0.05, gt=0, description="initial position sigma per axis; a start-up that takes "
+                               "the position from a fix (static-then-track, in-motion, auto) uses that fix's "
+                               "largest axis sigma, this the floor")
     sigma_vel_m_s: float = Field(0.05, gt=0, description="initial velocity sigma per axis")
     sigma_roll_pitch_deg: float = Field(1.0, gt=0, description="initial roll and pitch sigma")
     sigma_yaw_deg: float = Field(3.0, gt=0, description="initial yaw sigma (above 10 deg the yaw bank runs)")

@@ -146,7 +146,8 @@ def evaluate(solution_file, truth_file, *, t_from=None, t_to=None, remove_offset
     s["truth_coverage"] = cover
     s["warnings"] = (coverage_warnings(cover, truth.time) + sampling_warnings(sol.time, truth.time, truth_file)
                      + start_warnings(full, truth_file)
-                     + attitude_unit_warnings(sol, truth, solution_file, truth_file))
+                     + attitude_unit_warnings(sol, truth, solution_file, truth_file)
+                     + truth_consistency_warnings({"": s}))
     if per_epoch_file is not None:
         meta = {"solution": str(solution_file), "truth": str(truth_file), "window": s["window"],
                 "offset_removed": s["offset_removed"]}
@@ -163,6 +164,49 @@ def evaluate(solution_file, truth_file, *, t_from=None, t_to=None, remove_offset
 #: a truth sampled more coarsely than this [s] (median step), and than this many solution steps, is said
 TRUTH_STEP_WARN_S = 2.0
 TRUTH_STEP_WARN_RATIO = 50.0
+
+
+#: a solution whose errors against the truth exceed its own sigmas by this factor (RMS) on a channel is
+#: overconfident there: the summary warns
+TRUTH_OVERCONFIDENT_FACTOR = 2.0
+#: what each channel's overconfidence most often comes from
+TRUTH_OVERCONFIDENT_HINTS = {
+    "position": "fixes whose error is time-correlated or larger than their sigmas ([gnss] error_sigma_m, "
+                "sigma_scale_ned, sigma_floor_m)",
+    "velocity": "accelerometer noise or biases larger than configured, or vibration ([noise])",
+    "yaw": "gyro noise or biases larger than configured, or a mounting the constraints do not model ([noise], "
+           "[constraints] mounting)"}
+
+
+def truth_consistency_warnings(errs: dict) -> list[str]:
+    """Warnings for the solutions (``truth_errors``' ``forward``,
+    ``smoothed``) whose errors against the truth are, on some channel, more
+    than :data:`TRUTH_OVERCONFIDENT_FACTOR` times their own 1-sigma (RMS of
+    the ratio, :class:`inskit.analysis.errors.ErrorSummary`'s
+    ``consistency``): the sigmas the run reports understate its errors
+    there.  A consistent filter's ratio has an RMS of 1; over a run whose
+    errors are correlated for a minute, half an hour holds some 30
+    independent samples, whose RMS scatters by about 13 %: twice is no
+    chance."""
+    out = []
+    for label, e in errs.items():
+        c = e.get("consistency")
+        if not c:
+            continue
+        bad = {k: v for k, v in c["normalized_rms"].items() if v > TRUTH_OVERCONFIDENT_FACTOR}
+        if bad:
+            worst = sorted(bad, key=bad.get, reverse=True)
+            what = ", ".join(f"{k} {bad[k]:.1f} ({c['beyond_3_sigma_fraction'][k]:.0%} of epochs beyond 3 sigma)"
+                             for k in worst)
+            kinds = [kind for kind, names in (("position", ("north", "east", "down")),
+                                              ("velocity", ("vn", "ve", "vd")), ("yaw", ("yaw",)))
+                     if any(k in bad for k in names)]
+            hint = "; ".join(f"{kind}: {TRUTH_OVERCONFIDENT_HINTS[kind]}" for kind in kinds)
+            whose = f"the {label} solution's" if label else "the solution's"
+            out.append(f"truth: {whose} errors are more than {TRUTH_OVERCONFIDENT_FACTOR:g} times its "
+                       f"own sigmas (RMS of error over sigma, 1 when consistent: {what}): the filter is "
+                       f"overconfident there and its sigma columns understate the error. Likely causes, {hint}")
+    return out
 
 
 def sampling_warnings(t, truth_time, truth_file="truth") -> list[str]:
@@ -361,6 +405,10 @@ def summary_text(s: dict) -> str:
         lines.append(f"{k:<14}{v['rms']:>12.4g}{v['max']:>12.4g}{v['final']:>12.4g}  {u}")
     lines.append(f"{s['epochs']} epochs over {s['duration_s']:.1f} s "
                  f"({s['first_epoch_s']:.3f}..{s['last_epoch_s']:.3f} s)")
+    c = s.get("consistency")
+    if c:  # the solution carried its own sigmas
+        lines.append("error over the solution's own sigma, RMS (1 when consistent): " + ", ".join(
+            f"{k} {v:.2f}" for k, v in c["normalized_rms"].items()))
     for w in s.get("warnings", []):
         lines.append(f"warning: {w}")
     o = s.get("offset_removed")

@@ -1716,8 +1716,8 @@ def truth_errors(res: NavigateResult, truth: NavSolution) -> dict:
                 (("forward", res.forward), ("smoothed", res.smoothed)) if track is not None}
     out = {}
     for label, track in (("forward", res.forward), ("smoothed", res.smoothed)):
-        if track is not None:
-            out[label] = analysis.summarize(analysis.nav_error(track.nav, truth))
+        if track is not None:  # the solution with its own sigmas: the errors' consistency with them too
+            out[label] = analysis.summarize(analysis.nav_error(track.solution, truth))
     return out
 
 
@@ -1813,10 +1813,11 @@ def summary(res: NavigateResult) -> dict:
             out["health"]["warnings"].append(warn)
     if res.truth is not None:  # what the truth could not score, said (not silently left out)
         from .. import analysis
-        from .evaluate import attitude_unit_warnings, coverage_warnings
+        from .evaluate import attitude_unit_warnings, coverage_warnings, truth_consistency_warnings
 
         cover = analysis.truth_coverage(res.imu.time, res.truth.time)
         out["truth_coverage"] = cover
+        out["health"]["warnings"] += truth_consistency_warnings(out["truth_errors"])  # (from .evaluate)
         out["health"]["warnings"] += [f"truth: {w}" for w in coverage_warnings(cover, res.truth.time)]
         # a truth whose _deg columns hold radians (the solution's are this run's own: only the truth's are said)
         out["health"]["warnings"] += [f"truth: {w}" for w in attitude_unit_warnings(
