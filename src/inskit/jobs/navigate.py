@@ -521,6 +521,72 @@ def check_odometer_speed(path, t, v, gnss: GnssData, min_speed_m_s=2.0, what="od
                          "within it is estimated): the speed column must be m/s")
 
 
+#: the lags [s] :func:`odometer_lag` tries: this far either side, in steps of ODOMETER_LAG_STEP_S
+ODOMETER_LAG_SPAN_S = 1.0
+ODOMETER_LAG_STEP_S = 0.01
+#: the summary warns of a lag at least this long [s] ...
+ODOMETER_LAG_WARN_S = 0.05
+#: ... when the lag's better fit is this significant: the drop of the residual sum of squares from the tagged
+#: times to the lag, over the residual variance at the lag (an F statistic of one parameter; 25 is five sigma,
+#: margin for the track speed's neighbouring fixes sharing their noise)
+ODOMETER_LAG_WARN_F = 25.0
+
+
+def odometer_lag(t, v, gnss: GnssData, min_speed_m_s=2.0, track=None) -> dict | None:
+    """How late the odometer's speeds are against the GNSS track's.
+
+    For each trial lag ``tau`` within :data:`ODOMETER_LAG_SPAN_S`, the
+    odometer speed at ``t_fix + tau`` (interpolated) against the fixes'
+    track speed (:func:`inskit.alignment.coarse.gnss_speed`) at the fix
+    times while both say the vehicle moves faster than ``min_speed_m_s``,
+    a scale fitted by least squares (the scale-factor state's share); the
+    lag whose residual RMS is least.  A positive lag: a reading describes
+    the speed ``tau`` before its time tag (``[odometer] time_offset_s =
+    -tau`` puts it right).  Acceleration makes a lag visible: at a steady
+    speed every lag fits alike.  How much the data tell is ``f_statistic``,
+    the drop of the residual sum of squares from the tagged times to the
+    lag over the residual variance at the lag (one parameter: above 25 it
+    is five sigma), and ``gain``, the RMS as tagged over the RMS at the lag.
+
+    Returns ``{"lag_s", "rms_at_lag_m_s", "rms_as_given_m_s", "gain",
+    "f_statistic", "fixes"}``, or None with fewer than 10 such fixes (or 3
+    fixes)."""
+    if len(gnss.time) < 3 or len(t) < 2:
+        return None
+    sp = (gnss_speed(gnss) if track is None else track)[0]
+    t, v = np.asarray(t, float), np.abs(np.asarray(v, float))
+    taus = np.arange(-ODOMETER_LAG_SPAN_S, ODOMETER_LAG_SPAN_S + 1e-9, ODOMETER_LAG_STEP_S)
+    tf = gnss.time
+    ok = (tf - ODOMETER_LAG_SPAN_S >= t[0]) & (tf + ODOMETER_LAG_SPAN_S <= t[-1]) & (sp > min_speed_m_s)
+    if ok.sum() < 10:
+        return None
+    g = sp[ok]
+    o = np.interp(tf[ok][None, :] + taus[:, None], t, v)  # (lags, fixes)
+    k = o @ g / (g @ g)  # the scale at each lag
+    rms = np.sqrt(np.mean((o - k[:, None] * g) ** 2, axis=1))
+    i = int(np.argmin(rms))
+    i0 = int(np.argmin(np.abs(taus)))
+    n = int(ok.sum())
+    var = rms[i] ** 2 * n / max(n - 2, 1)  # two parameters fitted: the scale and the lag
+    f = float(n * (rms[i0] ** 2 - rms[i] ** 2) / var) if var > 0 else 0.0
+    return {"lag_s": float(taus[i]), "rms_at_lag_m_s": float(rms[i]), "rms_as_given_m_s": float(rms[i0]),
+            "gain": float(rms[i0] / rms[i]) if rms[i] > 0 else None, "f_statistic": f, "fixes": n}
+
+
+def odometer_lag_warning(lag: dict | None, path, offset_s) -> str | None:
+    """The summary's warning when :func:`odometer_lag` finds the log at least
+    :data:`ODOMETER_LAG_WARN_S` late or early, the better fit there
+    significant (``f_statistic`` above :data:`ODOMETER_LAG_WARN_F`)."""
+    if not lag or abs(lag["lag_s"]) < ODOMETER_LAG_WARN_S or lag["f_statistic"] < ODOMETER_LAG_WARN_F:
+        return None
+    late = "late" if lag["lag_s"] > 0 else "early"
+    return (f"odometer: {Path(path).name}: its speeds fit the GNSS track best {abs(lag['lag_s']):.2f} s {late} "
+            f"(residual RMS {lag['rms_at_lag_m_s']:.3f} m/s there against {lag['rms_as_given_m_s']:.3f} m/s as "
+            f"tagged, over {lag['fixes']} fixes while moving): the filter takes each reading at its time tag; "
+            f"[odometer] time_offset_s = {offset_s - lag['lag_s']:.2f} puts them right (the odometer's lag "
+            "against the track's: a receiver velocity that lags shifts it too)")
+
+
 def refuse_no_overlap(path, what, t, imu: ImuData, offset_key):
     """Refuse an aiding log (``what``: "odometer", "speed and course")
     whose time tags ``t`` [s, after its offset] all lie outside the IMU's
@@ -547,10 +613,15 @@ def odometer_measurement(cfg: NavigateConfig, imu: ImuData, gnss: GnssData | Non
     if o.rate_hz is not None and len(t) > 1:
         keep = np.r_[True, np.diff(np.floor(t * o.rate_hz)) > 0]
         t, v = t[keep], v[keep]
+    lag = None
     if gnss is not None:
-        check_odometer_speed(path.name, t, v, gnss)
-    return Odometer(t, v, o.sigma_m_s, lever_arm_b=o.lever_arm_b_m, with_nhc=o.with_nhc,
-                    nhc_sigma_m_s=o.nhc_sigma_m_s)
+        track = gnss_speed(gnss) if len(gnss.time) >= 3 else None
+        check_odometer_speed(path.name, t, v, gnss, track=track)
+        lag = odometer_lag(t, v, gnss, track=track)
+    m = Odometer(t, v, o.sigma_m_s, lever_arm_b=o.lever_arm_b_m, with_nhc=o.with_nhc,
+                 nhc_sigma_m_s=o.nhc_sigma_m_s)
+    m.lag_check = lag  # the summary's odometer_lag (:func:`odometer_lag`)
+    return m
 
 
 def speed_course_measurement(cfg: NavigateConfig, windows, lever, imu: ImuData, gnss: GnssData | None = None):
@@ -1805,6 +1876,12 @@ def summary(res: NavigateResult) -> dict:
     if res.raw is not None:
         out["health"]["warnings"] += list(res.raw.warnings)
     out["health"]["warnings"] += aiding_warnings(res.aiding, fw.counts, res.imu.time, res.settings.scheme)
+    for what, path, m in res.aiding or ():
+        if what == "odometer" and getattr(m, "lag_check", None) is not None:
+            out["odometer_lag"] = {**m.lag_check, "time_offset_s": res.config.odometer.time_offset_s}
+            warn = odometer_lag_warning(m.lag_check, path, res.config.odometer.time_offset_s)
+            if warn:
+                out["health"]["warnings"].append(warn)
     ax = gnss_axes(fw)
     if ax is not None:
         out["gnss_axes"] = {**ax, "sigma_scale_ned": [float(x) for x in res.config.gnss.sigma_scale_ned]}
