@@ -42,6 +42,23 @@ def test_rejected_updates_and_those_settling_after_a_break_are_left_out():
     assert rms_all.min() > 10.0  # the premise: kept, they would swamp it
 
 
+@pytest.mark.parametrize("rate_hz", [1.0, 0.5])
+def test_fixes_at_1_hz_or_slower_with_jittered_time_tags_are_not_all_breaks(rate_hz):
+    """A fixed 1 s pause made every update whose time tag came a millisecond
+    late the start of a break: fixes at 1 Hz with 1 ms of jitter counted none
+    of 4000 (the summary lost its gnss_axes, the calibration said the run
+    made no update), fixes at 0.5 Hz none ever.  A break is judged against
+    the updates' own interval too; an outage still is one."""
+    t, nu, sigma = innovations(4000, rate_hz=rate_hz)
+    t = t + RNG.uniform(-1e-3, 1e-3, len(t))
+    t[2000:] += 60.0  # a 60 s outage
+    nu[2000] *= 1e3  # its end
+    rms, n = axis_innovation_rms(t, nu, sigma)
+    settle = int(np.ceil(SETTLE_S * rate_hz))
+    assert len(t) - 2 * settle - 2 <= n <= len(t) - 2 * settle + 2, n
+    assert rms == pytest.approx([1.0, 1.0, 2.0], rel=0.08)
+
+
 def test_no_update_counted_gives_nan_and_zero():
     t, nu, sigma = innovations(10)
     rms, n = axis_innovation_rms(t, nu, sigma)  # 2.5 s: all settling

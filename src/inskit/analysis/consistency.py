@@ -27,8 +27,11 @@ import numpy as np
 
 #: updates within this long [s] after a break in the updates (or the first one) are left out
 SETTLE_S = 5.0
-#: a pause between updates longer than this [s] is a break (an outage, a gap in the fixes)
+#: a pause between updates longer than this [s] is a break (an outage, a gap in the fixes) ...
 BREAK_S = 1.0
+#: ... when it is also longer than this many times the updates' median interval (fixes at 1 Hz or slower, whose
+#: time tags jitter by a millisecond, pause by more than 1 s between every other pair)
+BREAK_INTERVALS = 1.5
 
 
 def axis_innovation_rms(t, nu, sigma, accepted=None, settle_s=SETTLE_S, break_s=BREAK_S):
@@ -48,8 +51,9 @@ def axis_innovation_rms(t, nu, sigma, accepted=None, settle_s=SETTLE_S, break_s=
         Updates within this long after the first update and after each
         break are left out [s].
     break_s : float
-        A pause between consecutive updates (used or not) longer than this is
-        a break [s].
+        A pause between consecutive updates (used or not) longer than this,
+        and than :data:`BREAK_INTERVALS` times their median interval, is a
+        break [s].
 
     Returns
     -------
@@ -66,7 +70,9 @@ def axis_innovation_rms(t, nu, sigma, accepted=None, settle_s=SETTLE_S, break_s=
                          f"{nu.shape} and {sigma.shape}")
     keep = np.ones(len(t), bool) if accepted is None else np.asarray(accepted, bool).copy()
     if len(t):
-        starts = np.r_[0, np.nonzero(np.diff(t) > break_s)[0] + 1]  # the first update after each break
+        dt = np.diff(t)
+        pause = max(break_s, BREAK_INTERVALS * float(np.median(dt))) if len(dt) else break_s
+        starts = np.r_[0, np.nonzero(dt > pause)[0] + 1]  # the first update after each break
         since = t - t[starts][np.searchsorted(starts, np.arange(len(t)), side="right") - 1]
         keep &= since >= settle_s
         keep &= np.all(np.isfinite(nu) & np.isfinite(sigma) & (sigma > 0), axis=1)
