@@ -11,6 +11,7 @@ the file says, and the run must see it, say it, and the calibration must
 find the factor 2 between the vertical and horizontal scales."""
 
 import warnings
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -23,6 +24,8 @@ from inskit.jobs.reproduce_tight import BLOCKAGE_NAVIGATE
 from inskit.jobs.simulate import write_simulation
 from inskit.simulation.scenario import Scenario, simulate
 from scenarios import short_car
+
+ROOT = Path(__file__).resolve().parents[1]
 
 CAR = short_car("axes car", [{"type": "static", "duration_s": 30.0},
                              {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 8.0},
@@ -121,3 +124,20 @@ def test_scales_must_be_positive_and_need_loose_coupling(drive):
                gnss={"file": "gnss.csv", "sigma_scale_search": "calibrate"})
     with pytest.raises(Exception, match="sigma_scale_search would be ignored: the uncoupled scheme"):
         config_from_dict(cfg, base_dir=drive, source=str(drive))
+
+
+def test_the_calibration_takes_fixes_solved_from_rinex(tmp_path):
+    """Loose coupling on our own single-point fixes (``obs`` and ``nav``, no
+    ``file``): the calibration read the inputs without the RINEX files and
+    stopped with 'no GNSS fixes: give gnss.file, or gnss.obs and gnss.nav',
+    both given.  It now solves them as the run does."""
+    from inskit.simulation.scenario import load_scenario
+
+    sc = load_scenario(ROOT / "examples" / "tc_blockage.toml").model_copy(update={"duration_limit_s": 140.0})
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        write_simulation(simulate(sc, 1), tmp_path, overwrite=True, plot=False)
+        cfg = config(tmp_path, gnss_file=None, obs="obs.rnx", nav="nav.rnx", systems=["G"])
+        assert cfg.gnss.file is None  # the premise: the fixes are our single-point solution
+        _, runs = calibrate_gnss_axes(cfg, max_runs=1, tol=10.0)
+    assert runs[0]["updates"] > 100, runs

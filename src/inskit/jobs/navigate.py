@@ -1380,8 +1380,9 @@ def calibrate_gnss_axes(cfg: NavigateConfig, log=None, tol=GNSS_AXES_TOLERANCE, 
     from ..analysis.consistency import axis_scale_step
 
     cfg = cfg.model_copy(update={"truth": None})  # the calibration never looks at a truth
-    if inputs is None:
-        inputs = load_inputs(cfg)
+    if inputs is None:  # fixes from RINEX (no gnss.file): our own single-point solution, as the run makes it
+        raw = load_raw_gnss(cfg, log) if cfg.gnss.file is None else None
+        inputs = (*load_inputs(cfg, raw=raw), raw)
     scale = np.asarray(cfg.gnss.sigma_scale_ned, float)
     runs = []
     for _ in range(max_runs):
