@@ -1387,7 +1387,7 @@ def calibrate_gnss_axes(cfg: NavigateConfig, log=None, tol=GNSS_AXES_TOLERANCE, 
     runs = []
     for _ in range(max_runs):
         c = cfg.model_copy(update={"gnss": cfg.gnss.model_copy(update={"sigma_scale_ned": tuple(scale)})})
-        ax = gnss_axes(navigate(c, inputs=inputs).forward)
+        ax = gnss_axes(run(c, inputs=inputs).forward)  # as the run will be (a default NHC that fails, dropped)
         if ax is None:
             raise InputError("gnss.sigma_scale_search = \"calibrate\" needs GNSS position updates to measure: "
                              "this run made none")
