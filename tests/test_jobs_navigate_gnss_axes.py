@@ -165,3 +165,24 @@ def test_the_calibration_measures_the_run_without_a_default_constraint_that_fail
     s = summary(res)
     assert s["constraint_check"]["nhc"] == "dropped"  # the premise: the run drops it
     assert not [w for w in s["health"]["warnings"] if "innovations are" in w], s["gnss_axes"]
+
+
+def test_a_calibration_on_too_few_fixes_is_refused(drive):
+    """All but the first 12 s of fixes withheld: the calibration shaped the
+    sigmas from the 5 fixes past the first 5 s, to a vertical 6.9 times the
+    horizontal (the truth: 2), and took it; fixes whose updates all lie
+    within 5 s of a break were 'none made'.  Fewer than 30 are refused,
+    saying how many there were and why."""
+    cfg = config(drive)
+    few = config_from_dict({**cfg.model_dump(mode="json", exclude_none=True),
+                            "outages": {"protocol": "windows", "windows_s": [[12.0, 235.0]]}},
+                           base_dir=drive, source=str(drive))
+    with pytest.raises(InputError, match=r"of the \d+ GNSS position updates the filter used, [0-9] are more than 5 s "
+                                         r"after the first and after each break in them .* fewer than the 30"):
+        calibrate_gnss_axes(few)
+    gaps = config_from_dict({**cfg.model_dump(mode="json", exclude_none=True),
+                             "outages": {"protocol": "windows",
+                                         "windows_s": [[a, a + 3.0] for a in np.arange(4.0, 235.0, 6.0)]}},
+                            base_dir=drive, source=str(drive))
+    with pytest.raises(InputError, match=r"of the \d{2,} GNSS position updates the filter used, 0 are more than"):
+        calibrate_gnss_axes(gaps)

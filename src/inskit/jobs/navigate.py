@@ -1375,9 +1375,11 @@ def calibrate_gnss_axes(cfg: NavigateConfig, log=None, tol=GNSS_AXES_TOLERANCE, 
     relative), by fixed-point steps of
     :func:`inskit.analysis.consistency.axis_scale_step` from the config's
     own scale, one forward run each, at most ``max_runs``.  Only the fixes
-    the filter uses enter, never the withheld ones; the files are read
-    once.  ``runs`` lists each run's scale and what it measured."""
-    from ..analysis.consistency import axis_scale_step
+    the filter uses enter, never the withheld ones, and at least
+    :data:`GNSS_AXES_MIN_UPDATES` of them (an :class:`InputError` with
+    fewer); the files are read once.  ``runs`` lists each run's scale and
+    what it measured."""
+    from ..analysis.consistency import SETTLE_S, axis_scale_step
 
     cfg = cfg.model_copy(update={"truth": None})  # the calibration never looks at a truth
     if inputs is None:  # fixes from RINEX (no gnss.file): our own single-point solution, as the run makes it
@@ -1387,10 +1389,16 @@ def calibrate_gnss_axes(cfg: NavigateConfig, log=None, tol=GNSS_AXES_TOLERANCE, 
     runs = []
     for _ in range(max_runs):
         c = cfg.model_copy(update={"gnss": cfg.gnss.model_copy(update={"sigma_scale_ned": tuple(scale)})})
-        ax = gnss_axes(run(c, inputs=inputs).forward)  # as the run will be (a default NHC that fails, dropped)
-        if ax is None:
-            raise InputError("gnss.sigma_scale_search = \"calibrate\" needs GNSS position updates to measure: "
-                             "this run made none")
+        fw = run(c, inputs=inputs).forward  # as the run will be (a default NHC that fails, dropped)
+        ax = gnss_axes(fw)
+        n = 0 if ax is None else ax["updates"]
+        if n < GNSS_AXES_MIN_UPDATES:  # a few fixes' RMS is their sampling: a shape drawn from it is noise
+            used = fw.counts.get("gnss_pos", {}).get("used", 0)
+            raise InputError(f"gnss.sigma_scale_search = \"calibrate\": of the {used} GNSS position updates the "
+                             f"filter used, {n} are more than {SETTLE_S:g} s after the first and after each break in "
+                             f"them (an outage's end measures the INS's drift, not the fixes' noise), fewer than the "
+                             f"{GNSS_AXES_MIN_UPDATES} the fixes' noise shape needs; set [gnss] sigma_scale_ned by "
+                             "hand (or leave it out)")
         runs.append({"sigma_scale_ned": [float(x) for x in scale], **ax})
         r = ax["vertical_to_horizontal"]
         if log:
