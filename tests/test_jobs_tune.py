@@ -242,3 +242,26 @@ def test_a_candidate_that_turns_a_switch_off_drops_the_keys_that_serve_it():
     # states, its NHC settings and mounting (refused with the scheme, and so the candidate was)
     cfg = load_config(ex, T.overrides_of({"filter.scheme": "uncoupled"}))
     assert cfg.filter.scheme == "uncoupled" and cfg.gnss.error_sigma_m is None and not cfg.constraints.mounting
+
+
+def test_a_candidate_that_calibrates_runs_calibrated(tmp_path):
+    """``gnss.sigma_scale_search = "calibrate"`` (or a config with it) was
+    ignored: each run went straight to the filter, and the two candidates of
+    ``--grid gnss.sigma_scale_search=off,calibrate`` scored alike to the last
+    digit.  A candidate now calibrates in each of its runs, as navigate does
+    (on the fixes that run uses): its consistency run is the calibrated
+    config's."""
+    from inskit.jobs.config import load_config
+    from inskit.jobs.navigate import calibrated_config, navigate, summary
+
+    nav = _sim_drive(tmp_path)
+    res = T.tune(nav, T.parse_grid(["gnss.sigma_scale_search=off,calibrate"]), hold_s=15.0, reaid_s=10.0,
+                 start_after_s=70.0, workers=1)
+    by = {c["params"]["gnss.sigma_scale_search"]: c for c in res["candidates"]}
+    cal, extra = calibrated_config(load_config(nav, {"gnss": {"sigma_scale_search": "calibrate"}}))
+    assert extra["gnss_axes_calibration"]["sigma_scale_ned"] != [1.0, 1.0, 1.0]  # the premise: it changes the run
+    nis = {k: summary(navigate(c))["health"]["measurements"]["gnss_pos"] for k, c in
+           (("calibrate", cal), ("off", load_config(nav)))}
+    for k, m in nis.items():
+        assert by[k]["gnss_mean_nis_per_dof"]["gnss_pos"] == pytest.approx(m["mean_nis"] / m["dof"], rel=1e-9), k
+    assert by["calibrate"]["cv_rms_m"] != by["off"]["cv_rms_m"]

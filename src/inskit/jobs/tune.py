@@ -12,7 +12,10 @@ stretches where the benchmark's protocol keeps GNSS on:
    protocol window or the end of the fixes;
 3. each candidate is run with both sets of windows withheld and scored by the
    horizontal RMS of its error at the end of the validation outages, against
-   the validation fixes withheld there (fixes the final run will use);
+   the validation fixes withheld there (fixes the final run will use); a
+   candidate that calibrates (``[imu] time_offset_search`` or ``[gnss]
+   sigma_scale_search = "calibrate"``) calibrates in each run, on the fixes
+   that run uses;
 4. the candidate with the smallest score wins among those whose run is
    healthy and *consistent*: in one more run with only the protocol's
    windows withheld (the run the config will make), the mean NIS per degree
@@ -188,7 +191,7 @@ def validation_windows(protocol_rel, t_first_rel, t_last_rel, hold_s=10.0, reaid
 def _run_one(args):
     config_path, params, sets = args
     from . import config as C
-    from .navigate import navigate, summary
+    from .navigate import calibrated_config, navigate, summary
     from ..errors import InskitError
 
     errs, health, reasons, nis = [], "healthy", [], {}
@@ -197,7 +200,8 @@ def _run_one(args):
         over["outages"] = ({"protocol": "windows", "windows_s": [list(w) for w in windows_rel], "keep_satellites": 0}
                            if windows_rel else {"protocol": "none"})  # the consistency run of a config without any
         cfg = C.load_config(config_path, over)
-        try:
+        try:  # its searches ([imu] time_offset_search, [gnss] sigma_scale_search) on this run's fixes, as navigate's
+            cfg, _ = calibrated_config(cfg)
             s = summary(navigate(cfg))
         except (InskitError, np.linalg.LinAlgError, FloatingPointError) as exc:  # diverged or refused: scored as
             return {"params": params, "cv_rms_m": math.inf, "error": str(exc).splitlines()[0][:300]}
