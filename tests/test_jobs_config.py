@@ -306,6 +306,10 @@ def test_height_needs_a_file_or_a_constant_and_refuses_ignored_keys():
                                               r"uncoupled scheme resets the INS to each position fix"):
             _cfg(LOOSE, **over)
     assert _cfg(LOOSE, filter={"scheme": "uncoupled"}).filter.scheme == "uncoupled"
+    # --calibrate-time-offset fits the filter's innovations: with no filter it ended in "internal error: KeyError"
+    with pytest.raises(ConfigError, match=r"field 'imu\.time_offset_search': .*uncoupled scheme has no filter"):
+        _cfg(LOOSE, filter={"scheme": "uncoupled"}, imu={"time_offset_search": "calibrate"})
+    assert _cfg(LOOSE, filter={"scheme": "uncoupled"}, imu={"time_offset_search": "off"}).imu.time_offset_search == "off"
     h = _cfg(LOOSE, height={"file": "b.csv", "bias_model": "gauss-markov", "bias_tau_s": 600.0}).height
     assert h.bias_tau_s == 600.0 and h.estimate_bias
 

@@ -1013,6 +1013,11 @@ class NavigateConfig(_Strict):
         if self.height is not None and self.filter.scheme == "uncoupled":
             raise _key_error("height", "[height] would be ignored: the uncoupled scheme has no filter to fuse "
                              "heights into (use filter.scheme = \"closed\" or \"open\")")
+        if self.filter.scheme == "uncoupled" and self.imu.time_offset_search == "calibrate":
+            raise _key_error("imu.time_offset_search", "imu.time_offset_search = \"calibrate\" "
+                             "(--calibrate-time-offset) fits the offset to the filter's GNSS innovations, and the "
+                             "uncoupled scheme has no filter: use filter.scheme = \"closed\" or \"open\" to "
+                             "calibrate, or give imu.time_offset_s")
         if self.filter.scheme == "uncoupled":  # the INS reset to each fix: no filter, so none of these is applied
             bad = [k for k in UNCOUPLED_OFF if _changed(getattr(self, k.split(".")[0]), (k.split(".")[1],))]
             bad += ["odometer"] if self.odometer is not None else []
