@@ -186,3 +186,47 @@ def test_a_calibration_on_too_few_fixes_is_refused(drive):
                             base_dir=drive, source=str(drive))
     with pytest.raises(InputError, match=r"of the \d{2,} GNSS position updates the filter used, 0 are more than"):
         calibrate_gnss_axes(gaps)
+
+
+def test_a_calibration_on_a_lost_filter_is_refused(drive):
+    """IMU time tags taken 0.5 s late: the filter loses the fixes for
+    stretches of refusals, and those it still accepts lie near its wrong
+    track; their innovations are no measure of the fixes' noise, and the
+    calibration says so instead of shaping the noise to them."""
+    cfg = config(drive)
+    late = cfg.model_copy(update={"imu": cfg.imu.model_copy(update={"time_offset_s": 0.5,
+                                                                    "time_offset_search": "off"})})
+    lost = summary(navigate(late))["health"]["measurements"]["gnss_pos"]["lost_stretches"]
+    assert lost, "the premise: the late tags lose the filter"
+    with pytest.raises(InputError, match=r"the filter lost the fixes over \d+ stretch\(es\) .*Mend the run first"):
+        calibrate_gnss_axes(late)
+
+
+def test_the_calibration_halves_its_step_once_it_overshoots(drive, monkeypatch):
+    """Scripted measurements (vertical over horizontal 2.0, then 0.8, then
+    0.99): the first step is the full :func:`axis_scale_step`; after the
+    ratio crosses 1 each step is its square root (half in log scale), which
+    keeps an oscillating fixed point from running the 5 runs out."""
+    import inskit.jobs.navigate as N
+    from inskit.analysis.consistency import axis_scale_step
+
+    ratios = iter([2.0, 0.8, 0.99])
+    seen = []
+
+    class Run:
+        forward = None
+
+    def fake_axes(fw):
+        r = next(ratios)
+        rms = [0.5, 0.5, 0.5 * r]
+        return {"normalized_innovation_rms_ned": rms, "horizontal": 0.5, "vertical": 0.5 * r,
+                "vertical_to_horizontal": r, "updates": 100}
+
+    monkeypatch.setattr(N, "run", lambda c, inputs=None: (seen.append(c.gnss.sigma_scale_ned), Run())[1])
+    monkeypatch.setattr(N, "health", lambda fw: {"measurements": {}})
+    monkeypatch.setattr(N, "gnss_axes", fake_axes)
+    scale, runs = N.calibrate_gnss_axes(config(drive), inputs=("imu", "gnss", None))
+    s1 = axis_scale_step([0.5, 0.5, 1.0])
+    s2 = s1 * np.sqrt(axis_scale_step([0.5, 0.5, 0.4]))
+    assert np.allclose(seen[1], s1) and np.allclose(seen[2], s2) and np.allclose(scale, s2), seen
+    assert [r["vertical_to_horizontal"] for r in runs] == [2.0, 0.8, 0.99]
