@@ -14,3 +14,18 @@ def short_car(name, segments, lever_arm_b_m=(0.0, 0.0, -1.2)):
         gnss["lever_arm_b_m"] = list(lever_arm_b_m)
     return {"name": name, "start": dict(START), "imu": {"rate_hz": 100.0, "grade": "industrial-mems"},
             "gnss": gnss, "segment": [dict(s) for s in segments]}
+
+
+def write_drive(folder, scenario: dict, seed):
+    """Simulate ``scenario`` (a dict such as :func:`short_car` makes) with
+    ``seed`` and write its files (imu.csv, gnss.csv, truth.csv) into
+    ``folder``, the simulator's warnings silenced; returns ``folder``."""
+    import warnings
+
+    from inskit.jobs.simulate import write_simulation
+    from inskit.simulation.scenario import Scenario, simulate
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        write_simulation(simulate(Scenario.model_validate(scenario), seed=seed), folder, plot=False, overwrite=True)
+    return folder

@@ -22,8 +22,8 @@ from inskit.jobs.config import config_from_dict
 from inskit.jobs.navigate import GNSS_AXES_WARN_RATIO, calibrate_gnss_axes, calibrated_config, navigate, summary
 from inskit.jobs.reproduce_tight import BLOCKAGE_NAVIGATE
 from inskit.jobs.simulate import write_simulation
-from inskit.simulation.scenario import Scenario, simulate
-from scenarios import short_car
+from inskit.simulation.scenario import simulate
+from scenarios import short_car, write_drive
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -41,10 +41,7 @@ H_M, V_M = 0.5, 1.0
 
 @pytest.fixture(scope="module")
 def drive(tmp_path_factory):
-    d = tmp_path_factory.mktemp("axes")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        write_simulation(simulate(Scenario.model_validate(CAR), seed=3), d, plot=False, overwrite=True)
+    d = write_drive(tmp_path_factory.mktemp("axes"), CAR, seed=3)
     g = pd.read_csv(d / "gnss.csv")
     assert np.allclose(g[["sigma_n_m", "sigma_e_m", "sigma_d_m"]], [H_M, H_M, V_M])  # the premise
     g["sigma_d_m"] = H_M  # the file now says the vertical is as good as the horizontal

@@ -7,8 +7,6 @@ named the symptoms (rejections, NIS, recoveries) but not the cause.  A short
 simulated car, its IMU tags taken as 0.3 s late (``time_offset_s = 0.3``
 given, the truth 0): the check must name an offset within 0.01 s of 0."""
 
-import warnings
-
 import numpy as np
 import pytest
 
@@ -16,9 +14,7 @@ from inskit import api
 from inskit.jobs.config import config_from_dict
 from inskit.jobs.navigate import check_time_offset, gnss_updates_unhealthy, navigate, summary
 from inskit.jobs.reproduce_tight import BLOCKAGE_NAVIGATE
-from inskit.jobs.simulate import write_simulation
-from inskit.simulation.scenario import Scenario, simulate
-from scenarios import short_car
+from scenarios import short_car, write_drive
 
 CAR = short_car("short car", [{"type": "static", "duration_s": 30.0},
                               {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 8.0},
@@ -34,11 +30,7 @@ LATE_S = 0.3  # the offset given; the IMU's tags are right (0)
 
 @pytest.fixture(scope="module")
 def drive(tmp_path_factory):
-    d = tmp_path_factory.mktemp("toff")
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        write_simulation(simulate(Scenario.model_validate(CAR), seed=2), d, plot=False, overwrite=True)
-    return d
+    return write_drive(tmp_path_factory.mktemp("toff"), CAR, seed=2)
 
 
 def config(d, offset, search="check"):
