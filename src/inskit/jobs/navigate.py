@@ -524,11 +524,15 @@ def check_odometer_speed(path, t, v, gnss: GnssData, min_speed_m_s=2.0, what="od
 #: the lags [s] :func:`odometer_lag` tries: this far either side, in steps of ODOMETER_LAG_STEP_S
 ODOMETER_LAG_SPAN_S = 1.0
 ODOMETER_LAG_STEP_S = 0.01
+#: the odometer speed at a trial time is its mean over this window [s] (or two of its sampling intervals, if
+#: longer): read between two samples (interpolated) it is less noisy than at one, and the lags that put the fix
+#: times between samples fitted better by that alone (10 Hz wheel speeds on 1 Hz fixes: 0.05 s "late")
+ODOMETER_LAG_WINDOW_S = 0.5
 #: the summary warns of a lag at least this long [s] ...
 ODOMETER_LAG_WARN_S = 0.05
-#: ... when the lag's better fit is this significant: the drop of the residual sum of squares from the tagged
-#: times to the lag, over the residual variance at the lag (an F statistic of one parameter; 25 is five sigma,
-#: margin for the track speed's neighbouring fixes sharing their noise)
+#: ... when a lag is this significant: the drop of the residual sum of squares at the tagged times when the
+#: track's acceleration times a lag joins the scale, over the residual variance (an F statistic of one
+#: parameter; 25 is five sigma, margin for the track speed's neighbouring fixes sharing their noise)
 ODOMETER_LAG_WARN_F = 25.0
 
 
@@ -536,39 +540,55 @@ def odometer_lag(t, v, gnss: GnssData, min_speed_m_s=2.0, track=None) -> dict | 
     """How late the odometer's speeds are against the GNSS track's.
 
     For each trial lag ``tau`` within :data:`ODOMETER_LAG_SPAN_S`, the
-    odometer speed at ``t_fix + tau`` (interpolated) against the fixes'
-    track speed (:func:`inskit.alignment.coarse.gnss_speed`) at the fix
-    times while both say the vehicle moves faster than ``min_speed_m_s``,
-    a scale fitted by least squares (the scale-factor state's share); the
-    lag whose residual RMS is least.  A positive lag: a reading describes
-    the speed ``tau`` before its time tag (``[odometer] time_offset_s =
-    -tau`` puts it right).  Acceleration makes a lag visible: at a steady
-    speed every lag fits alike.  How much the data tell is ``f_statistic``,
-    the drop of the residual sum of squares from the tagged times to the
-    lag over the residual variance at the lag (one parameter: above 25 it
-    is five sigma), and ``gain``, the RMS as tagged over the RMS at the lag.
+    odometer's mean speed over :data:`ODOMETER_LAG_WINDOW_S` about
+    ``t_fix + tau`` against the fixes' track speed
+    (:func:`inskit.alignment.coarse.gnss_speed`) at the fix times while it
+    says the vehicle moves faster than ``min_speed_m_s``, a scale fitted by
+    least squares (the scale-factor state's share); the lag whose residual
+    RMS is least.  A positive lag: a reading describes the speed ``tau``
+    before its time tag (``[odometer] time_offset_s = -tau`` puts it
+    right).  Acceleration makes a lag visible: at a steady speed every lag
+    fits alike, and the least RMS falls on whichever lag the noise favours.
+    How much the data tell is ``f_statistic``: at the tagged times, the drop
+    of the residual sum of squares when the track's acceleration times a
+    lag joins the scale (``o = k g - k tau dg/dt``, the lag to first
+    order), over the residual variance (one parameter: above 25 it is five
+    sigma; the acceleration is the track's, whose noise is not the
+    odometer's, so a steady speed gives chance values); ``gain`` is the RMS
+    as tagged over the RMS at the lag.
 
     Returns ``{"lag_s", "rms_at_lag_m_s", "rms_as_given_m_s", "gain",
-    "f_statistic", "fixes"}``, or None with fewer than 10 such fixes (or 3
-    fixes)."""
+    "f_statistic", "fixes"}`` (``gain`` and
+    ``f_statistic`` None where a residual is 0), or None with fewer than 10
+    such fixes (or 3 fixes)."""
     if len(gnss.time) < 3 or len(t) < 2:
         return None
     sp = (gnss_speed(gnss) if track is None else track)[0]
     t, v = np.asarray(t, float), np.abs(np.asarray(v, float))
     taus = np.arange(-ODOMETER_LAG_SPAN_S, ODOMETER_LAG_SPAN_S + 1e-9, ODOMETER_LAG_STEP_S)
     tf = gnss.time
-    ok = (tf - ODOMETER_LAG_SPAN_S >= t[0]) & (tf + ODOMETER_LAG_SPAN_S <= t[-1]) & (sp > min_speed_m_s)
+    half = 0.5 * max(ODOMETER_LAG_WINDOW_S, 2.0 * float(np.median(np.diff(t))))
+    reach = ODOMETER_LAG_SPAN_S + half
+    ok = (tf - reach >= t[0]) & (tf + reach <= t[-1]) & (sp > min_speed_m_s)
     if ok.sum() < 10:
         return None
     g = sp[ok]
-    o = np.interp(tf[ok][None, :] + taus[:, None], t, v)  # (lags, fixes)
+    dist = np.r_[0.0, np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))]  # the distance travelled [m]
+    tt = tf[ok][None, :] + taus[:, None]
+    o = (np.interp(tt + half, t, dist) - np.interp(tt - half, t, dist)) / (2.0 * half)  # (lags, fixes)
     k = o @ g / (g @ g)  # the scale at each lag
     rms = np.sqrt(np.mean((o - k[:, None] * g) ** 2, axis=1))
     i = int(np.argmin(rms))
     i0 = int(np.argmin(np.abs(taus)))
     n = int(ok.sum())
-    var = rms[i] ** 2 * n / max(n - 2, 1)  # two parameters fitted: the scale and the lag
-    f = float(n * (rms[i0] ** 2 - rms[i] ** 2) / var) if var > 0 else 0.0
+    # the significance: the speeds as tagged (at the samples' own noise) against the scale alone and against
+    # the scale and the lag to first order, the track's acceleration the lag's regressor
+    o0 = np.interp(tf[ok], t, v)
+    x = np.column_stack([g, np.gradient(sp, tf)[ok]])
+    rss0 = float(np.sum((o0 - (o0 @ g / (g @ g)) * g) ** 2))
+    r1 = o0 - x @ np.linalg.lstsq(x, o0, rcond=None)[0]
+    var = float(r1 @ r1) / max(n - 2, 1)
+    f = max(0.0, (rss0 - float(r1 @ r1)) / var) if var > 0 else None
     return {"lag_s": float(taus[i]), "rms_at_lag_m_s": float(rms[i]), "rms_as_given_m_s": float(rms[i0]),
             "gain": float(rms[i0] / rms[i]) if rms[i] > 0 else None, "f_statistic": f, "fixes": n}
 
@@ -577,7 +597,8 @@ def odometer_lag_warning(lag: dict | None, path, offset_s) -> str | None:
     """The summary's warning when :func:`odometer_lag` finds the log at least
     :data:`ODOMETER_LAG_WARN_S` late or early, the better fit there
     significant (``f_statistic`` above :data:`ODOMETER_LAG_WARN_F`)."""
-    if not lag or abs(lag["lag_s"]) < ODOMETER_LAG_WARN_S or lag["f_statistic"] < ODOMETER_LAG_WARN_F:
+    if (not lag or abs(lag["lag_s"]) < ODOMETER_LAG_WARN_S or lag["f_statistic"] is None
+            or lag["f_statistic"] < ODOMETER_LAG_WARN_F):
         return None
     late = "late" if lag["lag_s"] > 0 else "early"
     return (f"odometer: {Path(path).name}: its speeds fit the GNSS track best {abs(lag['lag_s']):.2f} s {late} "
