@@ -1435,3 +1435,31 @@ def test_an_odometer_log_at_a_steady_speed_shows_no_lag():
             lag = odometer_lag(log.time + late_s, log.speed_m_s, car.gnss)
             assert lag["lag_s"] == pytest.approx(late_s, abs=0.03), (late_s, rate_hz, lag)
             assert (odometer_lag_warning(lag, "odo.csv", 0.0) is None) == (late_s == 0.0), (late_s, rate_hz, lag)
+
+
+def test_an_odometer_lag_beyond_the_search_is_said_to_be_at_its_limit():
+    """Wheel speeds tagged 2 s late, beyond the +-1 s searched: the best fit
+    lies at the limit, 1 s.  The warning said the log fitted best 1.00 s late
+    and that ``time_offset_s = -1.00`` puts it right (half of the lag left);
+    now it says the lag is at least the limit and gives no offset that
+    would put it right."""
+    from inskit.jobs.navigate import ODOMETER_LAG_SPAN_S, odometer_lag, odometer_lag_warning
+    from inskit.simulation.odometer import simulate_odometer
+
+    car = _simulated([{"type": "static", "duration_s": 20.0},
+                      {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 8.0},
+                      {"type": "turn", "angle_deg": 90.0, "radius_m": 40.0},
+                      {"type": "decelerate", "speed_m_s": 5.0, "duration_s": 6.0},
+                      {"type": "accelerate", "speed_m_s": 14.0, "duration_s": 6.0},
+                      {"type": "cruise", "duration_s": 10.0}])
+    log = simulate_odometer(car.truth, rate_hz=10.0, scale_error=0.005, noise_m_s=0.05, rng=np.random.default_rng(8))
+    for late_s, sign in ((2.0, 1.0), (-2.0, -1.0)):
+        lag = odometer_lag(log.time + late_s, log.speed_m_s, car.gnss)
+        assert lag["lag_s"] == pytest.approx(sign * ODOMETER_LAG_SPAN_S) and lag["at_search_limit"], lag
+        warn = odometer_lag_warning(lag, "odo.csv", 0.5)
+        late = "late" if sign > 0 else "early"
+        assert warn.startswith(f"odometer: odo.csv: its speeds fit the GNSS track best at the limit of the "
+                               f"+-1 s searched, 1.00 s {late} or more"), warn
+        assert "puts them right" not in warn and f"time_offset_s = {0.5 - sign:.2f} or {'less' if sign > 0 else 'more'}" in warn
+    lag = odometer_lag(log.time + 0.3, log.speed_m_s, car.gnss)
+    assert not lag["at_search_limit"] and "puts them right" in odometer_lag_warning(lag, "odo.csv", 0.0)

@@ -555,10 +555,11 @@ def odometer_lag(t, v, gnss: GnssData, min_speed_m_s=2.0, track=None) -> dict | 
     order), over the residual variance (one parameter: above 25 it is five
     sigma; the acceleration is the track's, whose noise is not the
     odometer's, so a steady speed gives chance values); ``gain`` is the RMS
-    as tagged over the RMS at the lag.
+    as tagged over the RMS at the lag, ``at_search_limit`` whether the lag
+    found is a limit of the search (the lag may then be longer).
 
     Returns ``{"lag_s", "rms_at_lag_m_s", "rms_as_given_m_s", "gain",
-    "f_statistic", "fixes"}`` (``gain`` and
+    "f_statistic", "fixes", "at_search_limit"}`` (``gain`` and
     ``f_statistic`` None where a residual is 0), or None with fewer than 10
     such fixes (or 3 fixes)."""
     if len(gnss.time) < 3 or len(t) < 2:
@@ -590,22 +591,31 @@ def odometer_lag(t, v, gnss: GnssData, min_speed_m_s=2.0, track=None) -> dict | 
     var = float(r1 @ r1) / max(n - 2, 1)
     f = max(0.0, (rss0 - float(r1 @ r1)) / var) if var > 0 else None
     return {"lag_s": float(taus[i]), "rms_at_lag_m_s": float(rms[i]), "rms_as_given_m_s": float(rms[i0]),
-            "gain": float(rms[i0] / rms[i]) if rms[i] > 0 else None, "f_statistic": f, "fixes": n}
+            "gain": float(rms[i0] / rms[i]) if rms[i] > 0 else None, "f_statistic": f, "fixes": n,
+            "at_search_limit": i in (0, len(taus) - 1)}
 
 
 def odometer_lag_warning(lag: dict | None, path, offset_s) -> str | None:
     """The summary's warning when :func:`odometer_lag` finds the log at least
     :data:`ODOMETER_LAG_WARN_S` late or early, the better fit there
-    significant (``f_statistic`` above :data:`ODOMETER_LAG_WARN_F`)."""
+    significant (``f_statistic`` above :data:`ODOMETER_LAG_WARN_F`); a lag at
+    the search's limit is said to be at least that long."""
     if (not lag or abs(lag["lag_s"]) < ODOMETER_LAG_WARN_S or lag["f_statistic"] is None
             or lag["f_statistic"] < ODOMETER_LAG_WARN_F):
         return None
     late = "late" if lag["lag_s"] > 0 else "early"
-    return (f"odometer: {Path(path).name}: its speeds fit the GNSS track best {abs(lag['lag_s']):.2f} s {late} "
+    offset = f"[odometer] time_offset_s = {offset_s - lag['lag_s']:.2f}"
+    if lag.get("at_search_limit"):  # the lag may be longer: no offset found that puts it right
+        where = (f"at the limit of the +-{ODOMETER_LAG_SPAN_S:g} s searched, {abs(lag['lag_s']):.2f} s {late} "
+                 "or more")
+        fix = (f"{offset} or {'less' if lag['lag_s'] > 0 else 'more'}, the lag perhaps longer than the search: "
+               "check the log's time base")
+    else:
+        where, fix = f"{abs(lag['lag_s']):.2f} s {late}", f"{offset} puts them right"
+    return (f"odometer: {Path(path).name}: its speeds fit the GNSS track best {where} "
             f"(residual RMS {lag['rms_at_lag_m_s']:.3f} m/s there against {lag['rms_as_given_m_s']:.3f} m/s as "
             f"tagged, over {lag['fixes']} fixes while moving): the filter takes each reading at its time tag; "
-            f"[odometer] time_offset_s = {offset_s - lag['lag_s']:.2f} puts them right (the odometer's lag "
-            "against the track's: a receiver velocity that lags shifts it too)")
+            f"{fix} (the odometer's lag against the track's: a receiver velocity that lags shifts it too)")
 
 
 def refuse_no_overlap(path, what, t, imu: ImuData, offset_key):
