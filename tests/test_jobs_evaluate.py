@@ -280,15 +280,16 @@ def test_attitude_unit_check_keeps_quiet_where_it_cannot_tell(files, turning, tm
     assert _unit_warnings(evaluate(tmp_path / "poor.csv", turning / "truth.csv")) == []
 
 
-def _with_sigmas(d, name, pos_sigma_file, seed=11):
+def _with_sigmas(d, name, pos_sigma_file, seed=11, offset_ned_m=(0.0, 0.0, 0.0)):
     """A solution = truth + white errors of 0.2 m per position axis, 0.05 m/s
-    per velocity axis and 0.5 deg of yaw, written with its own sigma columns
-    claiming ``pos_sigma_file`` [m] for the position (right: 0.2) and the
-    true velocity and yaw sigmas."""
+    per velocity axis and 0.5 deg of yaw (and ``offset_ned_m`` [m]), written
+    with its own sigma columns claiming ``pos_sigma_file`` [m] for the
+    position (right: 0.2) and the true velocity and yaw sigmas."""
     truth = io.read_solution(d / "truth.csv")
     n = len(truth.time)
     rng = np.random.default_rng(seed)
     dp, dv, dyaw = rng.normal(0, 0.2, (n, 3)), rng.normal(0, 0.05, (n, 3)), rng.normal(0, np.radians(0.5), n)
+    dp = dp + np.asarray(offset_ned_m, float)
     rpy = truth.euler.copy()
     rpy[:, 2] += dyaw
     extra = {k: np.full(n, v) for k, v in (("sigma_n_m", pos_sigma_file), ("sigma_e_m", pos_sigma_file),
@@ -330,3 +331,25 @@ def test_a_solution_whose_sigmas_understate_its_errors_is_said(files):
 def test_a_solution_without_sigmas_has_no_consistency(files):
     s = evaluate(files / "sol.csv", files / "truth.csv")
     assert "consistency" not in s and "own sigma" not in summary_text(s)
+
+
+def test_a_removed_offset_leaves_the_position_unjudged(files):
+    """A solution 1 m off down whose sigmas claim the 0.2 m of its white
+    errors: 5 sigma RMS down, said.  With --remove-offset the offset fitted
+    to the errors took the overconfidence with it and the down figure read
+    1.0, nothing said; the sigmas describe the error with its offset, so the
+    position channels are now null, said so, and the velocity and yaw still
+    judged."""
+    sol = _with_sigmas(files, "sol_off.csv", 0.2, offset_ned_m=(0.0, 0.0, 1.0))
+    s = evaluate(sol, files / "truth.csv")
+    assert s["consistency"]["normalized_rms"]["down"] == pytest.approx(5.1, rel=0.05)
+    assert [w for w in s["warnings"] if "own sigmas" in w and "down 5." in w]
+    for interval in ((None, None), (0.0, 100.0)):
+        s = evaluate(sol, files / "truth.csv", remove_offset=interval)
+        c = s["consistency"]
+        for k in ("north", "east", "down"):
+            assert c["normalized_rms"][k] is None and c["beyond_3_sigma_fraction"][k] is None
+        assert c["normalized_rms"]["vn"] == pytest.approx(1.0, rel=0.05) and "constant offset was removed" in c["note"]
+        assert not [w for w in s["warnings"] if "own sigmas" in w]
+        text = summary_text(s)
+        assert "north n/a, east n/a, down n/a, vn 0.9" in text and "after a removed offset is not judged" in text

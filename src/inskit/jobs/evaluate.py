@@ -139,6 +139,14 @@ def evaluate(solution_file, truth_file, *, t_from=None, t_to=None, remove_offset
                   else analysis.constant_offset(full, a, b, name="--remove-offset"))
         err = analysis.remove_offset(err, offset.ned_m)
     s = analysis.summarize(err)
+    if offset is not None and "consistency" in s:
+        # the solution's sigmas describe its error with any offset in it; what is left once an offset fitted to
+        # the errors is gone passed an overconfident solution (a correlated error is much of the offset)
+        c = s["consistency"]
+        for f in ("normalized_rms", "beyond_3_sigma_fraction"):
+            c[f].update(dict.fromkeys(OFFSET_CHANNELS, None))
+        c["note"] += (f"; {', '.join(OFFSET_CHANNELS)} not judged (null): a constant offset was removed, and the "
+                      "solution's sigmas describe its error with the offset in it")
     s["solution_file"] = str(solution_file)
     s["truth_file"] = str(truth_file)
     s["window"] = {"from_s": t_from, "to_s": t_to}
@@ -160,6 +168,9 @@ def evaluate(solution_file, truth_file, *, t_from=None, t_to=None, remove_offset
         s["plot"] = str(plot_file)
     return s
 
+
+#: the channels of ``consistency`` that a removed offset leaves unjudged (the position's)
+OFFSET_CHANNELS = ("north", "east", "down")
 
 #: a truth sampled more coarsely than this [s] (median step), and than this many solution steps, is said
 TRUTH_STEP_WARN_S = 2.0
@@ -193,7 +204,7 @@ def truth_consistency_warnings(errs: dict) -> list[str]:
         c = e.get("consistency")
         if not c:
             continue
-        bad = {k: v for k, v in c["normalized_rms"].items() if v > TRUTH_OVERCONFIDENT_FACTOR}
+        bad = {k: v for k, v in c["normalized_rms"].items() if v is not None and v > TRUTH_OVERCONFIDENT_FACTOR}
         if bad:
             worst = sorted(bad, key=bad.get, reverse=True)
             what = ", ".join(f"{k} {bad[k]:.1f} ({c['beyond_3_sigma_fraction'][k]:.0%} of epochs beyond 3 sigma)"
@@ -408,7 +419,9 @@ def summary_text(s: dict) -> str:
     c = s.get("consistency")
     if c:  # the solution carried its own sigmas
         lines.append("error over the solution's own sigma, RMS (1 when consistent): " + ", ".join(
-            f"{k} {v:.2f}" for k, v in c["normalized_rms"].items()))
+            f"{k} {'n/a' if v is None else format(v, '.2f')}" for k, v in c["normalized_rms"].items())
+            + (" (n/a: the position after a removed offset is not judged)" if None in c["normalized_rms"].values()
+               else ""))
     for w in s.get("warnings", []):
         lines.append(f"warning: {w}")
     o = s.get("offset_removed")
