@@ -280,11 +280,12 @@ def test_attitude_unit_check_keeps_quiet_where_it_cannot_tell(files, turning, tm
     assert _unit_warnings(evaluate(tmp_path / "poor.csv", turning / "truth.csv")) == []
 
 
-def _with_sigmas(d, name, pos_sigma_file, seed=11, offset_ned_m=(0.0, 0.0, 0.0)):
+def _with_sigmas(d, name, pos_sigma_file, seed=11, offset_ned_m=(0.0, 0.0, 0.0), yaw_sigma_deg=0.5):
     """A solution = truth + white errors of 0.2 m per position axis, 0.05 m/s
     per velocity axis and 0.5 deg of yaw (and ``offset_ned_m`` [m]), written
     with its own sigma columns claiming ``pos_sigma_file`` [m] for the
-    position (right: 0.2) and the true velocity and yaw sigmas."""
+    position (right: 0.2), ``yaw_sigma_deg`` for the yaw (right: 0.5) and the
+    true velocity sigmas."""
     truth = io.read_solution(d / "truth.csv")
     n = len(truth.time)
     rng = np.random.default_rng(seed)
@@ -296,7 +297,7 @@ def _with_sigmas(d, name, pos_sigma_file, seed=11, offset_ned_m=(0.0, 0.0, 0.0))
                                            ("sigma_d_m", pos_sigma_file), ("sigma_vn_m_s", 0.05),
                                            ("sigma_ve_m_s", 0.05), ("sigma_vd_m_s", 0.05),
                                            ("sigma_att_n_rad", np.radians(0.1)), ("sigma_att_e_rad", np.radians(0.1)),
-                                           ("sigma_att_d_rad", np.radians(0.5)))}
+                                           ("sigma_att_d_rad", np.radians(yaw_sigma_deg)))}
     sol = NavSolution.from_euler(truth.time, earth.ned_to_lla(dp, truth.lla), truth.v_n + dv, rpy, extra=extra)
     io.write_solution(d / name, sol)
     return d / name
@@ -353,3 +354,21 @@ def test_a_removed_offset_leaves_the_position_unjudged(files):
         assert not [w for w in s["warnings"] if "own sigmas" in w]
         text = summary_text(s)
         assert "north n/a, east n/a, down n/a, vn 0.9" in text and "after a removed offset is not judged" in text
+
+
+def test_a_truth_yaw_of_another_convention_is_not_blamed_on_the_gyros(files, tmp_path):
+    """The truth's yaw written counter-clockwise from east (90 - yaw): the
+    solution's yaw is 92 deg off, thousands of its sigmas, and the
+    warning blamed gyro noise and [noise]; an error beyond the filter's
+    small-angle model now names the truth's convention."""
+    sol = _with_sigmas(files, "sol_sig_yaw.csv", 0.2)
+    df = pd.read_csv(files / "truth.csv")
+    df["yaw_deg"] = (90.0 - df["yaw_deg"] + 180.0) % 360.0 - 180.0
+    df.to_csv(tmp_path / "truth_enu.csv", index=False)
+    s = evaluate(sol, tmp_path / "truth_enu.csv")
+    warn = [w for w in s["warnings"] if "own sigmas" in w]
+    assert len(warn) == 1 and "yaw: an error of 92 deg RMS is no filter's small-angle error: a truth whose yaw_deg " \
+                               "follows another convention" in warn[0] and "gyro noise" not in warn[0], warn
+    s = evaluate(_with_sigmas(files, "sol_sig_yaw_over.csv", 0.2, yaw_sigma_deg=0.1), files / "truth.csv")
+    warn = [w for w in s["warnings"] if "own sigmas" in w]  # a filter overconfident in yaw: the gyros are named
+    assert len(warn) == 1 and "yaw: gyro noise or biases" in warn[0], warn

@@ -187,6 +187,9 @@ TRUTH_OVERCONFIDENT_HINTS = {
     "velocity": "accelerometer noise or biases larger than configured, or vibration ([noise])",
     "yaw": "gyro noise or biases larger than configured, or a mounting the constraints do not model ([noise], "
            "[constraints] mounting)"}
+#: a yaw error of more than this RMS [deg] is beyond the filter's small-angle model: rather a truth whose yaw
+#: follows another convention (or a heading never found) than gyro noise
+TRUTH_YAW_CONVENTION_DEG = 20.0
 
 
 def truth_consistency_warnings(errs: dict) -> list[str]:
@@ -212,7 +215,14 @@ def truth_consistency_warnings(errs: dict) -> list[str]:
             kinds = [kind for kind, names in (("position", ("north", "east", "down")),
                                               ("velocity", ("vn", "ve", "vd")), ("yaw", ("yaw",)))
                      if any(k in bad for k in names)]
-            hint = "; ".join(f"{kind}: {TRUTH_OVERCONFIDENT_HINTS[kind]}" for kind in kinds)
+            hints = dict(TRUTH_OVERCONFIDENT_HINTS)
+            yaw_rms = (e.get("yaw_deg") or {}).get("rms")
+            if yaw_rms is not None and yaw_rms > TRUTH_YAW_CONVENTION_DEG:
+                hints["yaw"] = (f"an error of {yaw_rms:.0f} deg RMS is no filter's small-angle error: a truth whose "
+                                "yaw_deg follows another convention (clockwise from north expected: not from east, "
+                                "not counter-clockwise, the body's x axis forward), or a heading the start-up never "
+                                "found")
+            hint = "; ".join(f"{kind}: {hints[kind]}" for kind in kinds)
             whose = f"the {label} solution's" if label else "the solution's"
             out.append(f"truth: {whose} errors are more than {TRUTH_OVERCONFIDENT_FACTOR:g} times its "
                        f"own sigmas (RMS of error over sigma, 1 when consistent: {what}): the filter is "
