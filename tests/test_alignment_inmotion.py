@@ -278,3 +278,37 @@ def test_a_bank_that_cannot_tell_the_yaws_apart_keeps_the_tracks_course():
     clear[3] = 5.0 * (1.0 - 2 * BANK_TIE)
     b = yaw_bank(imu, at, np.radians(10.0), [], None, run=fake(clear), keep_first_on_tie=True)
     assert b["chosen"] == 3 and not b["tie"]
+
+
+def test_the_start_ups_position_sigma_is_the_fix_as_the_filter_takes_it(tmp_path):
+    """A fix file whose sigmas the config puts right ([gnss] sigma_floor_m,
+    sigma_scale_ned, as GnssPosition applies them): the start-up took the
+    file's sigma for its position's while the filter took the fix's as
+    configured (fixes of 1 m claiming 0.25 m with sigma_floor_m = 1: the
+    forward down error ran at 1.56 sigma RMS, 0.30 m against 0.16 m with
+    right sigmas).  Static, auto and in-motion start-ups now take the first
+    fix's sigma as the filter does, and navigate hands them the config's
+    keys."""
+    import pandas as pd
+
+    sim = _simulate(tmp_path, STATIC_FIRST, 12)
+    raw = sim.gnss.sigma_ned[0]
+    scale = (1.0, 2.0, 3.0)
+    for mode in ("static-then-track", "auto"):
+        s = auto_startup(sim.imu, sim.gnss, (0.0, 0.0, -1.2), mode=mode, sigma_floor_m=4.0)
+        assert s.mode == "static-then-track" and s.sigma["sigma_pos_m"] == pytest.approx(4.0)
+        s = auto_startup(sim.imu, sim.gnss, (0.0, 0.0, -1.2), mode=mode, sigma_scale_ned=scale)
+        assert s.sigma["sigma_pos_m"] == pytest.approx(float(np.max(raw * scale)))
+    k = int(np.searchsorted(sim.imu.time, 25.0))
+    imu, gnss = sim.imu.slice(k), sim.gnss.select(sim.gnss.time >= sim.imu.time[k])
+    s = auto_startup(imu, gnss, (0.0, 0.0, -1.2), sigma_floor_m=4.0)
+    assert s.mode == "in-motion" and s.sigma["sigma_pos_m"] == pytest.approx(4.0)
+    g = pd.read_csv(tmp_path / "gnss.csv")
+    g[["sigma_n_m", "sigma_e_m", "sigma_d_m"]] = 0.25
+    g.to_csv(tmp_path / "gnss_formal.csv", index=False)
+    for gnss_keys in ({"sigma_floor_m": 1.5}, {"sigma_scale_ned": [2.0, 2.0, 6.0]}):
+        cfg = config_from_dict({"imu": {"file": str(tmp_path / "imu.csv")},
+                                "gnss": {"file": str(tmp_path / "gnss_formal.csv"), "lever_arm_b_m": [0.0, 0.0, -1.2],
+                                         **gnss_keys}, "init": {"mode": "static-then-track"}})
+        res = navigate(cfg)  # the file's 0.25 m floored at 1.5, or 0.25 m times 6 down: 1.5 m
+        assert res.startup.sigma == {"sigma_pos_m": pytest.approx(1.5)}, (gnss_keys, res.startup.sigma)

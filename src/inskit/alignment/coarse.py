@@ -183,14 +183,26 @@ def _chain_rotations(q, dth):
     return np.array([q0 / n, q1 / n, q2 / n, q3 / n])
 
 
+def fix_sigma_m(gnss: GnssData, k, sigma_floor_m=0.0, sigma_scale_ned=(1.0, 1.0, 1.0)) -> float:
+    """The largest axis sigma [m] of fix ``k`` as the filter takes it
+    (:class:`~inskit.integration.GnssPosition`: the file's, no smaller than
+    ``sigma_floor_m``, times ``sigma_scale_ned``): a start-up's position
+    taken from that fix is as uncertain."""
+    return float(np.max(np.maximum(gnss.sigma_ned[k], sigma_floor_m) * np.asarray(sigma_scale_ned, float)))
+
+
 def startup_state(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), *, min_static_s=5.0,
-                  motion_threshold_m_s=0.3, heading_speed_m_s=3.0) -> Startup:
+                  motion_threshold_m_s=0.3, heading_speed_m_s=3.0, sigma_floor_m=0.0,
+                  sigma_scale_ned=(1.0, 1.0, 1.0)) -> Startup:
     """Initial state from data: level on the static start, heading from the track.
 
     The IMU must start at rest (at least ``min_static_s``).  The gyro bias is
     the static mean less the Earth rate; the accelerometer bias along the
     vertical is the static norm less normal gravity (the horizontal part cannot
-    be told from tilt and is left to the filter).
+    be told from tilt and is left to the filter).  The position is the first
+    fix's, its sigma (``sigma["sigma_pos_m"]``) that fix's as the filter
+    takes it (:func:`fix_sigma_m` with ``sigma_floor_m``,
+    ``sigma_scale_ned``).
     """
     t_move = detect_motion_start(gnss, motion_threshold_m_s)
     static_end = t_move - 1.0
@@ -232,7 +244,9 @@ def startup_state(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), *, 
 
     # the position is the first fix's, as uncertain as it (its largest axis sigma; a fix of 1 m noise taken
     # as 5 cm kept its error through the static start, the fixes' updates too weak to move it)
-    sigma = {"sigma_pos_m": float(np.max(gnss.sigma_ned[0]))} if np.isfinite(gnss.sigma_ned[0]).all() else None
+    # as the filter takes it ([gnss] sigma_floor_m, sigma_scale_ned: a file's sigmas that the config puts right)
+    sigma = ({"sigma_pos_m": fix_sigma_m(gnss, 0, sigma_floor_m, sigma_scale_ned)}
+             if np.isfinite(gnss.sigma_ned[0]).all() else None)
     return Startup(state, gyro_bias, accel_bias, static_end, t_head, reason=f"static for "
                    f"{static_end - imu.time[0]:.1f} s at the start (at least {min_static_s:g} s needed)",
                    sigma=sigma, at_yaw=at_yaw)

@@ -43,7 +43,7 @@ from .. import rotations as rot
 from ..errors import InputError, InskitError
 from ..types import GnssData, ImuData, NavState
 from ..units import DEG
-from .coarse import Startup, _chain_rotations, detect_motion_start, level, startup_state
+from .coarse import Startup, _chain_rotations, detect_motion_start, fix_sigma_m, level, startup_state
 
 #: a yaw sigma above this [rad] is outside the filter's small-angle model: the start-up runs the yaw bank
 BANK_ABOVE_YAW_SIGMA = 10.0 * DEG
@@ -150,7 +150,7 @@ class _Levelling:
         self.lla0 = _interp_lla(self.t0, gnss)
         self.v0 = _interp_rows(np.array([self.t0]), gnss.time, self.v_fix)[0]
         k = int(np.clip(np.searchsorted(gnss.time, self.t0), 0, len(gnss.time) - 1))
-        self.sig_pos = float(np.max(gnss.sigma_ned[k]))
+        self.fix0 = k  # the fix the position is taken at
         self.a_mean = self.a_n.mean(axis=0)
 
     def roll_pitch(self, yaw):
@@ -178,7 +178,8 @@ def _interp_lla(t, gnss: GnssData):
 
 def inmotion_startup(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), *, heading_speed_m_s=3.0,
                      course_average_s=3.0, level_window_s=2.0, accel_span_s=1.0, yaw_guess=None,
-                     gyro_bias_sigma=0.05 * DEG, accel_bias_sigma=0.05, floors=None, reason="") -> Startup:
+                     gyro_bias_sigma=0.05 * DEG, accel_bias_sigma=0.05, floors=None, reason="",
+                     sigma_floor_m=0.0, sigma_scale_ned=(1.0, 1.0, 1.0)) -> Startup:
     """Initial state of a log that starts in motion.
 
     Roll and pitch from the specific force corrected for the GNSS-derived
@@ -213,6 +214,10 @@ def inmotion_startup(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), 
         by the gyros and the tilt.
     floors : dict, optional
         Lower bounds of the sigmas found (:data:`STARTUP_SIGMAS`, config units).
+    sigma_floor_m, sigma_scale_ned : float, (3,) array_like
+        How the filter takes the fixes' position sigmas (``[gnss]``): the
+        position's sigma is the fix's so taken
+        (:func:`~inskit.alignment.coarse.fix_sigma_m`).
 
     Returns
     -------
@@ -263,7 +268,8 @@ def inmotion_startup(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), 
     sig_a = np.sqrt(2.0) * lv.sig_vh / lv.accel_span / np.sqrt(max(1.0, lv.window / lv.accel_span))
     a_h = float(np.hypot(lv.a_mean[0], lv.a_mean[1]))
     sig_tilt = float(np.sqrt(sig_a ** 2 + accel_bias_sigma ** 2 + (a_h * min(sig_yaw, 1.0)) ** 2) / g)
-    sigma = {"sigma_pos_m": lv.sig_pos, "sigma_vel_m_s": max(lv.sig_vh, lv.sig_vd),
+    sigma = {"sigma_pos_m": fix_sigma_m(gnss, lv.fix0, sigma_floor_m, sigma_scale_ned),
+             "sigma_vel_m_s": max(lv.sig_vh, lv.sig_vd),
              "sigma_roll_pitch_deg": sig_tilt / DEG, "sigma_yaw_deg": sig_yaw / DEG}
     if floors:
         sigma = {k: max(v, float(floors.get(k, 0.0))) for k, v in sigma.items()}
@@ -305,16 +311,17 @@ def auto_startup(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), *, m
             return s
         return dataclasses.replace(s, sigma={k: max(v, float(floors.get(k, 0.0))) for k, v in s.sigma.items()})
 
+    fix_sigma = {k: inmotion[k] for k in ("sigma_floor_m", "sigma_scale_ned") if k in inmotion}
     if mode == "static-then-track":
         return floored(startup_state(imu, gnss, lever_arm_b, min_static_s=min_static_s,
-                                     heading_speed_m_s=heading_speed_m_s))
+                                     heading_speed_m_s=heading_speed_m_s, **fix_sigma))
     if mode == "in-motion":
         return inmotion_startup(imu, gnss, lever_arm_b, heading_speed_m_s=heading_speed_m_s,
                                 reason="init.mode = \"in-motion\"", **inmotion)
     rest = static_start_s(imu, gnss)
     if rest >= min_static_s:
         s = floored(startup_state(imu, gnss, lever_arm_b, min_static_s=min_static_s,
-                                  heading_speed_m_s=heading_speed_m_s))
+                                  heading_speed_m_s=heading_speed_m_s, **fix_sigma))
         return Startup(s.state, s.gyro_bias, s.accel_bias, s.static_end, s.heading_time, mode=s.mode,
                        reason=f"auto: {s.reason}", sigma=s.sigma, at_yaw=s.at_yaw)
     why = (f"auto: the log starts with {rest:.1f} s of rest (static-then-track needs init.min_static_s = "

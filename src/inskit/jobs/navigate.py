@@ -1046,6 +1046,9 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
                              "fix(es); the start-up needs the fixes while the IMU runs (mismatched time bases, "
                              f"or logs of different runs?){time_unit_hint(gnss_used.time, imu.time)}")
         g_start = gnss_used if span.all() else gnss_used.select(span)
+        # the start-up's position is a fix's, as uncertain as the filter takes that fix (loose coupling's keys)
+        fix_sigma = ({} if tight else {"sigma_floor_m": cfg.gnss.sigma_floor_m,
+                                       "sigma_scale_ned": tuple(cfg.gnss.sigma_scale_ned)})
 
         def start(imu):
             try:  # the start-up sees only the fixes while the IMU runs (a short IMU log claimed a static start it lacked)
@@ -1054,7 +1057,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
                                     course_average_s=i.course_average_s, level_window_s=i.level_window_s,
                                     yaw_guess=None if i.yaw_deg is None else i.yaw_deg * DEG,
                                     gyro_bias_sigma=turn_on_sigmas(cfg)[0], accel_bias_sigma=turn_on_sigmas(cfg)[1],
-                                    floors={k: getattr(i, k) for k in STARTUP_SIGMAS})
+                                    floors={k: getattr(i, k) for k in STARTUP_SIGMAS}, **fix_sigma)
             except InputError as e:
                 if span.all():
                     raise
