@@ -372,3 +372,27 @@ def test_a_truth_yaw_of_another_convention_is_not_blamed_on_the_gyros(files, tmp
     s = evaluate(_with_sigmas(files, "sol_sig_yaw_over.csv", 0.2, yaw_sigma_deg=0.1), files / "truth.csv")
     warn = [w for w in s["warnings"] if "own sigmas" in w]  # a filter overconfident in yaw: the gyros are named
     assert len(warn) == 1 and "yaw: gyro noise or biases" in warn[0], warn
+
+
+def test_sigma_columns_of_zero_or_below_are_said(files, tmp_path):
+    """A solution file whose sigma columns hold 0 over half the epochs (or
+    negative values throughout): consistency was taken over the other half
+    (or dropped) without a word; now a warning names the file, the columns
+    and the count."""
+    df = pd.read_csv(_with_sigmas(files, "sol_sig_z.csv", 0.2))
+    half = df.copy()
+    half.loc[:1499, "sigma_e_m"] = 0.0
+    half.to_csv(tmp_path / "half.csv", index=False)
+    s = evaluate(tmp_path / "half.csv", files / "truth.csv")
+    assert s["consistency"]["epochs"] == 1500
+    warn = [w for w in s["warnings"] if "(a 1-sigma is > 0)" in w]
+    assert warn == [f"{tmp_path / 'half.csv'}: 1500 of 3000 scored epochs hold 0 or less in sigma_e_m (a 1-sigma is "
+                    "> 0): they are not judged against the solution's own sigmas"]
+    neg = df.copy()
+    neg["sigma_n_m"] = -neg["sigma_n_m"]
+    neg.to_csv(tmp_path / "neg.csv", index=False)
+    s = evaluate(tmp_path / "neg.csv", files / "truth.csv")
+    assert "consistency" not in s
+    assert [w for w in s["warnings"] if "3000 of 3000 scored epochs hold 0 or less in sigma_n_m" in w
+            and w.endswith("no epoch is, so there is no consistency figure")]
+    assert not [w for w in evaluate(files / "sol.csv", files / "truth.csv")["warnings"] if "1-sigma" in w]

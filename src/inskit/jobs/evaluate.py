@@ -155,7 +155,7 @@ def evaluate(solution_file, truth_file, *, t_from=None, t_to=None, remove_offset
     s["warnings"] = (coverage_warnings(cover, truth.time) + sampling_warnings(sol.time, truth.time, truth_file)
                      + start_warnings(full, truth_file)
                      + attitude_unit_warnings(sol, truth, solution_file, truth_file)
-                     + truth_consistency_warnings({"": s}))
+                     + sigma_column_warnings(err, solution_file) + truth_consistency_warnings({"": s}))
     if per_epoch_file is not None:
         meta = {"solution": str(solution_file), "truth": str(truth_file), "window": s["window"],
                 "offset_removed": s["offset_removed"]}
@@ -190,6 +190,24 @@ TRUTH_OVERCONFIDENT_HINTS = {
 #: a yaw error of more than this RMS [deg] is beyond the filter's small-angle model: rather a truth whose yaw
 #: follows another convention (or a heading never found) than gyro noise
 TRUTH_YAW_CONVENTION_DEG = 20.0
+
+
+def sigma_column_warnings(err: analysis.NavError, solution_file="solution") -> list[str]:
+    """Scored epochs whose ``sigma_*`` columns
+    (:data:`inskit.analysis.errors.SIGMA_COLUMNS`) hold a value of 0 or
+    below, in words: ``consistency`` leaves them out (all of them: no
+    ``consistency``), which would otherwise go unsaid."""
+    if err.sigma is None or not len(err.time):
+        return []
+    bad = ~np.all(err.sigma > 0, axis=1)
+    if not bad.any():
+        return []
+    from ..analysis.errors import SIGMA_COLUMNS
+
+    cols = [c for c, b in zip(SIGMA_COLUMNS, (err.sigma <= 0).any(axis=0)) if b]
+    return [f"{solution_file}: {int(bad.sum())} of {len(bad)} scored epochs hold 0 or less in "
+            f"{', '.join(cols)} (a 1-sigma is > 0): they are not judged against the solution's own sigmas"
+            + ("; no epoch is, so there is no consistency figure" if bad.all() else "")]
 
 
 def truth_consistency_warnings(errs: dict) -> list[str]:
