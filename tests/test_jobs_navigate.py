@@ -1463,3 +1463,26 @@ def test_an_odometer_lag_beyond_the_search_is_said_to_be_at_its_limit():
         assert "puts them right" not in warn and f"time_offset_s = {0.5 - sign:.2f} or {'less' if sign > 0 else 'more'}" in warn
     lag = odometer_lag(log.time + 0.3, log.speed_m_s, car.gnss)
     assert not lag["at_search_limit"] and "puts them right" in odometer_lag_warning(lag, "odo.csv", 0.0)
+
+
+def test_an_odometer_log_with_dropouts_shows_no_lag():
+    """Fifteen stop-and-go cycles with the wheel speeds tagged rightly but 4 s
+    missing from each: the speed interpolated across a dropout is a straight
+    line, its misfit during a manoeuvre follows the acceleration, and the
+    lag's F statistic read 138 (a lag far beyond chance) for a log without
+    one.  The fixes whose trial times reach into a gap are left out: F is
+    chance again, and the log tagged 0.3 s late is still found."""
+    from inskit.jobs.navigate import odometer_lag, odometer_lag_warning
+    from inskit.simulation.odometer import simulate_odometer
+
+    cycle = [{"type": "accelerate", "speed_m_s": 15.0, "duration_s": 6.0}, {"type": "cruise", "duration_s": 4.0},
+             {"type": "decelerate", "speed_m_s": 5.0, "duration_s": 5.0}, {"type": "cruise", "duration_s": 3.0}]
+    car = _simulated([{"type": "static", "duration_s": 20.0},
+                      {"type": "accelerate", "speed_m_s": 5.0, "duration_s": 3.0}] + cycle * 15)
+    log = simulate_odometer(car.truth, rate_hz=10.0, scale_error=0.005, noise_m_s=0.05, rng=np.random.default_rng(1))
+    phase = (log.time - 33.0) % 18.0
+    keep = ~((phase < 4.0) & (log.time > 23.0))  # from 33 s, 4 s of every 18 s missing
+    lag = odometer_lag(log.time[keep], log.speed_m_s[keep], car.gnss)
+    assert abs(lag["lag_s"]) <= 0.03 and lag["f_statistic"] < 25.0 and 100 < lag["fixes"] < 200, lag
+    lag = odometer_lag(log.time[keep] + 0.3, log.speed_m_s[keep], car.gnss)
+    assert lag["lag_s"] == pytest.approx(0.3, abs=0.03) and odometer_lag_warning(lag, "odo.csv", 0.0), lag

@@ -528,6 +528,10 @@ ODOMETER_LAG_STEP_S = 0.01
 #: longer): read between two samples (interpolated) it is less noisy than at one, and the lags that put the fix
 #: times between samples fitted better by that alone (10 Hz wheel speeds on 1 Hz fixes: 0.05 s "late")
 ODOMETER_LAG_WINDOW_S = 0.5
+#: a fix whose trial times reach into a gap of the log longer than this many median sampling intervals is left
+#: out (the speed interpolated across a dropout is a straight line: during a manoeuvre its misfit follows the
+#: acceleration and passes for a lag)
+ODOMETER_LAG_GAP_FACTOR = 5.0
 #: the summary warns of a lag at least this long [s] ...
 ODOMETER_LAG_WARN_S = 0.05
 #: ... when a lag is this significant: the drop of the residual sum of squares at the tagged times when the
@@ -545,10 +549,12 @@ def odometer_lag(t, v, gnss: GnssData, min_speed_m_s=2.0, track=None) -> dict | 
     (:func:`inskit.alignment.coarse.gnss_speed`) at the fix times while it
     says the vehicle moves faster than ``min_speed_m_s``, a scale fitted by
     least squares (the scale-factor state's share); the lag whose residual
-    RMS is least.  A positive lag: a reading describes the speed ``tau``
-    before its time tag (``[odometer] time_offset_s = -tau`` puts it
-    right).  Acceleration makes a lag visible: at a steady speed every lag
-    fits alike, and the least RMS falls on whichever lag the noise favours.
+    RMS is least (a fix whose trial times reach into a gap of the log,
+    :data:`ODOMETER_LAG_GAP_FACTOR`, left out).  A positive lag: a reading
+    describes the speed ``tau`` before its time tag (``[odometer]
+    time_offset_s = -tau`` puts it right).  Acceleration makes a lag
+    visible: at a steady speed every lag fits alike, and the least RMS falls
+    on whichever lag the noise favours.
     How much the data tell is ``f_statistic``: at the tagged times, the drop
     of the residual sum of squares when the track's acceleration times a
     lag joins the scale (``o = k g - k tau dg/dt``, the lag to first
@@ -571,6 +577,11 @@ def odometer_lag(t, v, gnss: GnssData, min_speed_m_s=2.0, track=None) -> dict | 
     half = 0.5 * max(ODOMETER_LAG_WINDOW_S, 2.0 * float(np.median(np.diff(t))))
     reach = ODOMETER_LAG_SPAN_S + half
     ok = (tf - reach >= t[0]) & (tf + reach <= t[-1]) & (sp > min_speed_m_s)
+    step = np.diff(t)
+    gaps = np.r_[0, np.cumsum(step > ODOMETER_LAG_GAP_FACTOR * float(np.median(step)))]  # gaps before each sample
+    lo = np.clip(np.searchsorted(t, tf - reach, side="right") - 1, 0, len(t) - 1)
+    hi = np.clip(np.searchsorted(t, tf + reach, side="left"), 0, len(t) - 1)
+    ok &= gaps[hi] == gaps[lo]  # no gap between the samples that hold the trial times
     if ok.sum() < 10:
         return None
     g = sp[ok]
