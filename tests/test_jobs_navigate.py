@@ -1396,6 +1396,15 @@ def _simulated(segments, seed=4):
         return simulate(Scenario.model_validate(car), seed=seed)
 
 
+#: a short drive that speeds up, turns and slows down: what shows an odometer's lag
+LAG_CAR = [{"type": "static", "duration_s": 20.0},
+           {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 8.0},
+           {"type": "turn", "angle_deg": 90.0, "radius_m": 40.0},
+           {"type": "decelerate", "speed_m_s": 5.0, "duration_s": 6.0},
+           {"type": "accelerate", "speed_m_s": 14.0, "duration_s": 6.0},
+           {"type": "cruise", "duration_s": 10.0}]
+
+
 def test_an_odometer_log_at_a_steady_speed_shows_no_lag():
     """Ten minutes at a steady 15 m/s, the wheel speeds tagged rightly: a lag
     is unobservable there (lag times no acceleration).  The fit at each trial
@@ -1422,12 +1431,7 @@ def test_an_odometer_log_at_a_steady_speed_shows_no_lag():
             lag = odometer_lag(log.time[k], log.speed_m_s[k], steady.gnss)
             assert lag["fixes"] > 500 and lag["f_statistic"] < 25.0, (rate_hz, seed, lag)
             assert odometer_lag_warning(lag, "odo.csv", 0.0) is None
-    car = _simulated([{"type": "static", "duration_s": 20.0},
-                      {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 8.0},
-                      {"type": "turn", "angle_deg": 90.0, "radius_m": 40.0},
-                      {"type": "decelerate", "speed_m_s": 5.0, "duration_s": 6.0},
-                      {"type": "accelerate", "speed_m_s": 14.0, "duration_s": 6.0},
-                      {"type": "cruise", "duration_s": 10.0}])
+    car = _simulated(LAG_CAR)
     for late_s in (0.0, 0.3):
         for rate_hz in (10.0, 1.0):
             log = simulate_odometer(car.truth, rate_hz=rate_hz, scale_error=0.005, noise_m_s=0.05,
@@ -1446,12 +1450,7 @@ def test_an_odometer_lag_beyond_the_search_is_said_to_be_at_its_limit():
     from inskit.jobs.navigate import ODOMETER_LAG_SPAN_S, odometer_lag, odometer_lag_warning
     from inskit.simulation.odometer import simulate_odometer
 
-    car = _simulated([{"type": "static", "duration_s": 20.0},
-                      {"type": "accelerate", "speed_m_s": 15.0, "duration_s": 8.0},
-                      {"type": "turn", "angle_deg": 90.0, "radius_m": 40.0},
-                      {"type": "decelerate", "speed_m_s": 5.0, "duration_s": 6.0},
-                      {"type": "accelerate", "speed_m_s": 14.0, "duration_s": 6.0},
-                      {"type": "cruise", "duration_s": 10.0}])
+    car = _simulated(LAG_CAR)
     log = simulate_odometer(car.truth, rate_hz=10.0, scale_error=0.005, noise_m_s=0.05, rng=np.random.default_rng(8))
     for late_s, sign in ((2.0, 1.0), (-2.0, -1.0)):
         lag = odometer_lag(log.time + late_s, log.speed_m_s, car.gnss)
