@@ -332,6 +332,20 @@ def test_a_solution_whose_sigmas_understate_its_errors_is_said(files):
 def test_a_solution_without_sigmas_has_no_consistency(files):
     s = evaluate(files / "sol.csv", files / "truth.csv")
     assert "consistency" not in s and "own sigma" not in summary_text(s)
+    assert not [w for w in s["warnings"] if "sigma" in w]  # no sigma columns at all: nothing to say
+
+
+def test_a_solution_with_some_of_its_sigmas_says_it_is_not_judged(files):
+    """A file carrying the position and velocity sigmas but not the heading's
+    (sigma_att_d_rad) was not judged, without a word."""
+    import pandas as pd
+
+    sol = pd.read_csv(_with_sigmas(files, "sol_part.csv", 0.2))
+    sol.drop(columns=["sigma_att_d_rad"]).to_csv(files / "sol_part.csv", index=False)
+    s = evaluate(files / "sol_part.csv", files / "truth.csv")
+    assert "consistency" not in s
+    w = [w for w in s["warnings"] if "not judged against the solution's own sigmas" in w]
+    assert len(w) == 1 and "but not sigma_att_d_rad" in w[0] and "sigma_n_m" in w[0], s["warnings"]
 
 
 def test_a_removed_offset_leaves_the_position_unjudged(files):

@@ -155,7 +155,7 @@ def evaluate(solution_file, truth_file, *, t_from=None, t_to=None, remove_offset
     s["warnings"] = (coverage_warnings(cover, truth.time) + sampling_warnings(sol.time, truth.time, truth_file)
                      + start_warnings(full, truth_file)
                      + attitude_unit_warnings(sol, truth, solution_file, truth_file)
-                     + sigma_column_warnings(err, solution_file) + truth_consistency_warnings({"": s}))
+                     + sigma_column_warnings(err, solution_file, sol) + truth_consistency_warnings({"": s}))
     if per_epoch_file is not None:
         meta = {"solution": str(solution_file), "truth": str(truth_file), "window": s["window"],
                 "offset_removed": s["offset_removed"]}
@@ -192,18 +192,28 @@ TRUTH_OVERCONFIDENT_HINTS = {
 TRUTH_YAW_CONVENTION_DEG = 20.0
 
 
-def sigma_column_warnings(err: analysis.NavError, solution_file="solution") -> list[str]:
+def sigma_column_warnings(err: analysis.NavError, solution_file="solution", sol=None) -> list[str]:
     """Scored epochs whose ``sigma_*`` columns
     (:data:`inskit.analysis.errors.SIGMA_COLUMNS`) hold a value of 0 or
     below, in words: ``consistency`` leaves them out (all of them: no
-    ``consistency``), which would otherwise go unsaid."""
-    if err.sigma is None or not len(err.time):
+    ``consistency``), which would otherwise go unsaid; and, given the
+    solution ``sol``, a file that carries some of those columns but not all
+    (no ``consistency`` at all)."""
+    from ..analysis.errors import SIGMA_COLUMNS
+
+    if err.sigma is None:
+        have = [c for c in SIGMA_COLUMNS if c in (getattr(sol, "extra", None) or {})]
+        if have:  # some of its own sigmas, not all: nothing judged, said
+            missing = [c for c in SIGMA_COLUMNS if c not in have]
+            return [f"{solution_file}: it carries {', '.join(have)} but not {', '.join(missing)}: the errors are "
+                    "not judged against the solution's own sigmas (no consistency figure; all of "
+                    f"{', '.join(SIGMA_COLUMNS)} are needed)"]
+        return []
+    if not len(err.time):
         return []
     bad = ~np.all(err.sigma > 0, axis=1)
     if not bad.any():
         return []
-    from ..analysis.errors import SIGMA_COLUMNS
-
     cols = [c for c, b in zip(SIGMA_COLUMNS, (err.sigma <= 0).any(axis=0)) if b]
     return [f"{solution_file}: {int(bad.sum())} of {len(bad)} scored epochs hold 0 or less in "
             f"{', '.join(cols)} (a 1-sigma is > 0): they are not judged against the solution's own sigmas"
