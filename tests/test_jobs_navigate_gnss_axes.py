@@ -227,3 +227,21 @@ def test_the_calibration_halves_its_step_once_it_overshoots(drive, monkeypatch):
     s2 = s1 * np.sqrt(axis_scale_step([0.5, 0.5, 0.4]))
     assert np.allclose(seen[1], s1) and np.allclose(seen[2], s2) and np.allclose(scale, s2), seen
     assert [r["vertical_to_horizontal"] for r in runs] == [2.0, 0.8, 0.99]
+
+
+def test_a_calibration_with_no_horizontal_innovation_says_so(drive, monkeypatch):
+    """Every horizontal innovation exactly 0 (fixes copied from the INS):
+    the ratio is undefined, and the calibration says so rather than ending
+    in a TypeError."""
+    import inskit.jobs.navigate as N
+
+    class Run:
+        forward = None
+
+    monkeypatch.setattr(N, "run", lambda c, inputs=None: Run())
+    monkeypatch.setattr(N, "health", lambda fw: {"measurements": {}})
+    monkeypatch.setattr(N, "gnss_axes", lambda fw: {"normalized_innovation_rms_ned": [0.0, 0.0, 0.5],
+                                                    "horizontal": 0.0, "vertical": 0.5,
+                                                    "vertical_to_horizontal": None, "updates": 100})
+    with pytest.raises(InputError, match="horizontal innovations are all zero"):
+        N.calibrate_gnss_axes(config(drive), inputs=("imu", "gnss", None))

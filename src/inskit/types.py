@@ -635,6 +635,16 @@ class NavSolution:
         return NavSolution(t, lla, v, q, extra)
 
 
+def fix_sigmas(sigma_ned, sigma_floor_m=0.0, sigma_scale_ned=(1.0, 1.0, 1.0)):
+    """Fixes' north, east, down position sigmas [m] as a filter takes them:
+    the file's (``(n, 3)`` or ``(3,)``), no smaller than ``sigma_floor_m``,
+    times the per-axis ``sigma_scale_ned`` (``[gnss] sigma_floor_m``,
+    ``sigma_scale_ned``).  The one rule for the position updates
+    (:class:`inskit.integration.GnssPosition`) and for a start-up whose
+    position is a fix's (:func:`inskit.alignment.coarse.fix_sigma_m`)."""
+    return np.maximum(sigma_ned, sigma_floor_m) * np.asarray(sigma_scale_ned, dtype=float)
+
+
 @dataclass(frozen=True)
 class GnssData:
     """GNSS position (and optionally velocity) fixes with their sigmas.

@@ -16,7 +16,7 @@ from numba import njit
 from .. import earth
 from .. import rotations as rot
 from ..errors import InputError
-from ..types import GnssData, ImuData, NavState
+from ..types import GnssData, ImuData, NavState, fix_sigmas
 from ..units import DEG
 
 
@@ -188,7 +188,7 @@ def fix_sigma_m(gnss: GnssData, k, sigma_floor_m=0.0, sigma_scale_ned=(1.0, 1.0,
     (:class:`~inskit.integration.GnssPosition`: the file's, no smaller than
     ``sigma_floor_m``, times ``sigma_scale_ned``): a start-up's position
     taken from that fix is as uncertain."""
-    return float(np.max(np.maximum(gnss.sigma_ned[k], sigma_floor_m) * np.asarray(sigma_scale_ned, float)))
+    return float(np.max(fix_sigmas(gnss.sigma_ned[k], sigma_floor_m, sigma_scale_ned)))
 
 
 def startup_state(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), *, min_static_s=5.0,
@@ -242,9 +242,9 @@ def startup_state(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), *, 
         p = earth.ned_to_lla(-(rot.dcm_from_euler(rpy) @ np.asarray(lever_arm_b, float)), lla0)
         return NavState.from_euler(imu.time[0], p, np.zeros(3), rpy)
 
-    # the position is the first fix's, as uncertain as it (its largest axis sigma; a fix of 1 m noise taken
-    # as 5 cm kept its error through the static start, the fixes' updates too weak to move it)
-    # as the filter takes it ([gnss] sigma_floor_m, sigma_scale_ned: a file's sigmas that the config puts right)
+    # the position is the first fix's, as uncertain as the filter takes that fix (its largest axis sigma, after
+    # [gnss] sigma_floor_m and sigma_scale_ned): taken as 5 cm, a fix of 1 m noise kept its error through the
+    # static start, the fixes' updates too weak to move it
     sigma = ({"sigma_pos_m": fix_sigma_m(gnss, 0, sigma_floor_m, sigma_scale_ned)}
              if np.isfinite(gnss.sigma_ned[0]).all() else None)
     return Startup(state, gyro_bias, accel_bias, static_end, t_head, reason=f"static for "

@@ -33,7 +33,6 @@ inside the small-angle model.
 from __future__ import annotations
 
 import dataclasses
-
 import time as _time
 
 import numpy as np
@@ -176,6 +175,12 @@ def _interp_lla(t, gnss: GnssData):
     return earth.ned_to_lla(_interp_rows(np.array([t]), gnss.time, p)[0], gnss.lla[0])
 
 
+def floored_sigmas(sigma: dict, floors: dict | None) -> dict:
+    """The start-up's sigmas (config units, :data:`STARTUP_SIGMAS`) each no
+    smaller than its floor in ``floors`` (the config's ``[init]`` sigmas)."""
+    return {k: max(v, float((floors or {}).get(k, 0.0))) for k, v in sigma.items()}
+
+
 def inmotion_startup(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), *, heading_speed_m_s=3.0,
                      course_average_s=3.0, level_window_s=2.0, accel_span_s=1.0, yaw_guess=None,
                      gyro_bias_sigma=0.05 * DEG, accel_bias_sigma=0.05, floors=None, reason="",
@@ -271,8 +276,7 @@ def inmotion_startup(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), 
     sigma = {"sigma_pos_m": fix_sigma_m(gnss, lv.fix0, sigma_floor_m, sigma_scale_ned),
              "sigma_vel_m_s": max(lv.sig_vh, lv.sig_vd),
              "sigma_roll_pitch_deg": sig_tilt / DEG, "sigma_yaw_deg": sig_yaw / DEG}
-    if floors:
-        sigma = {k: max(v, float(floors.get(k, 0.0))) for k, v in sigma.items()}
+    sigma = floored_sigmas(sigma, floors)
     return Startup(state, np.zeros(3), np.zeros(3), lv.t0, t_head, mode="in-motion",
                    reason=(reason + "; " if reason else "") + how, sigma=sigma,
                    at_yaw=lambda yaw: lv.state(yaw, lever_arm_b))
@@ -304,12 +308,10 @@ def auto_startup(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), *, m
     """
     if mode not in ("auto", "static-then-track", "in-motion"):
         raise InputError(f"start-up mode must be auto, static-then-track or in-motion, got {mode!r}")
-    floors = inmotion.get("floors") or {}
-
     def floored(s):  # the static start-up's sigmas (the first fix's position sigma) no smaller than the floors
         if s.sigma is None:
             return s
-        return dataclasses.replace(s, sigma={k: max(v, float(floors.get(k, 0.0))) for k, v in s.sigma.items()})
+        return dataclasses.replace(s, sigma=floored_sigmas(s.sigma, inmotion.get("floors")))
 
     fix_sigma = {k: inmotion[k] for k in ("sigma_floor_m", "sigma_scale_ned") if k in inmotion}
     if mode == "static-then-track":

@@ -48,9 +48,9 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from .. import earth
-from ..rotations import dcm_from_quat, quat_from_dcm, skew
 from ..errors import InputError
-from ..types import GnssData
+from ..rotations import dcm_from_quat, quat_from_dcm, skew
+from ..types import GnssData, fix_sigmas
 from . import _kernel as K
 from . import _updates as U
 from .blocks import mounting_dcm
@@ -241,7 +241,7 @@ class GnssPosition:
         if scale.shape != (3,) or not (np.all(np.isfinite(scale)) and np.all(scale > 0)):
             raise InputError(f"sigma_scale_ned must be three finite numbers > 0 (north, east, down), got "
                              f"{sigma_scale_ned!r}")
-        self.sigma = np.maximum(gnss.sigma_ned, sigma_floor_m) * scale
+        self.sigma = fix_sigmas(gnss.sigma_ned, sigma_floor_m, scale)
         self.lever_arm_b = np.asarray(lever_arm_b, dtype=float)
         self._rows = np.nonzero(self.use)[0]
 

@@ -586,10 +586,11 @@ def odometer_lag(t, v, gnss: GnssData, min_speed_m_s=2.0, track=None) -> dict | 
         return None
     g = sp[ok]
     dist = np.r_[0.0, np.cumsum(0.5 * (v[1:] + v[:-1]) * np.diff(t))]  # the distance travelled [m]
-    tt = tf[ok][None, :] + taus[:, None]
-    o = (np.interp(tt + half, t, dist) - np.interp(tt - half, t, dist)) / (2.0 * half)  # (lags, fixes)
-    k = o @ g / (g @ g)  # the scale at each lag
-    rms = np.sqrt(np.mean((o - k[:, None] * g) ** 2, axis=1))
+    rms = np.empty(len(taus))
+    for j, tau in enumerate(taus):  # one lag at a time: memory of one row of fixes, whatever the log's length
+        tt = tf[ok] + tau
+        o = (np.interp(tt + half, t, dist) - np.interp(tt - half, t, dist)) / (2.0 * half)
+        rms[j] = np.sqrt(np.mean((o - (o @ g / (g @ g)) * g) ** 2))  # the scale fitted at each lag
     i = int(np.argmin(rms))
     i0 = int(np.argmin(np.abs(taus)))
     n = int(ok.sum())
@@ -1456,8 +1457,11 @@ def calibrate_gnss_axes(cfg: NavigateConfig, log=None, tol=GNSS_AXES_TOLERANCE, 
                              f"them (an outage's end measures the INS's drift, not the fixes' noise), fewer than the "
                              f"{GNSS_AXES_MIN_UPDATES} the fixes' noise shape needs; set [gnss] sigma_scale_ned by "
                              "hand (or leave it out)")
-        runs.append({"sigma_scale_ned": [float(x) for x in scale], **ax})
         r = ax["vertical_to_horizontal"]
+        if r is None:  # every horizontal innovation exactly 0: fixes copied from the INS, say
+            raise InputError("gnss.sigma_scale_search = \"calibrate\": the fixes' horizontal innovations are all "
+                             "zero, so there is no shape to measure; set [gnss] sigma_scale_ned by hand")
+        runs.append({"sigma_scale_ned": [float(x) for x in scale], **ax})
         if log:
             log(f"calibrate: sigma_scale_ned [{', '.join(f'{x:.3f}' for x in scale)}] -> normalised innovations "
                 f"horizontal {ax['horizontal']:.3f}, vertical {ax['vertical']:.3f} (ratio {r:.3f})")
