@@ -312,3 +312,44 @@ def test_the_start_ups_position_sigma_is_the_fix_as_the_filter_takes_it(tmp_path
                                          **gnss_keys}, "init": {"mode": "static-then-track"}})
         res = navigate(cfg)  # the file's 0.25 m floored at 1.5, or 0.25 m times 6 down: 1.5 m
         assert res.startup.sigma == {"sigma_pos_m": pytest.approx(1.5)}, (gnss_keys, res.startup.sigma)
+
+
+def test_rest_and_motion_are_found_against_the_fixes_as_the_filter_takes_them(tmp_path):
+    """A fix file claiming 2 cm for fixes of 0.5 m (white) noise, put right
+    by ``[gnss] sigma_floor_m = 0.5``: the start-up judged rest and motion
+    against the file's 2 cm (the track's speed noise read as motion from
+    the first second: 'the log starts with 0.0 s of rest' of 20 s, an
+    in-motion start with a 1.4 cm/s velocity sigma), and navigate's ZUPT
+    found no rest at all.  Both now take the fixes as the filter does."""
+    import dataclasses
+
+    sim = _simulate(tmp_path, STATIC_FIRST, 12)
+    formal = dataclasses.replace(sim.gnss, sigma_ned=np.full_like(sim.gnss.sigma_ned, 0.02))
+    fooled = auto_startup(sim.imu, formal, (0.0, 0.0, -1.2))  # nothing says the 2 cm are wrong: fooled, as before
+    assert fooled.mode == "in-motion"
+    s = auto_startup(sim.imu, formal, (0.0, 0.0, -1.2), sigma_floor_m=0.5)
+    assert s.mode == "static-then-track" and 19.0 < s.static_end < 23.0
+    assert s.sigma == {"sigma_pos_m": pytest.approx(0.5)}  # the floor counted once, not twice
+    scaled = auto_startup(sim.imu, formal, (0.0, 0.0, -1.2), sigma_scale_ned=(25.0, 25.0, 50.0))
+    assert scaled.mode == "static-then-track" and scaled.sigma == {"sigma_pos_m": pytest.approx(1.0)}
+    k = int(np.searchsorted(sim.imu.time, 25.0))
+    s2 = auto_startup(sim.imu.slice(k), formal.select(formal.time >= sim.imu.time[k]), (0.0, 0.0, -1.2),
+                      sigma_floor_m=0.5)
+    assert s2.mode == "in-motion" and s2.sigma["sigma_pos_m"] == pytest.approx(0.5)
+    # fixes of 0.5 m: the receiver's velocity (0.05 m/s), not the differences of 2 cm fixes (0.014 m/s)
+    assert s2.sigma["sigma_vel_m_s"] == pytest.approx(0.05)
+
+    import pandas as pd
+
+    g = pd.read_csv(tmp_path / "gnss.csv")
+    g[["sigma_n_m", "sigma_e_m", "sigma_d_m"]] = 0.02
+    g.to_csv(tmp_path / "gnss_formal.csv", index=False)
+    zupts = []
+    for floor in (0.0, 0.5):
+        cfg = config_from_dict({"imu": {"file": str(tmp_path / "imu.csv")},
+                                "gnss": {"file": str(tmp_path / "gnss_formal.csv"), "lever_arm_b_m": [0.0, 0.0, -1.2],
+                                         "sigma_floor_m": floor},
+                                "constraints": {"zupt": True}, "noise": {"from_static": False}})
+        res = navigate(cfg)
+        zupts.append(res.forward.counts.get("zupt", {}).get("used", 0))
+    assert zupts[0] == 0 and zupts[1] > 100, zupts  # 19 s of rest at 10 Hz

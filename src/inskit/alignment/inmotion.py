@@ -40,7 +40,7 @@ import numpy as np
 from .. import earth
 from .. import rotations as rot
 from ..errors import InputError, InskitError
-from ..types import GnssData, ImuData, NavState
+from ..types import GnssData, ImuData, NavState, fix_sigmas
 from ..units import DEG
 from .coarse import Startup, _chain_rotations, detect_motion_start, fix_sigma_m, level, startup_state
 
@@ -308,22 +308,28 @@ def auto_startup(imu: ImuData, gnss: GnssData, lever_arm_b=(0.0, 0.0, 0.0), *, m
     """
     if mode not in ("auto", "static-then-track", "in-motion"):
         raise InputError(f"start-up mode must be auto, static-then-track or in-motion, got {mode!r}")
+    shape = {k: inmotion.pop(k) for k in ("sigma_floor_m", "sigma_scale_ned") if k in inmotion}
+    if shape:  # the fixes as the filter takes them (types.fix_sigmas) for every use of their sigmas below: the
+        # rest and motion found from the track's speed against its noise, the velocity, course and tilt sigmas, the
+        # position's sigma (a file claiming 2 cm for 0.5 m of noise, floored at 0.5 m, was read as moving from its
+        # first second: 'the log starts with 0.0 s of rest' of 20, an in-motion start with a 1.4 cm/s velocity sigma)
+        gnss = dataclasses.replace(gnss, sigma_ned=fix_sigmas(gnss.sigma_ned, **shape))
+
     def floored(s):  # the static start-up's sigmas (the first fix's position sigma) no smaller than the floors
         if s.sigma is None:
             return s
         return dataclasses.replace(s, sigma=floored_sigmas(s.sigma, inmotion.get("floors")))
 
-    fix_sigma = {k: inmotion[k] for k in ("sigma_floor_m", "sigma_scale_ned") if k in inmotion}
     if mode == "static-then-track":
         return floored(startup_state(imu, gnss, lever_arm_b, min_static_s=min_static_s,
-                                     heading_speed_m_s=heading_speed_m_s, **fix_sigma))
+                                     heading_speed_m_s=heading_speed_m_s))
     if mode == "in-motion":
         return inmotion_startup(imu, gnss, lever_arm_b, heading_speed_m_s=heading_speed_m_s,
                                 reason="init.mode = \"in-motion\"", **inmotion)
     rest = static_start_s(imu, gnss)
     if rest >= min_static_s:
         s = floored(startup_state(imu, gnss, lever_arm_b, min_static_s=min_static_s,
-                                  heading_speed_m_s=heading_speed_m_s, **fix_sigma))
+                                  heading_speed_m_s=heading_speed_m_s))
         return Startup(s.state, s.gyro_bias, s.accel_bias, s.static_end, s.heading_time, mode=s.mode,
                        reason=f"auto: {s.reason}", sigma=s.sigma, at_yaw=s.at_yaw)
     why = (f"auto: the log starts with {rest:.1f} s of rest (static-then-track needs init.min_static_s = "

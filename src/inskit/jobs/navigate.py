@@ -19,7 +19,7 @@ from ..errors import InputError
 from ..files import write_json, write_text
 from ..io.rtklib import read_pos, read_rtklibexplorer_imu
 from ..io.time_tags import JITTER_HINT_FRACTION, JITTER_TOLERANCE
-from ..types import GnssData, ImuData, NavState
+from ..types import GnssData, ImuData, NavState, fix_sigmas
 from ..units import DEG, MILLI_G
 from ..integration import (FilterOutput, FilterSettings, GnssPosition, GnssVelocity, InitialUncertainty,
                            NonHolonomic, SensorNoise, Track, ZeroVelocity, rts_smooth, run_filter, run_uncoupled)
@@ -1149,8 +1149,11 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
             meas.append(GnssVelocity(gnss, used, cfg.gnss.velocity_delay_s, cfg.gnss.velocity_sigma_scale,
                                      lever_arm_b=lever))
         c = cfg.constraints
-        if c.zupt:
-            meas.append(ZeroVelocity(static_intervals(gnss_used), c.rate_hz, c.zupt_sigma_m_s))
+        if c.zupt:  # rest found from the track against the noise of the fixes as the filter takes them (with a
+            # file claiming 2 cm for 0.5 m of noise, floored at 0.5 m, no rest was ever found: no ZUPT at all)
+            still = gnss_used if tight else dataclasses.replace(gnss_used, sigma_ned=fix_sigmas(
+                gnss_used.sigma_ned, cfg.gnss.sigma_floor_m, cfg.gnss.sigma_scale_ned))
+            meas.append(ZeroVelocity(static_intervals(still), c.rate_hz, c.zupt_sigma_m_s))
         if c.nhc:
             meas.append(NonHolonomic([(imu.time[0], imu.time[-1])], c.rate_hz, c.nhc_sigma_m_s,
                                     lever_arm_b=c.nhc_lever_arm_b_m))
