@@ -401,3 +401,31 @@ def test_the_report_is_written_under_an_html_name_only(run_dir, tmp_path):
         with pytest.raises(InputError, match=r"the report is an HTML page: its name must end in \.html"):
             build_report(run_dir, tmp_path / name)
         assert not (tmp_path / name).exists()
+
+
+@pytest.mark.parametrize("edit, said", [
+    (lambda s: s.update(health="x"), r"health is text \(\"x\"\) where navigate writes an object"),
+    (lambda s: s.update(outage_table={}), r"outage_table is an object \(\{\}\) where navigate writes a list of outages"),
+    (lambda s: s.update(outage_table=[1]), r"outage_table\[0\] is a number \(1\) where navigate writes an object"),
+    (lambda s: s.update(first_fix_time_s="abc"), r"first_fix_time_s is text \(\"abc\"\) where navigate writes a "
+                                                 r"number or null"),
+    (lambda s: s["health"].update(measurements=[1]), r"health.measurements is a list"),
+    (lambda s: s.update(measurements={"gnss_pos": 5}), r"measurements.gnss_pos is a number \(5\) where navigate "
+                                                        r"writes an object"),
+    (lambda s: s.update(final_estimates={"bg": {"values": ["a"]}}), r"final_estimates.bg.values is a list"),
+])
+def test_a_summary_of_another_shape_is_refused_naming_the_key(run_dir, tmp_path, edit, said):
+    """A summary.json edited by hand (or damaged into other valid JSON) was an internal error ('str' object
+    has no attribute 'get' for ``"health": "x"``; could not convert string to float for a text
+    ``first_fix_time_s``) or a page without the outages (``"outage_table": {}``).  Now the key, what it
+    holds and what navigate writes there are said, as for any damaged input."""
+    d = tmp_path / "edited"
+    shutil.copytree(run_dir, d)
+    for f in d.glob("report*.html"):
+        f.unlink()
+    s = json.loads((d / "summary.json").read_text())
+    edit(s)
+    (d / "summary.json").write_text(json.dumps(s))
+    with pytest.raises(InputError, match=rf"^{re.escape(str(d / 'summary.json'))}: {said}.*: a damaged or "
+                                         r"hand-edited summary.json\? \(run navigate again to write it\)$"):
+        build_report(d)
