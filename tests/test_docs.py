@@ -155,3 +155,30 @@ def test_the_files_a_command_line_reads_are_bundled_or_written_by_an_earlier_lin
         if name == ["navigate"] and "--out" not in [o for o, _, _ in pairs]:
             outs += [_navigate_out(w) for w in positional if w.startswith("examples/")]
         written += outs
+
+
+def _missing_required(line):
+    """The required options of ``inskit WORDS`` that the line does not give."""
+    cmd, name, rest = _resolve(shlex.split(line)[1:])
+    if not name or isinstance(cmd, click.Group):
+        return []
+    pairs, _ = _parse(cmd, rest)
+    given = {o for o, _, _ in pairs}
+    return [p.opts[0] for p in cmd.params
+            if isinstance(p, click.Option) and p.required and not set(p.opts) & given]
+
+
+@pytest.mark.parametrize(("doc", "line"), _all_lines(), ids=lambda v: v[:60] if isinstance(v, str) else None)
+def test_every_command_line_gives_the_required_options(doc, line):
+    assert not _missing_required(line), f"{doc}: `{line}` lacks {_missing_required(line)}"
+
+
+def test_the_readme_figures_name_commands_that_run_as_written():
+    """The command column of README's Measured table: each whole command
+    (``... --smooth`` continues the row above) gives its required options
+    (``inskit reproduce all --only odometer-study`` lacked ``--out``)."""
+    rows = [r for r in (ROOT / "README.md").read_text().splitlines() if r.startswith("| ")]
+    commands = [c for r in rows for c in re.findall(r"`(inskit [^`]+)`", r.rstrip(" |").rsplit(" | ", 1)[-1])]
+    assert len(commands) >= 8
+    for line in commands:
+        assert not _missing_required(line), f"README.md: `{line}` lacks {_missing_required(line)}"
