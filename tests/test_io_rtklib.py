@@ -426,3 +426,19 @@ def test_a_pos_height_or_velocity_beyond_reason_is_refused(tmp_path, field, valu
     rows[5][field] = {4: "-99000", 15: "11000", 17: "-11000"}[field]  # within the bounds: read
     g, _ = read_pos(_write_pos(p, header, rows))
     assert len(g) == 20
+
+
+def test_a_pos_file_of_other_quality_names_its_quality_and_the_key_that_reads_it(tmp_path):
+    """``inskit spp`` writes Q = 5 (single point); read with the default
+    quality (1 fix, 2 float) the message said only "no rows with quality Q
+    in [1, 2]", not what the file holds nor how to read it."""
+    header, rows = _pos_rows(6)
+    for f in rows:
+        f[5] = "5"
+    rows[0][5] = "4"
+    p = _write_pos(tmp_path / "spp.pos", header, rows)
+    with pytest.raises(InputError, match=r"spp\.pos: no rows with quality Q in \[1, 2\]; its rows have Q 4 "
+                                         r"\(1 row, DGPS\) and 5 \(5 rows, single\): quality=\[4, 5\] "
+                                         r"\(\[gnss\] quality in a navigate config\) reads them"):
+        read_pos(p)
+    assert len(read_pos(p, quality=(5,))[0]) == 5

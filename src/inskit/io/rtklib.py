@@ -126,6 +126,10 @@ def _pos_times_ns(path, tsys, d0, d1, linenos):
     return ns
 
 
+#: RTKLIB's solution quality flags (the ``Q`` column)
+_Q_NAMES = {1: "fix", 2: "float", 3: "SBAS", 4: "DGPS", 5: "single", 6: "PPP"}
+
+
 def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0, info=None):
     """Read an RTKLIB ``.pos`` solution: latitude and longitude in degrees
     or in degrees, minutes and seconds, or ECEF x, y, z (rotated into
@@ -250,9 +254,14 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0, info=None):
                      else " ".join(table[i, names.index(f"{c[:-5]}({u})")] for u in "dms"))
             raise InputError(f"{path}: line {linenos[i]}: column '{c if c in names else _DMS[c[:-5]]}' has "
                              f"{shown!r}; expected a value in [-{limit:g}, {limit:g}] degrees")
-    keep = np.isin(num["Q"].astype(int), list(quality))
+    q_all = num["Q"].astype(int)
+    keep = np.isin(q_all, list(quality))
     if not keep.any():
-        raise InputError(f"{path}: no rows with quality Q in {list(quality)}")
+        found, counts = np.unique(q_all, return_counts=True)
+        held = " and ".join(f"{q} ({n} row{'s' if n != 1 else ''}, {_Q_NAMES.get(int(q), 'unknown')})"
+                            for q, n in zip(found, counts))
+        raise InputError(f"{path}: no rows with quality Q in {list(quality)}; its rows have Q {held}: "
+                         f"quality={[int(q) for q in found]} ([gnss] quality in a navigate config) reads them")
     d = np.diff(t[keep])
     if (d <= 0).any():
         i = int(np.argmax(d <= 0)) + 1
