@@ -123,6 +123,16 @@ def test_windows_without_the_windows_protocol(tmp_path):
         _cfg(LOOSE, outages={"protocol": "rtklibexplorer", "windows_s": [[15, 25]]})
 
 
+def test_outage_windows_are_numbered_in_time_order():
+    """``--outages windows:900-960,300-330`` kept the order given: the
+    outage table's k = 0 was the later window."""
+    from inskit.jobs.config import outages_from_spec
+
+    w = _cfg(LOOSE, outages={"protocol": "windows", "windows_s": [[900, 960], [300, 330]]}).outages.windows_s
+    assert w == [(300.0, 330.0), (900.0, 960.0)]
+    assert _cfg(LOOSE, outages=outages_from_spec("windows:900-960,300-330")).outages.windows_s == w
+
+
 def test_windows_protocol_with_no_windows():
     with pytest.raises(ConfigError, match=r"c\.toml: field 'outages\.windows_s': protocol = \"windows\" needs "
                                           r"windows_s.*e\.g\. windows_s = \[\[15, 25\], \[30, 40\]\]"):

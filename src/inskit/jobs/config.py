@@ -669,7 +669,8 @@ class OutagesSection(_Strict):
         "none", description="none; rtklibexplorer: the dataset's eleven outages, 40 + 45 k to 54.75 + 45 k s "
         "after the first GNSS epoch (k = 0..10); windows: the windows of windows_s")
     windows_s: list[tuple[float, float]] = Field(
-        default_factory=list, description="[start, end] seconds after the first GNSS epoch (protocol = \"windows\")"
+        default_factory=list, description="[start, end] seconds after the first GNSS epoch (protocol = \"windows\"); "
+        "the outage table numbers them k = 0, 1, ... in time order, whatever the order given"
     )
     keep_satellites: int = Field(0, ge=0, le=12, description="tight coupling: satellites kept inside each "
                                  "window (the highest ones), 0 for a full outage")
@@ -699,7 +700,9 @@ class OutagesSection(_Strict):
         clash = windows_conflict(v)
         if clash:
             raise ValueError(clash)
-        return v
+        # numbered in time order (the outage table's k), whatever the order given: windows 900-960, 300-330 made
+        # k = 0 the later one
+        return sorted((float(a), float(b)) for a, b in v)
 
     @model_validator(mode="after")
     def _consistent(self):
