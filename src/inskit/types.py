@@ -588,7 +588,10 @@ class NavSolution:
 
     def sample(self, t):
         """``(lla, v_n, q_nb)`` at any times ``t`` inside the span, in any order
-        (linear in position and velocity, normalised linear quaternion blend).
+        (linear in position and velocity, normalised linear quaternion blend;
+        the longitude along the shorter way round, so that two rows either
+        side of the antimeridian, +179.99 and -179.99 deg, give a point
+        between them and not one on the far side of the Earth).
 
         Parameters
         ----------
@@ -609,8 +612,14 @@ class NavSolution:
             )
         i, j, w = self._bracket(t)
         q = rot.quat_blend(self.q_nb[i], self.q_nb[j], w)
+        lla = self.lla[i] * (1 - w[:, None]) + self.lla[j] * w[:, None]
+        dlon = self.lla[j, 1] - self.lla[i, 1]
+        across = np.abs(dlon) > np.pi  # the rows straddle the antimeridian (or a +-pi wrap)
+        if across.any():
+            d = dlon[across] - np.copysign(2.0 * np.pi, dlon[across])
+            lla[across, 1] = rot.wrap_angle(self.lla[i[across], 1] + d * w[across])
         w = w[:, None]
-        return self.lla[i] * (1 - w) + self.lla[j] * w, self.v_n[i] * (1 - w) + self.v_n[j] * w, q
+        return lla, self.v_n[i] * (1 - w) + self.v_n[j] * w, q
 
     def _bracket(self, t):
         """The rows ``i`` and ``j`` on either side of each of the times ``t``
