@@ -513,3 +513,23 @@ def test_raw_gnss_settings_that_would_be_ignored_or_unwritable_are_refused_namin
     p.write_text(RAW_HEAD + raw + "\n")
     with pytest.raises(ConfigError, match=rf"^{re.escape(str(p))}: {said}"):
         simulate(load_scenario(p))
+
+
+def test_a_repeat_beyond_what_a_trajectory_builds_is_refused_at_once(tmp_path):
+    """``repeat = 1000000000`` on a turn (a slip of the keyboard) built repetition after repetition: killed
+    after two minutes and gigabytes, before the limit on the run's length could see it (3 million took
+    10 s and 1.9 GB to be refused).  Now the building stops at MAX_SEGMENTS (100,000) and says so, naming
+    the segment and its repeat; under duration_limit_s the segments still stop at the limit."""
+    from inskit.simulation import scenario
+
+    head = 'name = "t"\n[start]\nlat_deg = 45\nlon_deg = 10\n'
+    p = tmp_path / "many.toml"
+    # 200,000 static milliseconds: 200 s of run, within every limit on its length
+    p.write_text(head + '[[segment]]\ntype = "static"\nduration_s = 0.001\nrepeat = 200000\n')
+    with pytest.raises(ConfigError, match=r"many.toml: segment 1 \(static\), repetition 100001 of 200000: the "
+                                          r"scenario would build more than 100,000 segments .*'segment.0.repeat' "
+                                          r"= 200,000\): lower repeat, or cut the run with duration_limit_s"):
+        scenario.build_trajectory(load_scenario(p))
+    p.write_text('duration_limit_s = 50\n' + head + '[[segment]]\ntype = "turn"\nangle_deg = 90\n'
+                 'rate_deg_s = 10\nrepeat = 1000000000\n')
+    assert scenario.build_trajectory(load_scenario(p)).duration == 50.0

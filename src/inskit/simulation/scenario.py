@@ -424,6 +424,13 @@ def check_scenario(sc: Scenario) -> None:
         check_vibration(v, i, sc.imu, where)
 
 
+#: The most segments one trajectory builds (each repetition of a ``[[segment]]`` is one, a figure eight
+#: two): about 0.65 kB and 5 us each, so 65 MB and half a second at most.  ``repeat = 1000000000`` (a
+#: slip of the keyboard) built repetitions for minutes and gigabytes before any limit on the run's
+#: length could see it.
+MAX_SEGMENTS = 100_000
+
+
 def build_trajectory(sc: Scenario, rng=None) -> SegmentTrajectory:
     """The :class:`SegmentTrajectory` a scenario describes (checked first:
     :func:`check_scenario`).  An accelerate segment must speed up and a
@@ -443,6 +450,10 @@ def build_trajectory(sc: Scenario, rng=None) -> SegmentTrajectory:
                 cut = True                           # its cost (a segment repeated a million times, 3.6 GB)
                 break
             tr.label = f"{where}segment {i} ({t})" + (f", repetition {r} of {seg.repeat}" if seg.repeat > 1 else "")
+            if len(tr.segments) >= MAX_SEGMENTS:
+                raise ConfigError(f"{tr.label}: the scenario would build more than {MAX_SEGMENTS:,} segments "
+                                  f"(each repetition counts, a figure-eight twice; field 'segment.{i - 1}.repeat' = "
+                                  f"{seg.repeat:,}): lower repeat, or cut the run with duration_limit_s")
             if t == "static":
                 tr.static(seg.duration_s)
             elif t in ("accelerate", "decelerate"):
