@@ -533,3 +533,30 @@ def test_a_repeat_beyond_what_a_trajectory_builds_is_refused_at_once(tmp_path):
     p.write_text('duration_limit_s = 50\n' + head + '[[segment]]\ntype = "turn"\nangle_deg = 90\n'
                  'rate_deg_s = 10\nrepeat = 1000000000\n')
     assert scenario.build_trajectory(load_scenario(p)).duration == 50.0
+
+
+def test_a_truth_rate_slower_than_the_scenario_is_refused(tmp_path, capsys):
+    """`inskit simulate s.toml --truth-rate 0.01` of a 30 s scenario wrote a truth file of one row, the
+    start, and said 't: 0 s' (and "duration_s": 0.0): the summary's length was the truth's last time.
+    Now a truth rate whose second row would fall beyond the run is refused, naming the least rate that
+    gives two; the summary's length is the IMU's, whatever the truth rate."""
+    import json
+
+    from inskit.cli import main
+
+    p = tmp_path / "s.toml"
+    p.write_text(SCEN)
+    sc = load_scenario(p)
+    dur = simulate(sc, 0).trajectory.duration
+    with pytest.raises(ConfigError, match=rf"^{re.escape(str(p))}: the truth rate \(simulate --truth-rate\) 0.01 Hz "
+                                          r"puts a truth row every 100 s, longer than the scenario \(.* s\): the "
+                                          r"truth file would hold the start alone; give at least .* Hz$") as exc:
+        simulate(sc, 0, truth_rate_hz=0.01)
+    least = float(str(exc.value).rsplit("at least ", 1)[1].split()[0])
+    assert len(simulate(sc, 0, truth_rate_hz=least).truth) == 2
+    with pytest.raises(SystemExit) as ex:
+        main(["simulate", str(p), "--out", str(tmp_path / "o"), "--no-plot", "--json", "--truth-rate", "0.5"])
+    assert ex.value.code == 0
+    res = json.loads(capsys.readouterr().out)
+    assert dur % 2.0 > 0.1  # the truth's last row, on its 2 s grid, falls short of the end
+    assert res["duration_s"] == pytest.approx(dur, abs=1.0 / sc.imu.rate_hz)

@@ -495,7 +495,7 @@ def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, f
                                  inputs=[scenario_file])
         bar.update(1)
     res = {
-        "scenario": sc.name, "seed": seed, "duration_s": float(sim.truth.time[-1]), "imu_epochs": len(sim.imu),
+        "scenario": sc.name, "seed": seed, "duration_s": float(sim.imu.time[-1]), "imu_epochs": len(sim.imu),
         "imu_rate_hz": sc.imu.rate_hz, "imu_grade": sc.imu.grade, "gravity": sc.earth.gravity,
         "gnss_fixes": len(sim.gnss),
         "elapsed_s": time.perf_counter() - t0, "files": [str(f) for f in files],

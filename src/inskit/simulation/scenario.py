@@ -716,6 +716,12 @@ def simulate(sc: Scenario, seed=0, *, truth_rate_hz=None, progress=None) -> Simu
             raise ConfigError(f"{_where(sc)}the scenario lasts {tr.duration:g} s: {tr.duration * rate:,.0f} {what} "
                               f"{rate:g} Hz, more than the {MAX_SAMPLES:,} one simulation holds; lower the rate or "
                               "shorten the scenario (duration_limit_s)")
+    if truth_rate_hz is not None and not 1.0 / truth_rate_hz <= tr.duration + 1e-9:  # the grid's second row
+        step = 10.0 ** (np.floor(np.log10(1.0 / tr.duration)) - 3)
+        least = np.ceil(1.0 / tr.duration / step) * step  # 4 digits, rounded up: a rate that gives two rows
+        raise ConfigError(f"{_where(sc)}the truth rate (simulate --truth-rate) {truth_rate_hz:g} Hz puts a truth row "
+                          f"every {1.0 / truth_rate_hz:g} s, longer than the scenario ({tr.duration:g} s): the truth "
+                          f"file would hold the start alone; give at least {least:.4g} Hz")
     dt = 1.0 / sc.imu.rate_hz
     t = np.arange(0.0, tr.duration + 1e-9, dt)
     if len(t) < 2:
