@@ -155,6 +155,7 @@ def evaluate(solution_file, truth_file, *, t_from=None, t_to=None, remove_offset
     s["warnings"] = (coverage_warnings(cover, truth.time) + sampling_warnings(sol.time, truth.time, truth_file)
                      + start_warnings(full, truth_file)
                      + attitude_unit_warnings(sol, truth, solution_file, truth_file)
+                     + gimbal_lock_warnings(err, sol, truth)
                      + sigma_column_warnings(err, solution_file, sol) + truth_consistency_warnings({"": s}))
     if per_epoch_file is not None:
         meta = {"solution": str(solution_file), "truth": str(truth_file), "window": s["window"],
@@ -296,6 +297,36 @@ def start_warnings(err, truth_file="truth") -> list[str]:
                 f"{h0 / 1000.0:.4g} km from the truth: the two files seem to describe different places (a datum, "
                 "or angles in radians under a _deg header?) rather than a navigation error"]
     return []
+
+
+#: a pitch [deg] beyond which (in size) roll and yaw are ill-defined: their errors are amplified about
+#: 1 / cos(pitch) times (11 at 85 deg) and flip by 180 deg across +-90
+GIMBAL_LOCK_PITCH_DEG = 85.0
+
+
+def gimbal_lock_warnings(err: analysis.NavError, sol, truth) -> list[str]:
+    """Scored epochs where the solution's or the truth's pitch lies beyond
+    :data:`GIMBAL_LOCK_PITCH_DEG` (a vertical climb, a loop), in words.
+    There roll and yaw are ill-defined, and the roll and yaw errors (Euler
+    differences) read tens of degrees, up to 180, for an attitude off by a
+    fraction of one: the warning sets beside them the angle of the rotation
+    between the two attitudes over the same epochs."""
+    if not len(err.time):
+        return []
+    i = np.searchsorted(sol.time, err.time)  # the scored epochs are solution epochs
+    tr = truth.interpolate(err.time)
+    near = np.maximum(np.abs(sol.euler[i, 1]), np.abs(tr.euler[:, 1])) > GIMBAL_LOCK_PITCH_DEG * DEG
+    if not near.any():
+        return []
+    cos_half = np.abs(np.einsum("ij,ij->i", sol.q_nb[i[near]], tr.q_nb[near]))
+    angle = 2.0 * np.arccos(np.clip(cos_half, 0.0, 1.0)) / DEG
+    euler = np.abs(err.att_rpy[near][:, [0, 2]]).max() / DEG
+    t = err.time[near]
+    return [f"{int(near.sum())} of the {len(err.time)} epochs scored ({t[0]:.3f}..{t[-1]:.3f} s) have a pitch beyond "
+            f"+-{GIMBAL_LOCK_PITCH_DEG:g} deg, where roll and yaw are ill-defined (gimbal lock): the roll and yaw "
+            f"errors there (up to {euler:.3g} deg) are differences of Euler angles, while the attitude is off by at "
+            f"most {angle.max():.3g} deg (the angle of the rotation between the two attitudes); read roll_deg and "
+            "yaw_deg with that in mind"]
 
 
 #: attitude columns of a solution file, in the order of :attr:`NavSolution.euler`
