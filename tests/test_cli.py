@@ -140,6 +140,22 @@ def test_mechanize_height_ref_takes_a_number_or_a_height_log(files, tmp_path, ca
     assert code == 2 and "--height-ref would be ignored with --height free" in err
 
 
+def test_mechanize_warnings_are_in_its_json_too(files, tmp_path, capsys):
+    """`mechanize --height aid --height-ref h.csv --json` with a height log covering 10 of the IMU's 60 s
+    warned on stderr that its last height is held over 50 s, and the JSON (what a script reads) had no
+    warnings at all; now its ``warnings`` holds the same lines (empty when there is nothing to say)."""
+    (tmp_path / "h.csv").write_text("time_s,height_m\n" + "".join(f"{x},50.0\n" for x in range(11)))
+    base = ("mechanize", files / "imu.csv", "--init-from", files / "truth.csv", "--json")
+    code, out, err = _in_process(capsys, *base, "--height", "aid", "--height-ref", tmp_path / "h.csv")
+    assert code == 0, err
+    w = json.loads(out)["warnings"]
+    assert len(w) == 1 and w[0].startswith("h.csv covers 0.000..10.000 s of the IMU's 0.000..59.990 s: its end "
+                                           "heights are held over 49.990 s")
+    assert f"warning: {w[0]}" in err
+    code, out, err = _in_process(capsys, *base)
+    assert code == 0 and json.loads(out)["warnings"] == []
+
+
 def test_simulate_and_allan_json(tmp_path):
     scen = tmp_path / "s.toml"
     scen.write_text('name = "still"\n[start]\nlat_deg = 45\nlon_deg = 7\n[imu]\nrate_hz = 100\ngrade = "tactical"\n'

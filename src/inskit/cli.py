@@ -92,8 +92,9 @@ def _parse_init(text, option="--init"):
                                               "lat_deg,lon_deg,height_m,vn,ve,vd,roll_deg,pitch_deg,yaw_deg"))
 
 
-def _height_ref(text, imu):
-    """``--height-ref``: a number [m], or a height log interpolated onto the IMU times."""
+def _height_ref(text, imu, log=None):
+    """``--height-ref``: a number [m], or a height log interpolated onto the IMU times (``log`` takes the
+    warning of a log that does not cover them)."""
     try:
         x = float(text)
     except ValueError:
@@ -109,7 +110,7 @@ def _height_ref(text, imu):
     if not Path(text).is_file():
         what = "a folder" if Path(text).is_dir() else "no such file"
         raise InputError(f"--height-ref: {text!r} is neither a height in metres nor a height log ({what})")
-    return height_profile_at(text, imu.time, log=_log)
+    return height_profile_at(text, imu.time, log=log or _log)
 
 
 @cli.command()
@@ -183,16 +184,23 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
         opts["height"] = height
     if height_ref is not None and height == "free":
         raise InputError("--height-ref would be ignored with --height free; use --height hold or aid")
-    href = None if height == "free" else (init.lla[2] if height_ref is None else _height_ref(height_ref, imu))
+    warnings = []  # logged as they come, and the JSON's (a script reading it saw none of them)
+
+    def warn(msg):
+        msg = msg.removeprefix("warning: ")
+        _log(f"warning: {msg}")
+        warnings.append(msg)
+
+    href = None if height == "free" else (init.lla[2] if height_ref is None else _height_ref(height_ref, imu, warn))
     from .integration.gaps import find_gaps, find_rate_changes, refuse_long_gaps
 
     for ch in find_rate_changes(imu):
-        _log(f"warning: {imu_file}: the sampling rate changes from {ch.rate_before_hz:.4g} Hz to "
+        warn(f"{imu_file}: the sampling rate changes from {ch.rate_before_hz:.4g} Hz to "
              f"{ch.rate_after_hz:.4g} Hz near t = {ch.t_s:.3f} s (row {ch.row})")
     gaps = find_gaps(imu)
     refuse_long_gaps(gaps, str(imu_file))
     for g in gaps:
-        _log(f"warning: {imu_file}: a gap of {g.length_s:.3f} s at t = {g.start_s:.3f} s (row {g.row}); the "
+        warn(f"{imu_file}: a gap of {g.length_s:.3f} s at t = {g.start_s:.3f} s (row {g.row}); the "
              "mechanization integrates one sample's increments over it")
     t0 = time.perf_counter()
     with _progress(len(imu), f"mechanize ({frame})") as bar:
@@ -223,6 +231,7 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
         "imu_gaps": [{"row": g.row, "start_s": g.start_s, "length_s": g.length_s} for g in gaps],
         "imu_rate_changes": [{"row": ch.row, "t_s": ch.t_s, "rate_before_hz": ch.rate_before_hz,
                               "rate_after_hz": ch.rate_after_hz} for ch in find_rate_changes(imu)],
+        "warnings": warnings,
     }
     f = summary["final"]
     table = (
