@@ -4,6 +4,7 @@ no console error, fetches nothing, and its decimation keeps the extremes."""
 
 import json
 import os
+import re
 import shutil
 import subprocess
 from html.parser import HTMLParser

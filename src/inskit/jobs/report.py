@@ -190,6 +190,78 @@ def _read_json(path, what):
     return obj
 
 
+def _is_number(v):
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def check_summary(s: dict, path) -> None:
+    """Refuse a run summary whose parts the report reads are not of the
+    shape navigate writes (a summary.json edited by hand, or damaged into
+    other valid JSON): every key ending in ``_m`` or ``_s``, at the top, in
+    ``forward``, in each ``outage_table`` row and each measurement's
+    figures, a number or null; ``outage_table`` a list of objects with
+    numeric ``start_s`` and ``end_s``; ``health``, ``measurements``,
+    ``final_estimates`` and ``forward`` objects (each measurement and
+    estimate an object, an estimate's ``values`` and ``sigma`` lists of
+    numbers), ``health``'s ``reasons`` and ``warnings`` lists.  Such a file
+    was an internal error (``health: "x"``: 'str' object has no attribute
+    'get'), or a page without the outages (``outage_table: {}``)."""
+    def kind(v):
+        return ("null" if v is None else "true/false" if isinstance(v, bool) else "a number" if _is_number(v)
+                else "text" if isinstance(v, str) else "a list" if isinstance(v, list) else "an object")
+
+    def refuse(key, v, expected):
+        shown = json.dumps(v)
+        shown = shown if len(shown) <= 40 else shown[:37] + "..."
+        raise InputError(f"{path}: {key} is {kind(v)} ({shown}) where navigate writes {expected}: a damaged or "
+                         "hand-edited summary.json? (run navigate again to write it)")
+
+    def numbers(obj, where):
+        for k, v in obj.items():
+            if (k.endswith("_m") or k.endswith("_s")) and v is not None and not _is_number(v):
+                refuse(f"{where}{k}", v, "a number or null")
+
+    def objects(key, v, inner=False):
+        if v is None:
+            return {}
+        if not isinstance(v, dict):
+            refuse(key, v, "an object")
+        for name, x in v.items():
+            if inner and not isinstance(x, dict):
+                refuse(f"{key}.{name}", x, "an object")
+        return v
+
+    numbers(s, "")
+    numbers(objects("forward", s.get("forward")), "forward.")
+    for name, m in objects("measurements", s.get("measurements"), inner=True).items():
+        numbers(m, f"measurements.{name}.")
+        if m.get("used") is not None and not _is_number(m["used"]):
+            refuse(f"measurements.{name}.used", m["used"], "a count")
+    h = objects("health", s.get("health"))
+    for k in ("reasons", "warnings"):
+        if h.get(k) is not None and not isinstance(h[k], list):
+            refuse(f"health.{k}", h[k], "a list")
+    for name, m in objects("health.measurements", h.get("measurements"), inner=True).items():
+        for k in ("mean_nis", "dof"):
+            if m.get(k) is not None and not _is_number(m[k]):
+                refuse(f"health.measurements.{name}.{k}", m[k], "a number or null")
+    for name, e in objects("final_estimates", s.get("final_estimates"), inner=True).items():
+        for k in ("values", "sigma"):
+            x = e.get(k)
+            if x is not None and not (isinstance(x, list) and all(v is None or _is_number(v) for v in x)):
+                refuse(f"final_estimates.{name}.{k}", x, "a list of numbers")
+    rows = s.get("outage_table")
+    if rows is not None and not isinstance(rows, list):
+        refuse("outage_table", rows, "a list of outages")
+    for i, r in enumerate(rows or []):
+        if not isinstance(r, dict):
+            refuse(f"outage_table[{i}]", r, "an object")
+        for k in ("start_s", "end_s"):
+            if not _is_number(r.get(k)):
+                refuse(f"outage_table[{i}].{k}", r.get(k), "a number")
+        numbers(r, f"outage_table[{i}].")
+
+
 def read_innovations(path, counts=None):
     """``innovations.csv`` as a dict of name -> dict of arrays (``t, row, nu,
     sigma, accepted``), or None if the file is absent.
@@ -325,6 +397,7 @@ class _Run:
                              f"CONFIG --out {d}` first)")
         self.dir = d
         self.summary = _read_json(d / "summary.json", "run summary (summary.json)")
+        check_summary(self.summary, d / "summary.json")
         def solution(stem):  # the full-rate Parquet when there is one, else the CSV
             for ext in (".parquet", ".csv"):
                 if (d / f"{stem}{ext}").exists():
