@@ -202,3 +202,28 @@ def test_reproduce_tight_coupling_refuses_a_seed_the_walk_would_ignore(tmp_path,
     assert exc.value.code == 2
     assert "--seed would be ignored: it seeds the simulated blockage drive" in capsys.readouterr().err
     assert not (tmp_path / "tw").exists()
+
+
+def test_a_moving_receiver_scored_against_one_reference_point_is_said(tmp_path):
+    """`inskit spp obs.rnx nav.rnx --reference header` of a simulated drive (raw GNSS of a car at 15 m/s)
+    printed 'horizontal RMS 1758.87 m, max horizontal 2977.10 m' as the fixes' errors, without a word: the
+    header's APPROX POSITION is where the drive starts, and the errors were the car's travel.  Now a
+    health warning says the receiver moves (its median Doppler speed, the fixes' spread); a static
+    receiver (ABPO) is not warned."""
+    from inskit import api
+
+    scen = tmp_path / "drive.toml"
+    scen.write_text('name = "drive"\n[start]\nlat_deg = 40\nlon_deg = -105\nheight_m = 1600\nspeed_m_s = 15\n'
+                    '[imu]\nrate_hz = 10\n[raw_gnss]\n[[segment]]\ntype = "cruise"\nduration_s = 60\n')
+    api.simulate(str(scen), 1, out_dir=tmp_path / "sim")
+    s = run_spp(tmp_path / "sim" / "obs.rnx", tmp_path / "sim" / "nav.rnx", reference="header")
+    m = s["reference_motion"]
+    assert m["median_speed_m_s"] == pytest.approx(15.0, abs=0.5) and m["spread_m"] > 300.0
+    said = [w for w in s["health"]["warnings"] if w.startswith("the receiver moves (median Doppler speed ")]
+    assert len(said) == 1 and said[0].endswith("the errors against the one --reference point measure its travel, "
+                                               "not the fixes' accuracy; score a moving receiver against its own "
+                                               "track"), s["health"]["warnings"]
+    still = run_spp(OBS, NAV, reference="header")
+    assert still["reference_motion"]["spread_m"] < 10.0
+    assert not [w for w in still["health"]["warnings"] if "receiver moves" in w]
+    assert run_spp(OBS, NAV)["reference_motion"] is None

@@ -120,6 +120,39 @@ UNHEALTHY_EPOCH_FRACTION = 0.10
 RESIDUAL_WARN_M = 10.0
 #: A median HDOP above this says the geometry, not the receiver, sets the errors.
 HDOP_WARN = 5.0
+#: A receiver whose median Doppler speed [m/s] exceeds the first, or (without Doppler) whose fixes lie
+#: further than the second [m] (95th percentile) from their median, moves: errors against one
+#: ``--reference`` point then measure its travel, not the fixes' accuracy (a static receiver's single-point
+#: fixes scatter over metres and their Doppler speeds over centimetres per second).
+MOVING_SPEED_M_S, MOVING_SPREAD_M = 0.5, 100.0
+
+
+def receiver_motion(sol, enu):
+    """``{"median_speed_m_s", "spread_m"}`` of the solved epochs (None
+    where none has the figure): the median horizontal Doppler speed and
+    the 95th percentile of the horizontal distance of the fixes, ``enu``
+    against the reference, from their median."""
+    ok = np.isfinite(enu).all(axis=1)
+    v = np.asarray(sol.v_enu)[ok][:, :2]
+    v = v[np.isfinite(v).all(axis=1)]
+    h = enu[ok][:, :2]
+    spread = float(np.percentile(np.hypot(*(h - np.median(h, axis=0)).T), 95)) if len(h) else None
+    return {"median_speed_m_s": float(np.median(np.hypot(v[:, 0], v[:, 1]))) if len(v) else None,
+            "spread_m": spread}
+
+
+def motion_warning(m) -> str | None:
+    """The warning of a receiver that moves (:func:`receiver_motion`) scored against one reference point."""
+    if not m:
+        return None
+    speed, spread = m.get("median_speed_m_s"), m.get("spread_m")
+    if not ((speed is not None and speed > MOVING_SPEED_M_S)
+            or (speed is None and spread is not None and spread > MOVING_SPREAD_M)):
+        return None
+    said = ([f"median Doppler speed {speed:.3g} m/s"] if speed is not None else []) + (
+        [f"95 % of the fixes within {spread:.4g} m of their median"] if spread is not None else [])
+    return (f"the receiver moves ({', '.join(said)}): the errors against the one --reference point measure its "
+            "travel, not the fixes' accuracy; score a moving receiver against its own track")
 
 
 def spp_health(s: dict) -> dict:
@@ -158,6 +191,9 @@ def spp_health(s: dict) -> dict:
     hd = s.get("hdop_median")
     if hd is not None and hd > HDOP_WARN:
         warns.append(f"median HDOP {hd:.1f}: the geometry, not the ranges, sets the errors")
+    moving = motion_warning(s.get("reference_motion"))
+    if moving:
+        warns.append(moving)
     return {"verdict": "unhealthy" if reasons else "healthy", "reasons": reasons, "warnings": warns}
 
 
@@ -265,9 +301,10 @@ def run_spp(obs_path, nav_path, *, reference=None, mask_deg=10.0, iono="klobucha
                                     "max_horizontal_m")})
         s["mean_neu_m"] = [e["mean_enu_m"][1], e["mean_enu_m"][0], e["mean_enu_m"][2]]
         s["std_neu_m"] = [e["std_enu_m"][1], e["std_enu_m"][0], e["std_enu_m"][2]]
+        s["reference_motion"] = receiver_motion(sol, enu)
     else:
         s.update({k: None for k in ("horizontal_rms_m", "rms_3d_m", "mean_enu_m", "std_enu_m", "max_horizontal_m",
-                                    "mean_neu_m", "std_neu_m")})
+                                    "mean_neu_m", "std_neu_m", "reference_motion")})
     s["health"] = spp_health(s)
     if out is not None:
         s["files"] = [str(f) for f in _write(out, files, sol, enu, obs_path, nav_path, s, write_pos, log)]
