@@ -406,7 +406,8 @@ def test_the_report_is_written_under_an_html_name_only(run_dir, tmp_path):
 
 @pytest.mark.parametrize("edit, said", [
     (lambda s: s.update(health="x"), r"health is text \(\"x\"\) where navigate writes an object"),
-    (lambda s: s.update(outage_table={}), r"outage_table is an object \(\{\}\) where navigate writes a list of outages"),
+    (lambda s: s.update(outage_table={}),
+     r"outage_table is an object \(\{\}\) where navigate writes a list of outages"),
     (lambda s: s.update(outage_table=[1]), r"outage_table\[0\] is a number \(1\) where navigate writes an object"),
     (lambda s: s.update(first_fix_time_s="abc"), r"first_fix_time_s is text \(\"abc\"\) where navigate writes a "
                                                  r"number or null"),
