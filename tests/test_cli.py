@@ -156,6 +156,29 @@ def test_mechanize_warnings_are_in_its_json_too(files, tmp_path, capsys):
     assert code == 0 and json.loads(out)["warnings"] == []
 
 
+def test_mechanize_says_when_the_solution_leaves_the_earth(files, tmp_path, capsys):
+    """`mechanize` of the bundled drive's IMU (mounted upside down) with roll 0 in --init fell to a height of
+    -3259 km at 13 km/s and printed it as a result: no warning, and the --out file it wrote was refused by
+    evaluate and --init-from ('height_m=-100018.8 is beyond +-100 km of the ellipsoid (a height in metres);
+    another unit or column?'), blaming the units of inskit's own file.  Now a warning says that the solution
+    diverged, from when, and the likely causes; a run that stays on the Earth says nothing of it."""
+    from inskit.types import ImuData
+
+    traj = StationaryTrajectory((np.radians(45), 0.1, 50.0), (0.0, 0.0, 0.5))
+    imu = ideal_imu(traj, np.arange(0.0, 200.0, 0.01), nodes=1)
+    flipped = ImuData(imu.time, imu.dtheta_b * [1, -1, -1], imu.dv_b * [1, -1, -1])  # rolled 180 deg
+    io.write_imu(tmp_path / "flipped.csv", flipped)
+    code, out, err = _in_process(capsys, "mechanize", tmp_path / "flipped.csv", "--init-from", files / "truth.csv",
+                                 "--json")
+    assert code == 0, err
+    w = json.loads(out)["warnings"]
+    assert len(w) == 1 and w[0].startswith("the solution diverged: from t = "), w
+    assert "an IMU upside down: --mount-rpy 180,0,0" in w[0] and f"warning: {w[0]}" in err
+    code, out, err = _in_process(capsys, "mechanize", tmp_path / "flipped.csv", "--init-from", files / "truth.csv",
+                                 "--mount-rpy", "180,0,0", "--json")
+    assert code == 0 and json.loads(out)["warnings"] == [] and "diverged" not in err
+
+
 def test_simulate_and_allan_json(tmp_path):
     scen = tmp_path / "s.toml"
     scen.write_text('name = "still"\n[start]\nlat_deg = 45\nlon_deg = 7\n[imu]\nrate_hz = 100\ngrade = "tactical"\n'

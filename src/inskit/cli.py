@@ -206,6 +206,9 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
     with _progress(len(imu), f"mechanize ({frame})") as bar:
         sol = run_mech(imu, init, frame=frame, height_ref=href, progress=bar.update, chunk_size=200_000, **opts)
     elapsed = time.perf_counter() - t0
+    diverged = _diverged(sol)
+    if diverged:
+        warn(diverged)
     if out_file:
         io.write_solution(out_file, sol, overwrite=force)
         _log(f"wrote {out_file}")
@@ -241,6 +244,26 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
         f"rpy [{f['roll_deg']:.3f}, {f['pitch_deg']:.3f}, {f['yaw_deg']:.3f}] deg"
     )
     _emit(summary, as_json, table)
+
+
+def _diverged(sol):
+    """What a free-inertial solution that left the Earth says (or None): the first epoch beyond the
+    heights and speeds inskit's readers take (:data:`inskit.units.MAX_HEIGHT_M`,
+    :data:`~inskit.units.MAX_SPEED_M_S`), or not finite, and where it ends."""
+    from .units import MAX_HEIGHT_M, MAX_SPEED_M_S
+
+    h, v = sol.lla[:, 2], sol.v_n
+    off = (~np.isfinite(h) | ~np.isfinite(v).all(axis=1) | (np.abs(h) > MAX_HEIGHT_M)
+           | (np.abs(v) > MAX_SPEED_M_S).any(axis=1))
+    if not off.any():
+        return None
+    k = int(np.argmax(off))
+    return (f"the solution diverged: from t = {float(sol.time[k]):.3f} s (epoch {k} of {len(sol)}) it lies beyond "
+            f"+-{MAX_HEIGHT_M / 1000:g} km of the ellipsoid or moves faster than {MAX_SPEED_M_S:g} m/s (at the end: "
+            f"height {float(h[-1]) / 1000:.4g} km, speed {float(np.linalg.norm(v[-1])):.4g} m/s): the initial "
+            "state or the mounting does not fit the IMU (an IMU upside down: --mount-rpy 180,0,0; a wrong "
+            "roll, pitch or height in --init), or its units are wrong; inskit's readers refuse such a solution "
+            "file (evaluate, --init-from)")
 
 
 PLOT_SUFFIXES = (".png", ".pdf", ".svg", ".jpg", ".jpeg")
