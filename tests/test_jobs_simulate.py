@@ -79,3 +79,32 @@ def test_verify_at_rest_on_a_pole_mechanizes_in_the_wander_frame(tmp_path):
     assert list(v["frames"]) == ["wander"] and v["frames"]["wander"]["horizontal_max_m"] < 1e-6
     p.write_text(p.read_text().replace("lat_deg = 90", "lat_deg = 45"))
     assert list(JS.verify_ideal(load_scenario(p))["frames"]) == ["ned"]
+
+
+def test_readings_clipped_at_the_imu_saturation_are_said(tmp_path, capsys):
+    """A scenario at rest with ``[imu] accel = {saturation = 0.5}`` (g) wrote an IMU file whose every
+    accelerometer reading was clipped to half of gravity, and said nothing: the summary was that of any run.
+    Now `inskit simulate` warns (stderr and the JSON's warnings, :func:`JS.clipping_warnings`) how many rows
+    the limit clipped and how far the motion went; a run within the limits has no warnings."""
+    import json
+
+    from inskit.cli import main
+
+    base = ('name = "t"\n[start]\nlat_deg = 45\nlon_deg = 10\n[imu]\nrate_hz = 100\ngrade = "tactical"\n{}\n'
+            '[[segment]]\ntype = "static"\nduration_s = 10\n')
+
+    def run(name, extra):
+        (tmp_path / f"{name}.toml").write_text(base.format(extra))
+        try:
+            main(["simulate", str(tmp_path / f"{name}.toml"), "--out", str(tmp_path / name), "--no-plot", "--json"])
+        except SystemExit as exc:
+            assert exc.code == 0
+        cap = capsys.readouterr()
+        return json.loads(cap.out)["warnings"], cap.err
+
+    w, err = run("clip", "accel = {saturation = 0.5}")
+    assert w == ["field 'imu.accel' (saturation, or the grade's): the limit of 0.5 g clipped the readings of 1000 of "
+                 "1000 IMU rows (the run's specific force reaches 1 g on an axis): the IMU file holds the clipped "
+                 "readings, and a navigation from it drifts while they last"]
+    assert f"warning: {w[0]}" in err
+    assert run("fine", "") == ([], "")

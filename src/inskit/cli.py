@@ -502,7 +502,7 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object on stdout.")
 def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, file_format, gravity, as_json):
     """Simulate a scenario: IMU, GNSS and truth files plus a plot."""
-    from .jobs.simulate import check_simulation_outputs, verify_ideal, write_simulation
+    from .jobs.simulate import check_simulation_outputs, clipping_warnings, verify_ideal, write_simulation
     from .simulation.scenario import load_scenario, simulate as run_sim
 
     from .files import check_folder_writable
@@ -535,6 +535,9 @@ def simulate(scenario_file, out_dir, seed, force, no_plot, verify, truth_rate, f
         "segments": [dict(g, end_s=min(g["end_s"], sim.trajectory.duration)) for g in sim.trajectory.segments
                      if g["start_s"] < sim.trajectory.duration],
     }
+    res["warnings"] = clipping_warnings(sc, sim)
+    for w in res["warnings"]:
+        _log(f"warning: {w}")
     text = (f"{sc.name}: {res['duration_s']:.0f} s, {len(sim.imu)} IMU epochs, {len(sim.gnss)} GNSS "
             f"fixes -> {out_dir}/ ({res['elapsed_s']:.1f} s)")
     if verify:

@@ -174,6 +174,28 @@ def _plot(sim, path):
     return path
 
 
+def clipping_warnings(sc: Scenario, sim: Simulation) -> list[str]:
+    """What the IMU's saturation (``[imu] gyro`` / ``accel`` ``saturation``,
+    or a grade's) clipped, in words: the rows with a reading at the limit
+    and the largest true rate or specific force of the run.  Clipping is the
+    model's (the file holds the clipped readings); a limit below the motion,
+    below 1 g for an accelerometer at rest, was taken in silence."""
+    from ..simulation.scenario import imu_errors
+    from ..units import DEG, G0
+
+    errors = imu_errors(sc)
+    out = []
+    for name, what, e, unit, k in (("gyro", "rate", errors.gyro, "deg/s", DEG),
+                                   ("accel", "specific force", errors.accel, "g", G0)):
+        n = int(sim.draws.get(f"{name}_clipped_rows", 0))
+        if n:
+            out.append(f"field 'imu.{name}' (saturation, or the grade's): the limit of {e.saturation / k:g} {unit} clipped the readings of "
+                       f"{n} of {len(sim.imu) - 1} IMU rows (the run's {what} reaches "
+                       f"{sim.draws[f'{name}_peak'] / k:.4g} {unit} on an axis): the IMU file holds the clipped "
+                       "readings, and a navigation from it drifts while they last")
+    return out
+
+
 def verify_ideal(sc: Scenario, frames=None):
     """Mechanize the scenario's ideal IMU at its rate and at twice its rate and
     report how closely each reproduces the truth (the simulator's self-check),

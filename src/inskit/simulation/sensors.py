@@ -332,7 +332,11 @@ def apply_imu_errors(imu: ImuData, errors: ImuErrors, rng) -> tuple[ImuData, dic
         The per-run random draws for tests and reports: ``gyro_turn_on_bias``,
         ``accel_turn_on_bias`` (3,) and the true additive bias over time,
         ``gyro_bias``, ``accel_bias`` (n, 3) (fixed + turn-on + Gauss-Markov +
-        rate random walk, applied over the interval ending at each row).
+        rate random walk, applied over the interval ending at each row);
+        ``gyro_clipped_rows``, ``accel_clipped_rows``: rows (past the
+        initial epoch) with a reading clipped at the triad's saturation, and
+        ``gyro_peak``, ``accel_peak``: the largest true rate [rad/s] and
+        specific force [m/s^2] component of the run.
     """
     t = imu.time
     dt = np.empty_like(t)
@@ -345,8 +349,13 @@ def apply_imu_errors(imu: ImuData, errors: ImuErrors, rng) -> tuple[ImuData, dic
     dv = _quantize(fm * dt[:, None], errors.accel.quantization)
     dth[0] = 0.0
     dv[0] = 0.0
+    clipped = {f"{name}_clipped_rows": int((np.abs(y[1:]) >= e.saturation).any(axis=1).sum())
+               if np.isfinite(e.saturation) else 0
+               for name, y, e in (("gyro", wm, errors.gyro), ("accel", fm, errors.accel))}
     return ImuData(t, dth, dv), {"gyro_turn_on_bias": bg, "accel_turn_on_bias": ba,
-                                 "gyro_bias": bg_series, "accel_bias": ba_series}
+                                 "gyro_bias": bg_series, "accel_bias": ba_series, **clipped,
+                                 "gyro_peak": float(np.abs(w[1:]).max(initial=0.0)),
+                                 "accel_peak": float(np.abs(f[1:]).max(initial=0.0))}
 
 
 __all__ = ["ImuErrors", "PRESETS", "TRIAD_TERMS", "TriadErrors", "apply_imu_errors", "preset", "replace",
