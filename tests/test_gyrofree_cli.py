@@ -137,6 +137,24 @@ def test_rates_and_sample_counts_are_capped_naming_the_option(tmp_path):
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
 
 
+def test_too_few_samples_are_said_of_the_option_given(tmp_path):
+    """`gyrofree simulate SCENARIO --rate 0.05` (a 30 s scenario) said '--duration must cover at least two
+    samples, got 30.141592653589793 s at 0.05 Hz', of an option the user never gave; now both options and
+    what would do are named (no rate beyond the 10000 Hz cap is suggested)."""
+    from inskit.jobs.gyrofree import simulate_job
+
+    scen = tmp_path / "s.toml"
+    scen.write_text('name = "t"\n[start]\nlat_deg = 45\nlon_deg = 10\n[[segment]]\ntype = "static"\n'
+                    'duration_s = 30\n')
+    with pytest.raises(InputError, match=r"^--duration 30 s at --rate 0.05 Hz covers fewer than two sampling "
+                                         r"intervals: give a --rate of at least 0.06667 Hz or a --duration of at "
+                                         r"least 40 s$"):
+        simulate_job(str(scen), "ten", tmp_path / "a", rate_hz=0.05)
+    with pytest.raises(InputError, match=r"^--duration 0.0001 s at --rate 1000 Hz covers fewer than two sampling "
+                                         r"intervals: give a --duration of at least 0.002 s$"):
+        simulate_job("source003", "ten", tmp_path / "b", duration=1e-4)
+
+
 def test_a_duration_past_the_scenario_is_refused_as_platform_and_consistency_do(tmp_path):
     """`gyrofree simulate car.toml --duration 5000` clipped in silence to the scenario's 1842 s."""
     r = invoke(gyrofree, "simulate", EXAMPLES / "car.toml", "--out", tmp_path / "car", "--duration", 5000)

@@ -227,8 +227,11 @@ def _check_rate(rate, T):
     two or more than MAX_SAMPLES samples at it (before any array is made)."""
     if not (np.isfinite(rate) and 0 < rate <= MAX_RATE_HZ):
         raise InputError(f"--rate must be within (0, {MAX_RATE_HZ:g}] Hz, got {rate}")
-    if not (np.isfinite(T) and T * rate >= 2):
-        raise InputError(f"--duration must cover at least two samples, got {T} s at {rate} Hz")
+    if not (np.isfinite(T) and T * rate >= 2):  # said of both options: either may be the one given
+        fixes = ([f"a --rate of at least {2.0 / T:.4g} Hz"] if np.isfinite(T) and 0 < T and 2.0 / T <= MAX_RATE_HZ
+                 else []) + [f"a --duration of at least {2.0 / rate:.4g} s"]
+        raise InputError(f"--duration {T:g} s at --rate {rate:g} Hz covers fewer than two sampling intervals: give "
+                         + " or ".join(fixes))
     if T * rate > MAX_SAMPLES:
         raise InputError(f"--duration {T:g} s at --rate {rate:g} Hz: {T * rate:,.0f} samples, more than the "
                          f"{MAX_SAMPLES:,} one simulation holds; shorten --duration or lower --rate")
