@@ -431,3 +431,20 @@ def test_a_summary_of_another_shape_is_refused_naming_the_key(run_dir, tmp_path,
     with pytest.raises(InputError, match=rf"^{re.escape(str(d / 'summary.json'))}: {said}.*: a damaged or "
                                          r"hand-edited summary.json\? \(run navigate again to write it\)$"):
         build_report(d)
+
+
+def test_a_smoothed_run_without_its_smoothed_solution_is_refused(run_dir, tmp_path):
+    """A `navigate --smooth` folder copied without solution_smoothed.* gave a page of the forward filter alone
+    under the smoother's key figures and outage table, without a word.  Now it is refused, as a missing
+    forward solution is."""
+    d = tmp_path / "cut"
+    shutil.copytree(run_dir, d)
+    for f in d.glob("report*.html"):
+        f.unlink()
+    s = json.loads((d / "summary.json").read_text())
+    assert s["solution"] == "forward" and not list(d.glob("solution_smoothed.*"))
+    s["solution"] = "smoothed"
+    (d / "summary.json").write_text(json.dumps(s))
+    with pytest.raises(InputError, match=r"solution_smoothed.parquet or .csv is missing, and summary.json says the "
+                                         r"run was smoothed"):
+        build_report(d)

@@ -398,6 +398,7 @@ class _Run:
         self.dir = d
         self.summary = _read_json(d / "summary.json", "run summary (summary.json)")
         check_summary(self.summary, d / "summary.json")
+
         def solution(stem):  # the full-rate Parquet when there is one, else the CSV
             for ext in (".parquet", ".csv"):
                 if (d / f"{stem}{ext}").exists():
@@ -410,6 +411,12 @@ class _Run:
         if self.forward is None:
             raise InputError(f"{d}: solution_forward.parquet or .csv is missing (expected beside summary.json)")
         self.smoothed = solution("solution_smoothed")
+        if self.smoothed is None and self.summary.get("solution") == "smoothed":
+            # the key figures and the outage table are the smoother's: a page of the forward filter alone
+            # under them passed the folder for whole
+            raise InputError(f"{d}: solution_smoothed.parquet or .csv is missing, and summary.json says the run "
+                             "was smoothed (its figures are the smoother's); copy the folder again, or run "
+                             "navigate --smooth again")
         self.innov = read_innovations(d / "innovations.csv", self.summary.get("measurements"))
         self.config = _read_json(d / "config_used.json", "configuration (config_used.json)") \
             if (d / "config_used.json").exists() else None
