@@ -189,8 +189,8 @@ def clipping_warnings(sc: Scenario, sim: Simulation) -> list[str]:
                                    ("accel", "specific force", errors.accel, "g", G0)):
         n = int(sim.draws.get(f"{name}_clipped_rows", 0))
         if n:
-            out.append(f"field 'imu.{name}' (saturation, or the grade's): the limit of {e.saturation / k:g} {unit} clipped the readings of "
-                       f"{n} of {len(sim.imu) - 1} IMU rows (the run's {what} reaches "
+            out.append(f"field 'imu.{name}' (saturation, or the grade's): the limit of {e.saturation / k:g} {unit} "
+                       f"clipped the readings of {n} of {len(sim.imu) - 1} IMU rows (the run's {what} reaches "
                        f"{sim.draws[f'{name}_peak'] / k:.4g} {unit} on an axis): the IMU file holds the clipped "
                        "readings, and a navigation from it drifts while they last")
     return out
