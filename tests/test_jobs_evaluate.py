@@ -444,3 +444,25 @@ def test_roll_and_yaw_errors_near_a_vertical_pitch_are_said_to_be_euler_differen
         rot.dcm_from_euler(steep.euler) @ rot.dcm_from_euler([0.0, 0.0, np.radians(0.5)]))))
     assert not [x for x in evaluate(tmp_path / "steep_sol.csv", tmp_path / "steep.csv")["warnings"]
                 if "gimbal lock" in x]
+
+
+def test_navigate_against_a_truth_says_where_its_pitch_is_vertical():
+    """``navigate --truth`` scores roll and yaw as evaluate does, but said
+    nothing of a truth whose pitch passes +-85 deg (found by the review of
+    evaluate's gimbal-lock warning): the truth-side check, from the
+    quaternions, over the run's span only."""
+    from inskit.jobs.evaluate import vertical_pitch_warnings
+
+    n = 200
+    t = np.arange(n) / 10.0
+    lla = np.tile([np.radians(45), np.radians(10), 100.0], (n, 1))
+    pitch = np.radians(np.minimum(89.99, 60.25 + t * 5.0))  # beyond 85 deg from 5 s
+    truth = NavSolution.from_euler(t, lla, np.zeros((n, 3)), np.column_stack([np.zeros(n), pitch, np.zeros(n)]))
+    w = vertical_pitch_warnings(truth, 0.0, t[-1])
+    assert len(w) == 1 and f"at {int(np.sum(pitch > np.radians(85.0)))} of its {n} rows (" in w[0]
+    assert w[0].endswith("inskit evaluate of the solution file sets the rotation angle beside them")
+    assert vertical_pitch_warnings(truth, 0.0, 4.9) == []  # the run ends before the pitch gets there
+    dive = NavSolution.from_euler(t, lla, np.zeros((n, 3)), np.column_stack([np.zeros(n), -pitch, np.zeros(n)]))
+    assert len(vertical_pitch_warnings(dive, 0.0, t[-1])) == 1  # nose down alike
+    level = NavSolution.from_euler(t, lla, np.zeros((n, 3)), np.tile([0.0, np.radians(80.0), 0.0], (n, 1)))
+    assert vertical_pitch_warnings(level, 0.0, t[-1]) == []

@@ -329,6 +329,29 @@ def gimbal_lock_warnings(err: analysis.NavError, sol, truth) -> list[str]:
             "yaw_deg with that in mind"]
 
 
+def vertical_pitch_warnings(truth, t0, t1) -> list[str]:
+    """:func:`gimbal_lock_warnings` from the truth alone, for a run that
+    scores its solution against a truth as it goes (``navigate --truth``:
+    the per-epoch errors of a streamed run are not kept): the truth's rows
+    within ``[t0, t1]`` whose pitch lies beyond
+    :data:`GIMBAL_LOCK_PITCH_DEG`, where the roll and yaw errors are
+    differences of Euler angles.  The sine of the pitch straight from the
+    quaternions (``-C_nb[2, 0]``): no Euler angles of the whole truth."""
+    k0, k1 = int(np.searchsorted(truth.time, t0, side="left")), int(np.searchsorted(truth.time, t1, side="right"))
+    q = truth.q_nb[k0:k1]
+    if not len(q):
+        return []
+    sin_p = 2.0 * (q[:, 0] * q[:, 2] - q[:, 1] * q[:, 3])
+    near = np.abs(sin_p) > np.sin(GIMBAL_LOCK_PITCH_DEG * DEG)
+    if not near.any():
+        return []
+    t = truth.time[k0:k1][near]
+    return [f"the truth's pitch passes beyond +-{GIMBAL_LOCK_PITCH_DEG:g} deg at {int(near.sum())} of its "
+            f"{len(q)} rows ({t[0]:.3f}..{t[-1]:.3f} s), where roll and yaw are ill-defined (gimbal lock): the "
+            "roll and yaw errors there are differences of Euler angles (up to 180 deg for an attitude off by a "
+            "fraction of one); inskit evaluate of the solution file sets the rotation angle beside them"]
+
+
 #: attitude columns of a solution file, in the order of :attr:`NavSolution.euler`
 ATTITUDE_COLUMNS = ("roll_deg", "pitch_deg", "yaw_deg")
 #: a horizontal speed [m/s] above which the direction of travel is taken as a heading reference

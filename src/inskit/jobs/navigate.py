@@ -1965,11 +1965,14 @@ def summary(res: NavigateResult) -> dict:
             out["health"]["warnings"].append(warn)
     if res.truth is not None:  # what the truth could not score, said (not silently left out)
         from .. import analysis
-        from .evaluate import attitude_unit_warnings, coverage_warnings, truth_consistency_warnings
+        from .evaluate import (attitude_unit_warnings, coverage_warnings, truth_consistency_warnings,
+                               vertical_pitch_warnings)
 
         cover = analysis.truth_coverage(res.imu.time, res.truth.time)
         out["truth_coverage"] = cover
         out["health"]["warnings"] += truth_consistency_warnings(out["truth_errors"])  # (from .evaluate)
+        out["health"]["warnings"] += [f"truth: {w}" for w in vertical_pitch_warnings(
+            res.truth, float(res.imu.time[0]), float(res.imu.time[-1]))]
         out["health"]["warnings"] += [f"truth: {w}" for w in coverage_warnings(cover, res.truth.time)]
         # a truth whose _deg columns hold radians (the solution's are this run's own: only the truth's are said)
         out["health"]["warnings"] += [f"truth: {w}" for w in attitude_unit_warnings(
