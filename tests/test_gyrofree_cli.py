@@ -187,6 +187,25 @@ def test_a_rate_below_twice_the_scenario_vibration_is_refused(tmp_path):
     assert json.loads(r.stdout)["rate_hz"] == 30.0
 
 
+def test_a_vibration_the_scenario_rate_cannot_sample_runs_at_a_rate_that_can(tmp_path):
+    """A 100 Hz scenario with a 60 Hz vibration: `gyrofree simulate --rate
+    1000` was refused by the scenario's own check at its 100 Hz ('at or
+    above the Nyquist frequency of the IMU (50 Hz at imu.rate_hz 100)'),
+    though the array is sampled at 1000 Hz.  It runs; without --rate, or
+    with a --rate that cannot sample it either, it is refused."""
+    text = (EXAMPLES / "car.toml").read_text().replace("frequency_hz = 14.0", "frequency_hz = 60.0")
+    assert "frequency_hz = 60.0" in text
+    (tmp_path / "v.toml").write_text(text)
+    r = invoke(gyrofree, "simulate", tmp_path / "v.toml", "--out", tmp_path / "a", "--rate", 1000,
+               "--duration", 2, "--json")
+    assert r.exit_code == 0, r.output
+    assert json.loads(r.stdout)["rate_hz"] == 1000.0
+    r = invoke(gyrofree, "simulate", tmp_path / "v.toml", "--out", tmp_path / "b", "--duration", 2)
+    assert "Nyquist frequency of the IMU (50 Hz at imu.rate_hz 100)" in str(r.exception)
+    r = invoke(gyrofree, "simulate", tmp_path / "v.toml", "--out", tmp_path / "c", "--rate", 110, "--duration", 2)
+    assert str(r.exception).endswith("(imu.rate_hz is --rate 110 here)"), r.exception
+
+
 def test_a_gap_in_the_array_file_is_reported(tmp_path):
     """Half a second of rows missing from a 200 Hz array file was stepped
     across in silence (0.9 m off at 2 s on the source's motion); as

@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from ..files import plain_json, save_figure, write_json, write_text
-from ..errors import InputError
+from ..errors import ConfigError, InputError
 from ..units import DEG, MAX_RATE_HZ, MAX_SAMPLES, MICRO_G, PPM
 
 SOURCE_SCENARIO = "source003"
@@ -152,7 +152,18 @@ def simulate_job(scenario, layout_spec, out_dir, *, d=None, rate_hz=None, durati
         from ..simulation.imu import truth_solution
         from ..simulation.scenario import build_trajectory, load_scenario
 
-        sc = load_scenario(scenario)
+        try:
+            sc = load_scenario(scenario)
+        except ConfigError:
+            if rate_hz is None:
+                raise
+            try:  # sampled at --rate, not at the file's IMU rate: a 60 Hz vibration of a 100 Hz scenario was refused
+                # under --rate 1000 (a lower --rate is refused below, by _check_motion_sampled, in its own words)
+                sc = load_scenario(scenario, imu_rate_hz=rate_hz)
+            except ConfigError as exc:
+                if "imu.rate_hz" not in str(exc):
+                    raise
+                raise ConfigError(f"{exc} (imu.rate_hz is --rate {float(rate_hz):g} here)") from None
         tr = build_trajectory(sc, rng)
         rate = sc.imu.rate_hz if rate_hz is None else float(rate_hz)
         T = tr.duration if duration is None else float(duration)

@@ -298,10 +298,16 @@ assert set(SEGMENT_RULES) == set(_SEGMENT_TYPES), "SEGMENT_RULES must cover ever
 assert all(k in SegmentSpec.model_fields for r in SEGMENT_RULES.values() for k in r.keys + SEGMENT_COMMON_KEYS)
 
 
-def load_scenario(path) -> Scenario:
+def load_scenario(path, *, imu_rate_hz=None) -> Scenario:
     """Read and validate a scenario file (a ``nav:PATH`` constellation is
-    resolved relative to the file's folder)."""
+    resolved relative to the file's folder).  ``imu_rate_hz`` replaces the
+    file's ``[imu] rate_hz`` before the checks that depend on it (a
+    vibration above the Nyquist frequency): a command that samples the
+    scenario at its own rate (``inskit gyrofree simulate --rate``)."""
     data = read_toml(path, "scenario")
+    if imu_rate_hz is not None:
+        imu = data.get("imu")
+        data["imu"] = {**(imu if isinstance(imu, dict) else {}), "rate_hz": float(imu_rate_hz)}
     try:
         sc = Scenario.model_validate(data)
     except ValidationError as exc:
