@@ -6,6 +6,7 @@ line and the column."""
 import re
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from inskit import io
@@ -823,3 +824,42 @@ def test_an_unknown_sampled_mode_is_refused_for_every_file(tmp_path):
     for f in (p, tmp_path / "inc.csv"):
         with pytest.raises(InputError, match=r"^`sampled` must be one of 'instant', 'average', got 'bogus'$"):
             io.read_imu(f, sampled="bogus")
+
+
+@pytest.mark.parametrize("kind", ["increments", "increments.parquet", "increments-first-increment", "rates",
+                                  "rates-drop"])
+@pytest.mark.parametrize("sensor, value, match", [
+    ("gyro", 1e308, r"an angular rate of over 1e30 rad/s"),
+    ("gyro", 1e4, r"an angular rate of 1e\+04 rad/s"),
+    ("accel", 1e5, r"a specific force of 1\.02e\+04 g"),
+])
+def test_one_sample_beyond_any_sensor_range_is_refused_naming_its_row(tmp_path, kind, sensor, value, match):
+    """One corrupt IMU row (an increment of 100 rad or 1000 m/s over 10 ms, a 1e308; ``value`` is the rate) moved neither the
+    median nor the 99th percentile of the unit checks.  navigate integrated it: 100 rad about z turned the
+    heading by 5.75 rad and the run said 'health: healthy'; 1000 m/s lost the filter for 15 s; 1e308 ended in
+    'the innovation is not finite: the filter diverged' or '`rpy` has a NaN or infinite value (nan)', naming
+    no file and no row.  Now the reader refuses the row, by its line (row in Parquet)."""
+    cols = _imu_table(400)
+    row = 250
+    if kind.startswith("increments"):
+        names, scale = INCREMENTS, 0.01
+        name = "dtheta_z_rad" if sensor == "gyro" else "dv_x_m_s"
+    else:
+        names, scale = RATES, 1.0
+        name = "gyro_z_rad_s" if sensor == "gyro" else "accel_x_m_s2"
+    frame = pd.DataFrame({c: cols[c] for c in names})
+    if kind == "increments-first-increment":  # the file's first row is an increment: no initial row
+        frame = frame.iloc[1:].reset_index(drop=True)
+    if kind == "rates-drop":  # a repeated row dropped before the spike: the message still names the file's line
+        frame.iloc[100, 1:] = frame.iloc[99, 1:].to_numpy()
+    frame.loc[row, name] = value if value > 1e300 else value * scale
+    p = tmp_path / ("imu.parquet" if kind.endswith("parquet") else "imu.csv")
+    frame.to_parquet(p) if kind.endswith("parquet") else p.write_text(
+        ",".join(names) + "\n" + "\n".join(",".join(repr(float(x)) for x in r) for r in frame.to_numpy()) + "\n")
+    where = f"row {row}" if kind.endswith("parquet") else f"line {row + 2}"
+    kw = {"first_row": "increment"} if kind == "increments-first-increment" else \
+        {"repeated": "drop"} if kind == "rates-drop" else {}
+    with pytest.raises(InputError, match=rf"imu\.(csv|parquet): {where}: .*{match}, beyond any sensor's range"):
+        C.read_imu(p, **kw)
+    if value < 1e300:  # on request (a spinning projectile?) the row is read
+        assert len(C.read_imu(p, check_units=False, **kw)) >= 399

@@ -43,6 +43,8 @@ _ACCEL_MS2_LIKE = 3.0     # median |f| in g above this looks like m/s^2
 _GYRO_RAD_MAX = 10.0      # 99th percentile |w| in rad/s above this looks like deg/s
 _GYRO_RAD_MEDIAN = 1.0    # median |w| in rad/s above this looks like deg/s
 _IMU_STEP_MAX_S = 1.0     # a median IMU time step above this [s] (below 1 Hz) looks like ms, us or ns
+_GYRO_SAMPLE_MAX = 1000.0  # one sample's |w| above this [rad/s] (57,000 deg/s) is beyond any gyro's range
+_ACCEL_SAMPLE_MAX_G = 1000.0  # one sample's |f| above this [g] is beyond any navigation accelerometer's range
 
 
 def read_table(path) -> tuple:
@@ -887,8 +889,10 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", 
     check_units : bool
         Refuse magnitudes that betray a wrong unit: a median specific force
         below 2 m/s^2 in a column said to be m/s^2 (it looks like g), above 3
-        in one said to be g; a gyro said to be in rad/s whose 99th percentile
-        exceeds 10 rad/s or median exceeds 1 rad/s (it looks like deg/s).
+        g in one said to be g; a gyro said to be in rad/s whose 99th
+        percentile exceeds 10 rad/s or median exceeds 1 rad/s (it looks like
+        deg/s); one sample beyond any sensor's range (1000 rad/s, 1000 g: a
+        corrupt row), naming its line.
         Turn off for unusual data (free fall, spinning bodies).
     sampled : {"instant", "average"}
         How rates were sampled (see :meth:`ImuData.from_rates`).
@@ -943,13 +947,15 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", 
         w = numeric_columns(path, df, gcols)
         f = numeric_columns(path, df, acols)
         keep = repeated_rows(path, t, np.hstack([w, f]), repeated, info)
+        rows = None
         if keep is not None:
             t, w, f = t[keep], w[keep], f[keep]
+            rows = np.flatnonzero(keep)  # the file's row of each sample kept, for the messages
         t = smooth_time_tags(path, t, time_smoothing, info=info)
         w = w * GYRO_UNITS[gu]
         f = f * ACCEL_UNITS[au]
         if check_units:
-            check_imu_units(path, w, f, gcols[0], acols[0], gu, au)
+            check_imu_units(path, w, f, gcols[0], acols[0], gu, au, rows)
         check_imu_time(path, t, check_units=check_units)
         if first_row != "initial":
             raise InputError(f"{path}: first_row={first_row!r} applies to increment files (dtheta/dv columns); this "
@@ -965,8 +971,10 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", 
         dv = raw[:, 3:] * DV_UNITS[vu]
         if check_units and len(t) > 1:
             dt = np.diff(t)
-            check_imu_units(path, dth[1:] / dt[:, None], dv[1:] / dt[:, None], tcols[0], vcols[0],
-                             "rad_s" if du == "rad" else "deg_s", "m_s2")
+            with np.errstate(over="ignore"):  # a corrupt row's inf is refused by name (_check_imu_samples)
+                w, f = dth[1:] / dt[:, None], dv[1:] / dt[:, None]
+            check_imu_units(path, w, f, tcols[0], vcols[0],
+                            "rad_s" if du == "rad" else "deg_s", "m_s2", rows=1 if first_row != "increment" else 0)
         check_imu_time(path, t, check_units=check_units)
         return ImuData(t, dth, dv)
     raise InputError(
@@ -1051,10 +1059,11 @@ def _read_imu_lean(path, check_units, first_row):
     if check_units and norms is not None:
         for a in range(0, len(t) - 1, NORM_BLOCK_ROWS):  # the rates' norms, block by block (no (n,) temporaries)
             inv_dt = 1.0 / np.diff(t[a:a + NORM_BLOCK_ROWS + 1])
-            norms[0][a:a + NORM_BLOCK_ROWS] *= DTHETA_UNITS[du] * inv_dt
-            norms[1][a:a + NORM_BLOCK_ROWS] *= DV_UNITS[vu] * inv_dt
+            with np.errstate(over="ignore"):  # a corrupt row's inf is refused by name (_check_imu_samples)
+                norms[0][a:a + NORM_BLOCK_ROWS] *= DTHETA_UNITS[du] * inv_dt
+                norms[1][a:a + NORM_BLOCK_ROWS] *= DV_UNITS[vu] * inv_dt
         check_units_norms(path, norms[0], norms[1], tcols[0], vcols[0], "rad_s" if du == "rad" else "deg_s",
-                          "m_s2")
+                          "m_s2", rows=1)
     check_imu_time(path, t, check_units=check_units)
     return ImuData(t, dth, dv)
 
@@ -1151,7 +1160,7 @@ def _norm_rows32(x) -> np.ndarray:
 _F32_MAX = float(np.finfo(np.float32).max)
 
 
-def check_imu_units(path, w, f, gcol, acol, gunit, aunit):
+def check_imu_units(path, w, f, gcol, acol, gunit, aunit, rows=None):
     """Refuse magnitudes that betray a wrong unit (see :func:`read_imu`).
 
     ``w`` [rad/s] and ``f`` [m/s^2] are the rates as converted from the
@@ -1167,6 +1176,14 @@ def check_imu_units(path, w, f, gcol, acol, gunit, aunit):
       consecutive samples whose median exceeds 10 rad/s (a turn faster
       than 10 deg/s held for 75 samples or more, written in deg/s) give the
       unit away.
+    * One sample beyond any sensor's range: ``|w|`` above 1000 rad/s
+      (57,000 deg/s) or ``|f|`` above 1000 g, whatever the unit: a corrupt
+      row (a spike, a shifted or merged field).  A lone such row moves
+      neither the median nor the 99th percentile, and integrated it turned
+      the attitude by whole radians, or overflowed to a non-finite state
+      ('the innovation is not finite'), naming no row.  ``rows`` gives the
+      file row of each sample (``None``: the index; an int: the index plus
+      it; an array: looked up), for the message.
     * deg/s under a rad/s header on a *static* log cannot be told here: the
       values are 57.3 times the true rates, i.e. 57.3 times the Earth rate
       plus bias, about 0.004 rad/s for a good gyro.  That is also the bias of
@@ -1176,13 +1193,20 @@ def check_imu_units(path, w, f, gcol, acol, gunit, aunit):
       which knows the latitude, recognises the Earth rate scaled by 57.3 in
       a static log of a gyro good enough to see it.
     """
-    check_units_norms(path, _norm(w), _norm(f), gcol, acol, gunit, aunit)
+    check_units_norms(path, _norm(w), _norm(f), gcol, acol, gunit, aunit, rows)
 
 
-def check_units_norms(path, wn, f_norm, gcol, acol, gunit, aunit):
+def check_units_norms(path, wn, f_norm, gcol, acol, gunit, aunit, rows=None):
     """:func:`check_imu_units` from the rows' norms (``|w|`` [rad/s] and
     ``|f|`` [m/s^2]): a reader that has the increments need not make the
-    rates."""
+    rates.  The rules of the whole log first (they name the unit), then
+    the samples one by one."""
+    _check_units_of_log(path, wn, f_norm, gcol, acol, gunit, aunit, rows)
+    _check_imu_samples(path, wn, f_norm, gcol, acol, rows)
+
+
+def _check_units_of_log(path, wn, f_norm, gcol, acol, gunit, aunit, rows=None):
+    """The rules of :func:`check_units_norms` over the whole log."""
     fn = float(np.median(f_norm))
     if aunit in ("m_s2",) and fn < _ACCEL_G_LIKE:
         if acol.startswith("dv_"):  # increments have no g unit: the step they are divided by is the suspect
@@ -1217,10 +1241,42 @@ def check_units_norms(path, wn, f_norm, gcol, acol, gunit, aunit):
         if (med > _GYRO_RAD_MAX).any():
             i = int(np.argmax(med > _GYRO_RAD_MAX))
             raise InputError(
-                f"{path}: column '{gcol}': {k} consecutive samples (near {at_row(path, i * k)}) turn at a "
-                f"median {float(med[i]):.1f} rad/s ({float(med[i]) / DEG:.0f} deg/s), more than a vehicle or a person "
-                f"can; it looks like values in deg/s; {hint}"
+                f"{path}: column '{gcol}': {k} consecutive samples (near {at_row(path, _file_row(rows, i * k))}) "
+                f"turn at a median {float(med[i]):.1f} rad/s ({float(med[i]) / DEG:.0f} deg/s), more than a vehicle or "
+                f"a person can; it looks like values in deg/s; {hint}"
             )
+
+
+def _file_row(rows, i) -> int:
+    """The file row of sample ``i`` (``rows``: see :func:`check_imu_units`)."""
+    if rows is None:
+        return int(i)
+    if isinstance(rows, (int, np.integer)):
+        return int(i) + int(rows)
+    return int(rows[i])
+
+
+def _check_imu_samples(path, wn, f_norm, gcol, acol, rows=None):
+    """Refuse the first sample whose rate norm ``wn`` [rad/s] or specific
+    force norm ``f_norm`` [m/s^2] is beyond any sensor's range
+    (:data:`_GYRO_SAMPLE_MAX`, :data:`_ACCEL_SAMPLE_MAX_G`), naming its
+    line or row (``rows``: see :func:`check_imu_units`)."""
+    for norms, lim, col, what, unit, scale in (
+            (wn, _GYRO_SAMPLE_MAX, gcol, "an angular rate", "rad/s", 1.0),
+            (f_norm, _ACCEL_SAMPLE_MAX_G * G0, acol, "a specific force", "g", G0)):
+        bad = np.flatnonzero(np.asarray(norms) > lim)
+        if not len(bad):
+            continue
+        i = int(bad[0])
+        v = float(norms[i]) / scale
+        size = f"{v:.4g} {unit}" if np.isfinite(v) and v < 1e30 else f"over 1e30 {unit}"
+        more = f" ({len(bad) - 1} more row(s) do)" if len(bad) > 1 else ""
+        cols = col.replace("_x_", "_{x,y,z}_", 1)
+        raise InputError(
+            f"{path}: {at_row(path, _file_row(rows, i))}: {cols} give {what} of {size}{more}, beyond any "
+            f"sensor's range ({lim / scale:g} {unit}); expected a sample of the log: a corrupt row, or another "
+            "unit? (or pass check_units=False / --no-unit-check)"
+        )
 
 
 def write_imu(path, imu: ImuData, *, overwrite=False):

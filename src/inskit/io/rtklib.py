@@ -530,13 +530,15 @@ def read_rtklibexplorer_imu(path, *, week0=None, time_offset_s=0.0, mount_rpy=(0
     t = (week - week0) * WEEK_S + a[:, 1] + time_offset_s
     check_time_column(path, t, "gps_sow_s")
     keep = repeated_rows(path, t, a[:, 2:8], repeated, info)
+    rows = None
     if keep is not None:
         t, a = t[keep], a[keep]
+        rows = np.flatnonzero(keep)  # the file's row of each sample kept, for the messages
     t = smooth_time_tags(path, t, time_smoothing, info=info)
     C_bs = mount_dcm(mount_rpy)
     f = a[:, 2:5] * G0 @ C_bs.T
     w = a[:, 5:8] * DEG @ C_bs.T
     if check_units:
-        check_imu_units(path, w, f, "gyro_x_dps", "acc_x_g", "deg_s", "g")
+        check_imu_units(path, w, f, "gyro_x_dps", "acc_x_g", "deg_s", "g", rows)
     check_imu_time(path, t, "gps_sow_s", check_units)
     return ImuData.from_rates(t, w, f, sampled="average"), week0
