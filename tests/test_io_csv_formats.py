@@ -863,3 +863,26 @@ def test_one_sample_beyond_any_sensor_range_is_refused_naming_its_row(tmp_path, 
         C.read_imu(p, **kw)
     if value < 1e300:  # on request (a spinning projectile?) the row is read
         assert len(C.read_imu(p, check_units=False, **kw)) >= 399
+
+
+@pytest.mark.parametrize("kind, factor, match", [
+    ("rates", 3.28084, r"column 'accel_x_m_s2': the median specific force is 32\.\d+ m/s\^2 \(3\.\d+ g\), far above "
+                       r"gravity for a whole log: values in ft/s\^2, cm/s\^2 or mm/s\^2"),
+    ("rates", 1000.0, r".*far above gravity for a whole log: values in ft/s\^2, cm/s\^2 or mm/s\^2"),
+    ("increments", 100.0, r"column 'dv_x_m_s': .*far above gravity for a whole log: dv in cm/s, mm/s or ft/s"),
+])
+def test_a_specific_force_in_another_unit_under_an_m_s2_header_is_refused(tmp_path, kind, factor, match):
+    """accel_*_m_s2 columns holding ft/s^2 or mm/s^2 (dv_*_m_s holding cm/s) were read: navigate lost the
+    filter again and again ('recovered from a lost state ... tilt error of about 89 deg') and never said
+    which column was at fault, while g under m/s^2 and m/s^2 under g were refused.  A whole log's median
+    specific force above 3 g now is, as it is under a g header."""
+    cols = _imu_table(400)
+    names = RATES if kind == "rates" else INCREMENTS
+    frame = pd.DataFrame({c: cols[c] for c in names})
+    for c in names[4:]:
+        frame[c] *= factor
+    p = tmp_path / "imu.csv"
+    frame.to_csv(p, index=False)
+    with pytest.raises(InputError, match=r"imu\.csv: " + match):
+        C.read_imu(p)
+    assert len(C.read_imu(p, check_units=False)) == 400

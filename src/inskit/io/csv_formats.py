@@ -889,7 +889,7 @@ def read_imu(path, *, check_units=True, sampled="instant", first_row="initial", 
     check_units : bool
         Refuse magnitudes that betray a wrong unit: a median specific force
         below 2 m/s^2 in a column said to be m/s^2 (it looks like g), above 3
-        g in one said to be g; a gyro said to be in rad/s whose 99th
+        g in one said to be g or m/s^2; a gyro said to be in rad/s whose 99th
         percentile exceeds 10 rad/s or median exceeds 1 rad/s (it looks like
         deg/s); one sample beyond any sensor's range (1000 rad/s, 1000 g: a
         corrupt row), naming its line.
@@ -1176,6 +1176,9 @@ def check_imu_units(path, w, f, gcol, acol, gunit, aunit, rows=None):
       consecutive samples whose median exceeds 10 rad/s (a turn faster
       than 10 deg/s held for 75 samples or more, written in deg/s) give the
       unit away.
+    * Accelerometers: a median ``|f|`` above 3 g under an m/s^2 header
+      (ft/s^2, cm/s^2 or mm/s^2 read as m/s^2; under an increment header,
+      dv in cm/s, mm/s or ft/s).
     * One sample beyond any sensor's range: ``|w|`` above 1000 rad/s
       (57,000 deg/s) or ``|f|`` above 1000 g, whatever the unit: a corrupt
       row (a spike, a shifted or merged field).  A lone such row moves
@@ -1208,6 +1211,13 @@ def check_units_norms(path, wn, f_norm, gcol, acol, gunit, aunit, rows=None):
 def _check_units_of_log(path, wn, f_norm, gcol, acol, gunit, aunit, rows=None):
     """The rules of :func:`check_units_norms` over the whole log."""
     fn = float(np.median(f_norm))
+    if aunit == "m_s2" and fn / G0 > _ACCEL_MS2_LIKE:
+        other = "dv in cm/s, mm/s or ft/s (it must be m/s)" if acol.startswith("dv_") else \
+            "values in ft/s^2, cm/s^2 or mm/s^2 (they must be m/s^2)"
+        raise InputError(
+            f"{path}: column '{acol}': the median specific force is {fn:.4g} m/s^2 ({fn / G0:.3g} g), far above "
+            f"gravity for a whole log: {other}? (or pass check_units=False / --no-unit-check)"
+        )
     if aunit in ("m_s2",) and fn < _ACCEL_G_LIKE:
         if acol.startswith("dv_"):  # increments have no g unit: the step they are divided by is the suspect
             raise InputError(
