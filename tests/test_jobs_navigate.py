@@ -642,6 +642,36 @@ def test_an_odometer_in_the_wrong_unit_is_refused_by_its_speed():
         check_odometer_speed("odo.csv", to, v * 2.237, gnss)
 
 
+def test_an_odometer_that_reads_standing_still_while_the_track_moves_is_refused():
+    """An odometer log of zeros (a dead sensor, a flag column read as the speed) passed the ratio test, which
+    looks only where both the log and the track say the vehicle moves: `inskit navigate` with it lost the
+    fixes over and over (gnss_pos 208 of 300 rejected, a 'fit' of 180 m) and searched an IMU time offset,
+    never naming the log.  A log standing still over most of the track's motion is refused; a few stops of
+    the wheels (a dropout) and the rest before the drive still pass."""
+    from inskit import earth
+    from inskit.errors import InputError
+    from inskit.jobs.navigate import check_odometer_speed, check_speed_course
+    from inskit.types import GnssData
+
+    t = np.arange(0.0, 120.0, 1.0)
+    speed = np.where(t < 20.0, 0.0, 12.0)  # 20 s at rest, then 12 m/s north
+    ref = np.array([np.radians(45.0), np.radians(7.0), 100.0])
+    lla = earth.ned_to_lla(np.column_stack([np.cumsum(speed), 0 * t, 0 * t]), ref)
+    gnss = GnssData(t, lla, np.full((len(t), 3), 0.02))
+    to = np.arange(0.0, 120.0, 0.1)
+    v = np.interp(to, t - 0.5, speed)
+    for bad, shown in ((0.0 * v, "0"), (v / 1000.0, "0.012")):  # zeros; km/s under the m/s header
+        with pytest.raises(InputError, match=rf"odo\.csv: the odometer speed reads 1 m/s or less at \d+ of the \d+ "
+                                             rf"moments the GNSS track moves faster than 2 m/s \(median 12 m/s "
+                                             rf"against the log's {shown} m/s\).*a dead sensor"):
+            check_odometer_speed("odo.csv", to, bad, gnss)
+    with pytest.raises(InputError, match=r"sc\.csv: the speed over ground of the speed and course log reads"):
+        check_speed_course("sc.csv", to, 0.0 * v, 0.0 * v, gnss)
+    dropout = v.copy()
+    dropout[(to > 50.0) & (to < 70.0)] = 0.0  # 20 s of 100 moving: kept for the filter to judge
+    check_odometer_speed("odo.csv", to, dropout, gnss)
+
+
 def test_a_speed_and_course_log_in_the_wrong_units_is_refused_by_the_track():
     """Speed in km/h and course in radians under speed_m_s / course_deg went ahead to 1746 m and 13.7 km of outage
     error, blamed on the attitude: both are checked against the fixes' track (a drive north, then east, then

@@ -449,6 +449,10 @@ def time_unit_hint(t_gnss, t_imu) -> str:
 
 #: odometer speed / GNSS track speed outside this band (median while moving) is a unit or scale mistake
 ODOMETER_SPEED_RATIO = (0.8, 1.25)
+#: an odometer (or speed over ground) log that says the vehicle stands still at more than this fraction of the
+#: moments the GNSS track moves is refused (:func:`check_odometer_speed`): the ratio test, over the moments both
+#: say it moves, never saw a log of zeros
+ODOMETER_STILL_FRACTION = 0.5
 
 
 def check_speed_course(path, t, speed, course, gnss: GnssData, min_speed_m_s=2.0):
@@ -498,7 +502,11 @@ def check_odometer_speed(path, t, v, gnss: GnssData, min_speed_m_s=2.0, what="od
     :data:`ODOMETER_SPEED_RATIO` (3.6: km/h under an m/s header; 2.24: mph;
     the filter then rejected the GNSS and blamed it).  A scale error of a
     few per cent is the scale-factor state's to estimate, not refused.
-    Silent when the track gives fewer than 10 such moments.  ``track``: the
+    Silent when the track gives fewer than 10 such moments.  A log that
+    reads half ``min_speed_m_s`` or less at more than
+    :data:`ODOMETER_STILL_FRACTION` of the moments the track moves (a log of
+    zeros: a dead sensor, another column; km/s) is refused too: the ratio,
+    taken where both say the vehicle moves, never saw it.  ``track``: the
     fixes' :func:`gnss_speed` when the caller has it already."""
     if len(gnss.time) < 3:
         return
@@ -508,11 +516,21 @@ def check_odometer_speed(path, t, v, gnss: GnssData, min_speed_m_s=2.0, what="od
         return
     g = np.interp(t[inside], gnss.time, sp)
     o = np.abs(np.asarray(v, float)[inside])
-    moving = (g > min_speed_m_s) & (o > 0.5 * min_speed_m_s)
+    lo, hi = ODOMETER_SPEED_RATIO
+    track_moving = g > min_speed_m_s
+    still = track_moving & (o <= 0.5 * min_speed_m_s)
+    if track_moving.sum() >= 10 and still.sum() > ODOMETER_STILL_FRACTION * track_moving.sum():
+        raise InputError(
+            f"{path}: the {what} reads {0.5 * min_speed_m_s:g} m/s or less at {int(still.sum())} of the "
+            f"{int(track_moving.sum())} moments the GNSS track moves faster than {min_speed_m_s:g} m/s (median "
+            f"{float(np.median(g[track_moving])):.3g} m/s against the log's {float(np.median(o[track_moving])):.3g} "
+            f"m/s); expected the track's speed (ratio {lo:g}..{hi:g}): a dead sensor, another column, or another unit "
+            "(km/s?); the speed column must be m/s"
+        )
+    moving = track_moving & (o > 0.5 * min_speed_m_s)
     if moving.sum() < 10:
         return
     r = float(np.median(o[moving] / g[moving]))
-    lo, hi = ODOMETER_SPEED_RATIO
     if not lo <= r <= hi:
         hint = (" (km/h read as m/s?)" if abs(r - 3.6) < 0.4 else " (mph read as m/s?)" if abs(r - 2.237) < 0.25
                 else " (m/s read as km/h?)" if abs(r - 1 / 3.6) < 0.05 else "")
