@@ -191,11 +191,17 @@ def test_time_going_back_or_repeated(capsys, sim, tmp_path, kind):
 
 def test_gnss_times_in_milliseconds_are_named(capsys, sim, tmp_path):
     """Fixes with time_s in ms (the IMU reader refuses an IMU log in ms, not fixes): navigate said only
-    'overlaps 1 used GNSS fix(es) ... (mismatched time bases, or logs of different runs?)'."""
+    'overlaps 1 used GNSS fix(es) ... (mismatched time bases, or logs of different runs?)'.  Fixes with
+    velocity are refused by the reader, which sees them move 1000 times slower than their velocity says;
+    without velocity navigate's span test names the unit."""
     rows = lines_of(sim / "gnss.csv")
     bad = tmp_path / "gnss.csv"
     bad.write_text(rows[0] + "".join(",".join([repr(1000.0 * float(r.split(",")[0]))] + r.split(",")[1:])
                                      for r in rows[1:]))
+    refused(navigate(capsys, sim, tmp_path, gnss=bad), str(bad), "its positions move 1",
+            "times slower than its velocity columns say", "the time column holds milliseconds, not seconds")
+    assert empty_or_absent(tmp_path / "nav")
+    bad.write_text("".join(",".join(r.rstrip("\n").split(",")[:7]) + "\n" for r in bad.read_text().splitlines(True)))
     refused(navigate(capsys, sim, tmp_path, gnss=bad), "overlaps 1 used GNSS fix(es)", "; the fixes span 51000 s, "
             "986.3 times the IMU log's 51.71 s: is the fixes' time column in milliseconds (times must be seconds)?")
     assert empty_or_absent(tmp_path / "nav")

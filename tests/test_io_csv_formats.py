@@ -886,3 +886,30 @@ def test_a_specific_force_in_another_unit_under_an_m_s2_header_is_refused(tmp_pa
     with pytest.raises(InputError, match=r"imu\.csv: " + match):
         C.read_imu(p)
     assert len(C.read_imu(p, check_units=False)) == 400
+
+
+@pytest.mark.parametrize("fault, match", [
+    ("radians", r"its positions move 57\.\d+ times slower than its velocity columns say \(median over 39 moving "
+                r"rows\): latitude and longitude hold radians under the _deg headers"),
+    ("ms", r"its positions move 1000 times slower .*: the time column holds milliseconds"),
+])
+@pytest.mark.parametrize("kind", ["csv", "parquet"])
+def test_gnss_fixes_in_radians_or_milliseconds_are_told_by_their_velocity(tmp_path, fault, match, kind):
+    """Fixes with velocity whose lat_deg and lon_deg held radians (a point in the Gulf of Guinea, 57.3 times
+    too little motion) were read: `inskit navigate` lost the filter five times ('recovered from a lost
+    state'), searched an IMU time offset and said unhealthy without naming the file or the unit, while
+    read_solution refuses the same columns by the same test.  read_gnss now applies it."""
+    df = _gnss_frame()
+    df["lat_deg"] = 45.0 + 10.0 / 111_132.0 * 0.2 * np.arange(len(df))  # 10 m/s north, as vn_m_s says
+    df["vn_m_s"] = 10.0
+    if fault == "radians":
+        df["lat_deg"], df["lon_deg"] = np.radians(df["lat_deg"]), np.radians(df["lon_deg"])
+    else:
+        df["time_s"] *= 1000.0
+    p = tmp_path / f"gnss.{kind}"
+    df.to_parquet(p) if kind == "parquet" else df.to_csv(p, index=False)
+    with pytest.raises(InputError, match=rf"gnss\.{kind}: {match}"):
+        io.read_gnss(p)
+    df.drop(columns=[c for c in df.columns if c[:2] in ("vn", "ve", "vd") or c.startswith("sigma_v")]).to_csv(
+        tmp_path / "novel.csv", index=False)
+    assert len(io.read_gnss(tmp_path / "novel.csv")) == len(df)  # without velocity nothing tells it

@@ -1326,6 +1326,9 @@ def read_gnss(path) -> GnssData:
     Columns: ``time_s, lat_deg, lon_deg, height_m, sigma_n_m, sigma_e_m,
     sigma_d_m`` and optionally ``vn_m_s, ve_m_s, vd_m_s, sigma_vn_m_s,
     sigma_ve_m_s, sigma_vd_m_s``.  Sigmas are 1-sigma and must be > 0.
+    Fixes with velocity whose positions move far more slowly than it says
+    (latitude and longitude in radians under the ``_deg`` headers, a time
+    column in milliseconds) are refused (:func:`check_solution_time_unit`).
     """
     path, df = read_numeric_table(path, GNSS_COLUMNS + GNSS_VEL_COLUMNS)
     require_columns(path, df, GNSS_COLUMNS)
@@ -1343,7 +1346,10 @@ def read_gnss(path) -> GnssData:
         _check_positive(path, df, b[:, 3:], GNSS_VEL_COLUMNS[3:])
         v, sv = b[:, :3], b[:, 3:]
     lla = np.column_stack([a[:, 1] * DEG, a[:, 2] * DEG, a[:, 3]])
-    return GnssData(a[:, 0], lla, a[:, 4:7], v, sv)
+    gnss = GnssData(a[:, 0], lla, a[:, 4:7], v, sv)
+    if v is not None:  # the fixes' own motion against their velocity: radians under _deg, time in ms
+        check_solution_time_unit(path, gnss)
+    return gnss
 
 
 def _check_latlon(path, lat, lon):
@@ -1463,8 +1469,8 @@ TIME_UNIT_MIN_SPEED_M_S = 1.0
 TIME_UNIT_RATIO_MAX = 20.0
 
 
-def check_solution_time_unit(path, sol: NavSolution) -> None:
-    """Refuse a solution or truth file whose positions move more slowly than
+def check_solution_time_unit(path, sol: NavSolution | GnssData) -> None:
+    """Refuse a solution, truth or GNSS file (with velocity) whose positions move more slowly than
     its velocity columns say, by more than :data:`TIME_UNIT_RATIO_MAX`
     (median over up to :data:`TIME_UNIT_MAX_PAIRS` consecutive
     rows where the file moves faster than :data:`TIME_UNIT_MIN_SPEED_M_S`):
