@@ -913,3 +913,47 @@ def test_gnss_fixes_in_radians_or_milliseconds_are_told_by_their_velocity(tmp_pa
     df.drop(columns=[c for c in df.columns if c[:2] in ("vn", "ve", "vd") or c.startswith("sigma_v")]).to_csv(
         tmp_path / "novel.csv", index=False)
     assert len(io.read_gnss(tmp_path / "novel.csv")) == len(df)  # without velocity nothing tells it
+
+
+_SPEED_COURSE = "time_s,speed_m_s,course_deg,sigma_speed_m_s,sigma_course_deg\n" + "".join(
+    f"{k},{10.0 + 0.1 * k},{3.0 * k},0.1,2.0\n" for k in range(10))
+
+
+@pytest.mark.parametrize("reader, column, value, match", [
+    ("gnss", "sigma_n_m", "1e30", r"column 'sigma_n_m' is 1e\+30; a sigma beyond 100 km"),
+    ("gnss", "sigma_d_m", "2e5", r"column 'sigma_d_m' is 200000(\.0)?; a sigma beyond 100 km"),
+    ("gnss", "sigma_vd_m_s", "1e300", r"column 'sigma_vd_m_s' is 1e\+300; a sigma beyond 12000 m/s"),
+    ("speed_course", "sigma_speed_m_s", "1e300", r"column 'sigma_speed_m_s' is 1e\+300; a sigma beyond 12000 m/s"),
+    ("speed_course", "sigma_course_deg", "400", r"column 'sigma_course_deg' is 400(\.0)?; a sigma beyond 360 deg"),
+    ("speed_course", "speed_m_s", "1e300", r"column 'speed_m_s' is 1e\+300; expected a speed over ground up to "
+                                           r"12000 m/s"),
+    ("speed_course", "course_deg", "1e300", r"column 'course_deg' is 1e\+300; expected degrees clockwise from north, "
+                                            r"within \+-360"),
+    ("height", "sigma_m", "1e300", r"column 'sigma_m' is 1e\+300; a sigma beyond 100 km"),
+])
+def test_a_sigma_speed_or_course_beyond_reason_is_refused_naming_its_line(tmp_path, reader, column, value, match):
+    """A fix whose sigma_n_m held 1e30 (every fix) ended `inskit navigate` in 'covariance lost positiveness at
+    t = 0.500 s: the filter diverged (check sensor noise settings and the initial state)'; a speed-and-course
+    row with a speed, or a sigma, of 1e300 in 'innovation covariance is not positive definite: the filter
+    diverged'; a course of 1e300 deg went in as some angle and the run said healthy.  None named the file,
+    the line or the column: the readers now refuse them."""
+    if reader == "gnss":
+        df = _gnss_frame()
+        df[column] = df[column].astype(object)
+        df.loc[5, column] = value
+        p = tmp_path / "f.csv"
+        df.to_csv(p, index=False)
+        read = io.read_gnss
+    else:
+        text = _SPEED_COURSE if reader == "speed_course" else "time_s,height_m,sigma_m\n" + "".join(
+            f"{k},{100.0 + k},0.5\n" for k in range(10))
+        lines = text.splitlines(True)
+        names = lines[0].strip().split(",")
+        cells = lines[6].strip().split(",")
+        cells[names.index(column)] = value
+        lines[6] = ",".join(cells) + "\n"
+        p = tmp_path / "f.csv"
+        p.write_text("".join(lines))
+        read = io.read_speed_course if reader == "speed_course" else io.read_height
+    with pytest.raises(InputError, match=rf"f\.csv: line 7: {match}"):
+        read(p)

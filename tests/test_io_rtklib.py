@@ -442,3 +442,23 @@ def test_a_pos_file_of_other_quality_names_its_quality_and_the_key_that_reads_it
                                          r"\(\[gnss\] quality in a navigate config\) reads them"):
         read_pos(p)
     assert len(read_pos(p, quality=(5,))[0]) == 5
+
+
+@pytest.mark.parametrize("field, value, match", [
+    (7, "1e30", r"line 12: column 'sdn\(m\)' is 1e\+30; a sigma beyond 100 km"),
+    (19, "1e300", r"line 12: column 'sdve' is 1e\+300; a sigma beyond 12000 m/s"),
+])
+def test_a_pos_sigma_beyond_reason_is_refused_naming_its_line(tmp_path, field, value, match):
+    """A .pos row whose sdn held 1e30 was read, and the filter squared it into 'covariance lost
+    positiveness ... the filter diverged', naming neither file nor line; the CSV reader's limits now hold
+    for .pos files too (line 12: the 11th row after the header line)."""
+    lines = gzip.decompress(DRIVE_POS.read_bytes()).decode().splitlines(True)
+    first = next(i for i, s in enumerate(lines) if not s.startswith("%"))
+    k = first + 10
+    cells = lines[k].split()
+    cells[field] = value
+    lines[k] = " ".join(cells[:2]) + " " + " ".join(cells[2:]) + "\n"
+    p = tmp_path / "big.pos"
+    p.write_text("".join(lines))
+    with pytest.raises(InputError, match=rf"big\.pos: line {k + 1}: " + match.split(": ", 1)[1]):
+        read_pos(p)

@@ -1336,14 +1336,14 @@ def read_gnss(path) -> GnssData:
     check_time_column(path, a[:, 0])
     _check_latlon(path, a[:, 1], a[:, 2])
     check_ranges(path, {"height_m": a[:, 3]})
-    _check_positive(path, df, a[:, 4:7], GNSS_COLUMNS[4:7])
+    check_sigmas(path, a[:, 4:7], GNSS_COLUMNS[4:7])
     v = sv = None
     have = [c in df.columns for c in GNSS_VEL_COLUMNS]
     if any(have):
         require_columns(path, df, GNSS_VEL_COLUMNS, " (velocity needs all six velocity columns)")
         b = numeric_columns(path, df, GNSS_VEL_COLUMNS)
         check_ranges(path, dict(zip(GNSS_VEL_COLUMNS[:3], b[:, :3].T)))
-        _check_positive(path, df, b[:, 3:], GNSS_VEL_COLUMNS[3:])
+        check_sigmas(path, b[:, 3:], GNSS_VEL_COLUMNS[3:], "m/s")
         v, sv = b[:, :3], b[:, 3:]
     lla = np.column_stack([a[:, 1] * DEG, a[:, 2] * DEG, a[:, 3]])
     gnss = GnssData(a[:, 0], lla, a[:, 4:7], v, sv)
@@ -1418,12 +1418,31 @@ def _check_height_attitude(path, cols):
     check_ranges(path, {c: cols[c] for c in RANGE_LIMITS})
 
 
-def _check_positive(path, df, a, columns):
+#: the largest 1-sigma a reader takes, by the kind of quantity [m, m/s, deg]: beyond these a number says no
+#: measurement and is another unit or column; squared in the filter, 1e300 overflowed to inf and 1e30 left the
+#: covariance without its positiveness ('the filter diverged'), naming neither the file nor the column
+SIGMA_LIMITS = {"m": (MAX_HEIGHT_M, "100 km (no fix nor height is known that loosely)"),
+                "m/s": (MAX_SPEED_M_S, f"{MAX_SPEED_M_S:g} m/s (faster than the Earth's escape speed)"),
+                "deg": (360.0, "360 degrees (a full turn)")}
+
+
+def check_sigmas(path, a, columns, kind="m", where=None):
+    """Refuse a sigma that is not > 0, or beyond :data:`SIGMA_LIMITS` of its
+    ``kind`` (``"m"``, ``"m/s"``, ``"deg"``), naming the file, the line
+    (``where``: row index -> the place, default :func:`at_row`) and the
+    column."""
+    at = where if where is not None else (lambda i: at_row(path, i))
     bad = a <= 0
     if bad.any():
         i, j = np.argwhere(bad)[0]
-        raise InputError(f"{path}: {at_row(path, i)}: column '{columns[j]}' is {float(a[i, j])!r}; "
+        raise InputError(f"{path}: {at(i)}: column '{columns[j]}' is {float(a[i, j])!r}; "
                          "sigmas must be > 0")
+    lim, what = SIGMA_LIMITS[kind]
+    bad = ~(a <= lim)
+    if bad.any():
+        i, j = np.argwhere(bad)[0]
+        raise InputError(f"{path}: {at(i)}: column '{columns[j]}' is {plain_number(a[i, j])}; a sigma beyond {what} "
+                         "is no measurement: another unit or column?")
 
 
 def write_gnss(path, gnss: GnssData, *, overwrite=False):
@@ -1770,7 +1789,19 @@ def read_speed_course(path):
         i = int(np.argmax(a[:, 1] < 0))
         raise InputError(f"{path}: {at_row(path, i)}: column 'speed_m_s' is {plain_number(a[i, 1])}; a "
                          "speed over ground is >= 0 (the direction is in course_deg)")
-    _check_positive(path, df, a[:, 3:5], SPEED_COURSE_COLUMNS[3:5])
+    big = ~(a[:, 1] <= MAX_SPEED_M_S)
+    if big.any():
+        i = int(np.argmax(big))
+        raise InputError(f"{path}: {at_row(path, i)}: column 'speed_m_s' is {plain_number(a[i, 1])}; expected a "
+                         f"speed over ground up to {MAX_SPEED_M_S:g} m/s (faster than the Earth's escape speed): "
+                         "another unit or column?")
+    big = np.abs(a[:, 2]) > 360.0
+    if big.any():
+        i = int(np.argmax(big))
+        raise InputError(f"{path}: {at_row(path, i)}: column 'course_deg' is {plain_number(a[i, 2])}; expected "
+                         "degrees clockwise from north, within +-360: another unit or column?")
+    check_sigmas(path, a[:, 3:4], SPEED_COURSE_COLUMNS[3:4], "m/s")
+    check_sigmas(path, a[:, 4:5], SPEED_COURSE_COLUMNS[4:5], "deg")
     return a[:, 0].copy(), a[:, 1].copy(), np.radians(a[:, 2]), a[:, 3].copy(), np.radians(a[:, 4])
 
 
@@ -1807,6 +1838,6 @@ def read_height(path):
                          "beyond 100 km: a pressure or another unit? expected a height in metres")
     sigma = None
     if len(cols) == 3:
-        _check_positive(path, df, a[:, 2:3], ["sigma_m"])
+        check_sigmas(path, a[:, 2:3], ["sigma_m"])
         sigma = a[:, 2].copy()
     return a[:, 0].copy(), a[:, 1].copy(), sigma

@@ -21,8 +21,9 @@ from ..files import require_file
 from ..types import GnssData, ImuData, check_euler, plain_number
 from ..units import DEG, G0, MAX_HEIGHT_M
 from .csv_formats import (GZIP_ERRORS, CheckedBytes, TextFault, _header_names, at_row, check_imu_time,
-                          check_imu_units, check_ranges, check_time_column, cut_short_note, gzip_damage_message,
-                          lean_columns, numeric_columns, read_table, repeated_rows, require_columns)
+                          check_imu_units, check_ranges, check_sigmas, check_time_column, cut_short_note,
+                          gzip_damage_message, lean_columns, numeric_columns, read_table, repeated_rows,
+                          require_columns)
 from .time_tags import smooth_time_tags
 
 GPS_EPOCH = datetime(1980, 1, 6, tzinfo=timezone.utc)
@@ -272,12 +273,16 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0, info=None):
     if bad.any():
         i = int(np.argmax(bad))
         raise InputError(f"{path}: line {linenos[keep][i]}: a position sigma is {float(sig[i].min())!r}; sigmas must be > 0")
+    line = lambda i: f"line {linenos[keep][i]}"  # noqa: E731 - the message's place of a kept row
+    check_sigmas(path, sig, ["sdn(m)", "sde(m)", "sdu(m)"], "m", where=line)
     v = sv = None
     if all(c in num for c in _POS_VELOCITY["llh"]):  # an xyz file's made NED by _pos_from_ecef
         v = np.column_stack([num["vn(m/s)"], num["ve(m/s)"], -num["vu(m/s)"]])[keep]
         sv = np.column_stack([num["sdvn"], num["sdve"], num["sdvu"]])[keep]
         if (sv <= 0).any():
             v = sv = None  # velocity sigmas absent: treat the velocity as unusable
+        else:
+            check_sigmas(path, sv, ["sdvn", "sdve", "sdvu"], "m/s", where=line)
     return GnssData(t[keep], lla, sig, v, sv), week0
 
 
