@@ -132,6 +132,22 @@ def test_navigate_writes_only_when_asked(walkthrough, tmp_path):
     assert run.config.output.plots is False and cfg.output.plots is True  # the override touched a copy
 
 
+def test_navigate_never_overwrites_its_inputs_even_with_overwrite(walkthrough, tmp_path):
+    """navigate(cfg, truth=run/solution_forward.csv, out_dir=run, overwrite=True) read the truth and replaced it
+    with its own solution: the API checked no output against any input.  Refused before any work now, and the
+    folder is left as it was."""
+    ns, _ = walkthrough
+    cfg = ns["run"].config
+    out = tmp_path / "run"
+    out.mkdir()
+    truth = out / "solution_forward.csv"
+    truth.write_text("mine\n")
+    with pytest.raises(InputError, match=re.escape(f"{truth}: would overwrite an input of this run") +
+                       r".*overwrite=True replaces results, never what the run reads: choose another out_dir"):
+        inskit.navigate(cfg, out_dir=out, truth=truth, overwrite=True)
+    assert truth.read_text() == "mine\n" and sorted(p.name for p in out.iterdir()) == ["solution_forward.csv"]
+
+
 def test_navigate_config_forms_and_errors(tmp_path, monkeypatch):
     """A dict config starts its relative paths in the working directory; bad keys and files are named."""
     monkeypatch.chdir(tmp_path)

@@ -570,6 +570,37 @@ def test_out_equal_to_an_input(capsys, sim, tmp_path):
     assert sorted(p.name for p in d.iterdir()) == ["solution_forward.csv"]
 
 
+@pytest.mark.parametrize("role, name", [("gnss", "innovations.csv"), ("truth", "solution_forward.csv"),
+                                        ("truth", "solution_smoothed.parquet"), ("gnss", "config_used.json"),
+                                        ("gnss", "track.png"), ("previous", "gnss_old.csv")])
+def test_navigate_never_overwrites_any_of_its_inputs_even_with_force(capsys, sim, tmp_path, role, name):
+    """`inskit navigate --gnss run/innovations.csv --truth run/solution_forward.csv --out run --force` read the
+    fixes and the truth and then replaced both with its own innovations and solution: only five names (the
+    solutions and summary.json) were checked against the IMU, fixes and RINEX files, not the innovations,
+    config_used.json, the plots or report.html, nor the truth, odometer, height or speed-and-course files,
+    nor the files --force removes as an earlier run's.  Every output, and every file --force would clear,
+    is checked against every input now."""
+    d = tmp_path / "run"
+    d.mkdir()
+    gnss, truth = sim / "gnss.csv", None
+    if role == "previous":  # an earlier run there listed the file this run now reads
+        (d / "summary.json").write_text(json.dumps({"files": [str(d / name)]}))
+        shutil.copy(sim / "gnss.csv", d / name)
+        gnss = d / name
+    elif role == "gnss":
+        shutil.copy(sim / "gnss.csv", d / name)
+        gnss = d / name
+    else:
+        shutil.copy(sim / "truth.csv", d / name)
+        truth = d / name
+    before = {p.name: p.read_bytes() for p in d.iterdir()}
+    extra = ("--truth", truth) if truth is not None else ()
+    refused(run(capsys, "navigate", "--imu", sim / "imu.csv", "--gnss", gnss, "--out", d, "--force", *extra),
+            str(d / name), "would overwrite an input of this run", "--force replaces results, never what the run "
+            "reads")
+    assert {p.name: p.read_bytes() for p in d.iterdir()} == before
+
+
 @pytest.mark.skipif(os.name != "posix" or os.geteuid() == 0, reason="root writes into a read-only folder")
 def test_read_only_output_folder(capsys, sim, tmp_path):
     ro = tmp_path / "ro"

@@ -1515,3 +1515,25 @@ def test_an_odometer_log_with_dropouts_shows_no_lag():
     assert abs(lag["lag_s"]) <= 0.03 and lag["f_statistic"] < 25.0 and 100 < lag["fixes"] < 200, lag
     lag = odometer_lag(log.time[keep] + 0.3, log.speed_m_s[keep], car.gnss)
     assert lag["lag_s"] == pytest.approx(0.3, abs=0.03) and odometer_lag_warning(lag, "odo.csv", 0.0), lag
+
+
+def test_run_input_files_lists_every_file_a_run_reads_and_outputs_never_replace_them(tmp_path):
+    """The output check of navigate compared five of its outputs with the IMU, fixes and RINEX files only: a
+    truth, odometer, height or speed-and-course file named like an output (innovations.csv ...) was read and
+    then overwritten under --force.  run_input_files lists them all; refuse_overwriting_inputs checks every
+    name a run may write against them."""
+    from inskit.errors import InputError
+    from inskit.jobs import config as C
+    from inskit.jobs.navigate import refuse_overwriting_inputs, run_input_files
+
+    for n in ("imu.csv", "gnss.csv", "odo.csv", "h.csv", "sc.csv", "truth.csv"):
+        (tmp_path / n).write_text("x\n")
+    cfg = C.config_from_dict({"imu": {"file": "imu.csv"}, "gnss": {"file": "gnss.csv", "speed_course": "sc.csv"},
+                              "odometer": {"file": "odo.csv"}, "height": {"file": "h.csv"},
+                              "truth": {"file": "truth.csv"}}, base_dir=tmp_path, source="t")
+    assert sorted(p.name for p in run_input_files(cfg)) == ["gnss.csv", "h.csv", "imu.csv", "odo.csv", "sc.csv",
+                                                            "truth.csv"]
+    refuse_overwriting_inputs(cfg, tmp_path / "out", force=True)  # another folder: nothing to refuse
+    moved = cfg.model_copy(update={"height": cfg.height.model_copy(update={"file": tmp_path / "out" / "biases.png"})})
+    with pytest.raises(InputError, match=r"out/biases\.png: would overwrite an input of this run"):
+        refuse_overwriting_inputs(moved, tmp_path / "out")

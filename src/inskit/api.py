@@ -200,6 +200,9 @@ def navigate(config, *, smooth=False, truth=None, out_dir=None, overwrite=False,
         occupied = None if overwrite else N.occupied_folder_message(target, "overwrite=True", "another out_dir")
         if occupied:
             raise InputError(occupied)
+        given = [config if isinstance(config, (str, Path)) else None,
+                 truth if not isinstance(truth, NavSolution) else None]  # the files given apart from the config's
+        N.refuse_overwriting_inputs(cfg, target, given, overwrite, "overwrite=True", "another out_dir")
         check_folder_writable(target)  # before the computation, not after it; a file there: 'is a file; ...'
     if truth is not None and not isinstance(truth, NavSolution):
         truth = io.read_solution(truth)

@@ -443,18 +443,13 @@ def navigate(config_file, imu_file, imu_format, gnss_file, gnss_format, lever_ar
         if not (imu_file and gnss_file):
             raise InputError("give a config file, or at least --imu and --gnss")
         cfg = C.config_from_dict({}, base_dir=Path.cwd(), source="flags", overrides=over)
-    from .files import check_folder_writable, same_file
+    from .files import check_folder_writable
 
     target = Path(out_dir) if out_dir else (cfg.resolve(cfg.output.dir) if cfg.output.dir else Path("out") / cfg.name)
     occupied = None if force else N.occupied_folder_message(target)  # a file there: check_folder_writable says so
     if occupied:
         raise InputError(occupied)
-    for name in ("solution_forward.csv", "solution_smoothed.csv", "solution_forward.parquet",
-                 "solution_smoothed.parquet", "summary.json"):
-        inputs = [cfg.resolve(f) for f in (cfg.imu.file, cfg.gnss.file, cfg.gnss.obs, cfg.gnss.nav) if f is not None]
-        for inp in inputs + ([Path(config_file)] if config_file else []):
-            if same_file(target / name, inp):
-                raise InputError(f"{target / name}: would overwrite an input of this run; choose another --out")
+    N.refuse_overwriting_inputs(cfg, target, [config_file], force)
     check_folder_writable(target)  # before the computation, not after it
     cfg, extra = N.calibrated_config(cfg, log=_log)
     with _progress(None, "navigate") as bar:

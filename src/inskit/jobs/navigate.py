@@ -2447,6 +2447,48 @@ def bank_tie_text(best) -> str:
             "start-up's")
 
 
+def run_input_files(cfg: NavigateConfig) -> list:
+    """Every file a navigate run of ``cfg`` reads, resolved: the IMU log,
+    the fixes, the RINEX observation and navigation files, the speed and
+    course log, the odometer, height and truth files (those the config
+    names)."""
+    g = cfg.gnss
+    files = [cfg.imu.file, g.file, g.obs, g.nav, g.speed_course,
+             cfg.odometer.file if cfg.odometer is not None else None,
+             cfg.truth.file if cfg.truth is not None else None,
+             cfg.height.file if cfg.height is not None else None]
+    return [cfg.resolve(f) for f in files if f is not None]
+
+
+def run_output_names() -> list:
+    """The names of every file a navigate run may write into its folder
+    (:func:`write_outputs`, the plots, ``report.html``)."""
+    from .plots import PLOTS
+
+    names = [f"solution_{label}.{ext}" for label in ("forward", "smoothed") for ext in ("csv", "parquet")]
+    return names + ["innovations.csv", "config_used.json", "summary.json", "report.html"] + [n for n, _ in PLOTS]
+
+
+def refuse_overwriting_inputs(cfg: NavigateConfig, folder, extra_inputs=(), force=False, force_word="--force",
+                              other="another --out") -> None:
+    """Refuse, before any work, a run whose folder ``folder`` would receive
+    a file over one of the run's inputs (:func:`run_input_files`, and
+    ``extra_inputs``: the config file, a truth given apart): its solution,
+    innovations, summary, plots or report, or, with ``force``, a file an
+    earlier run there listed (which :func:`clear_previous_run` removes).
+    ``force`` (``force_word``) replaces results, never what the run reads."""
+    from ..files import same_file
+
+    folder = Path(folder)
+    targets = [folder / n for n in run_output_names()] + (previous_run_files(folder) if force else [])
+    inputs = run_input_files(cfg) + [Path(f) for f in extra_inputs if f is not None]
+    for out in targets:
+        for inp in inputs:
+            if same_file(out, inp):
+                raise InputError(f"{out}: would overwrite an input of this run ({inp}); {force_word} replaces "
+                                 f"results, never what the run reads: choose {other}, or move the input")
+
+
 def occupied_folder_message(folder, force="--force", other="--out") -> str | None:
     """Why a run may not write into ``folder`` unasked, or None (no folder,
     or an empty one): the words say what it holds, a run's results (its
