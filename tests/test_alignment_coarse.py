@@ -111,3 +111,19 @@ def test_vibration_beyond_the_absolute_limit_is_motion():
                     ideal.dv_b)
     check_static(quiet)
     assert detect_static_start(quiet) > 19.0
+
+
+def test_a_track_that_never_moves_says_how_fast_it_went_and_what_to_give(drive):
+    """A log entirely at rest ended `inskit navigate` in 'the GNSS track never moves: heading cannot be found
+    from it', with nothing measured and no way on (init.yaw_deg does not help: the static start-up ignores
+    it).  The message now gives the fastest speed against the threshold and the initial state to give."""
+    from inskit.types import GnssData
+
+    _, gnss, _ = drive
+    k = int(np.searchsorted(gnss.time, 15.0))  # the first 15 s of the drive's 20 s at rest
+    still = GnssData(gnss.time[:k], gnss.lla[:k], gnss.sigma_ned[:k])
+    with pytest.raises(InputError, match=r"^the GNSS track never moves \(\d+ fixes over 1\d\.\d s, the fastest "
+                                         r"0\.\d\d m/s, motion above 0\.30 m/s\): no heading can be found from it; "
+                                         r"a log at rest needs its initial state: init\.mode = \"given\" with "
+                                         r"lat_deg, lon_deg, height_m and rpy_deg$"):
+        detect_motion_start(still)

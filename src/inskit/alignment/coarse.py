@@ -72,9 +72,14 @@ def detect_motion_start(gnss: GnssData, threshold_m_s=0.3):
     """Time of the first GNSS epoch whose speed exceeds ``threshold_m_s`` (or
     four times the speed noise, if larger)."""
     speed, _, sig = gnss_speed(gnss)
-    moving = speed > max(threshold_m_s, 4.0 * sig)
+    limit = max(threshold_m_s, 4.0 * sig)
+    moving = speed > limit
     if not moving.any():
-        raise InputError("the GNSS track never moves: heading cannot be found from it")
+        raise InputError(
+            f"the GNSS track never moves ({len(speed)} fixes over {float(gnss.time[-1] - gnss.time[0]):.1f} s, the "
+            f"fastest {float(np.max(speed)) if len(speed) else 0.0:.2f} m/s, motion above {limit:.2f} m/s): no "
+            "heading can be found from it; a log at rest needs its initial state: init.mode = \"given\" with "
+            "lat_deg, lon_deg, height_m and rpy_deg")
     return float(gnss.time[int(np.argmax(moving))])
 
 
