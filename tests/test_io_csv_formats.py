@@ -957,3 +957,16 @@ def test_a_sigma_speed_or_course_beyond_reason_is_refused_naming_its_line(tmp_pa
         read = io.read_speed_course if reader == "speed_course" else io.read_height
     with pytest.raises(InputError, match=rf"f\.csv: line 7: {match}"):
         read(p)
+
+
+def test_an_odometer_speed_beyond_the_limit_backwards_is_said_below_not_above(tmp_path):
+    """A reversing speed of -400 m/s (km/h of a reversing car, a corrupt row) was refused as 'holds -400.0,
+    above 150 m/s', which it is not; the message now says which side of the bound it lies."""
+    p = tmp_path / "odo.csv"
+    p.write_text("time_s,speed_m_s\n0.0,0.0\n0.1,-400\n0.2,1.0\n")
+    with pytest.raises(InputError, match=r"odo\.csv: line 3: column 'speed_m_s' holds -400(\.0)?, below -150 m/s: "
+                                         r"km/h or another unit\? expected metres per second$"):
+        io.read_speed(p)
+    p.write_text("time_s,speed_m_s\n0.0,0.0\n0.1,400\n0.2,1.0\n")
+    with pytest.raises(InputError, match=r"line 3: column 'speed_m_s' holds 400(\.0)?, above 150 m/s"):
+        io.read_speed(p)

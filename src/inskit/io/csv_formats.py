@@ -1765,7 +1765,8 @@ def read_speed(path):
     if (np.abs(a[:, 1]) > 150.0).any():
         i = int(np.argmax(np.abs(a[:, 1]) > 150.0))
         raise InputError(f"{path}: {at_row(path, i)}: column 'speed_m_s' holds {plain_number(a[i, 1])}, "
-                         "above 150 m/s: km/h or another unit? expected metres per second")
+                         f"{'above' if a[i, 1] > 0 else 'below'} {'' if a[i, 1] > 0 else '-'}150 m/s: km/h or "
+                         "another unit? expected metres per second")
     return a[:, 0].copy(), a[:, 1].copy()
 
 
