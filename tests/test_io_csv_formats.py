@@ -930,13 +930,18 @@ _SPEED_COURSE = "time_s,speed_m_s,course_deg,sigma_speed_m_s,sigma_course_deg\n"
     ("speed_course", "course_deg", "1e300", r"column 'course_deg' is 1e\+300; expected degrees clockwise from north, "
                                             r"within \+-360"),
     ("height", "sigma_m", "1e300", r"column 'sigma_m' is 1e\+300; a sigma beyond 100 km"),
+    ("gnss", "sigma_e_m", "1e-10", r"column 'sigma_e_m' is 1e-10; a sigma below 1e-06 m is no measurement"),
+    ("gnss", "sigma_ve_m_s", "1e-30", r"column 'sigma_ve_m_s' is 1e-30; a sigma below 1e-06 m/s"),
+    ("speed_course", "sigma_course_deg", "1e-9", r"column 'sigma_course_deg' is 1e-09; a sigma below 1e-06 deg"),
+    ("height", "sigma_m", "1e-12", r"column 'sigma_m' is 1e-12; a sigma below 1e-06 m"),
 ])
 def test_a_sigma_speed_or_course_beyond_reason_is_refused_naming_its_line(tmp_path, reader, column, value, match):
     """A fix whose sigma_n_m held 1e30 (every fix) ended `inskit navigate` in 'covariance lost positiveness at
     t = 0.500 s: the filter diverged (check sensor noise settings and the initial state)'; a speed-and-course
     row with a speed, or a sigma, of 1e300 in 'innovation covariance is not positive definite: the filter
-    diverged'; a course of 1e300 deg went in as some angle and the run said healthy.  None named the file,
-    the line or the column: the readers now refuse them."""
+    diverged'; a course of 1e300 deg went in as some angle and the run said healthy.  Exact fixes with sigmas
+    of 1e-10 m ended in 'covariance lost positiveness at t = 1.000 s' (1e-8 m still ran).  None named the
+    file, the line or the column: the readers now refuse them."""
     if reader == "gnss":
         df = _gnss_frame()
         df[column] = df[column].astype(object)

@@ -1424,19 +1424,29 @@ def _check_height_attitude(path, cols):
 SIGMA_LIMITS = {"m": (MAX_HEIGHT_M, "100 km (no fix nor height is known that loosely)"),
                 "m/s": (MAX_SPEED_M_S, f"{MAX_SPEED_M_S:g} m/s (faster than the Earth's escape speed)"),
                 "deg": (360.0, "360 degrees (a full turn)")}
+#: the smallest 1-sigma a reader takes (any kind): below it no sensor measures, and the filter's covariance
+#: cannot follow (fixes of sigma 1e-10 m, exact as they were, ended 'covariance lost positiveness at t = 1.000 s:
+#: the filter diverged'; 1e-8 m still ran); ``inskit simulate`` writes 1 mm at least
+SIGMA_MIN = 1e-6
 
 
 def check_sigmas(path, a, columns, kind="m", where=None):
-    """Refuse a sigma that is not > 0, or beyond :data:`SIGMA_LIMITS` of its
-    ``kind`` (``"m"``, ``"m/s"``, ``"deg"``), naming the file, the line
-    (``where``: row index -> the place, default :func:`at_row`) and the
-    column."""
+    """Refuse a sigma that is not > 0, below :data:`SIGMA_MIN`, or beyond
+    :data:`SIGMA_LIMITS` of its ``kind`` (``"m"``, ``"m/s"``, ``"deg"``),
+    naming the file, the line (``where``: row index -> the place, default
+    :func:`at_row`) and the column."""
     at = where if where is not None else (lambda i: at_row(path, i))
     bad = a <= 0
     if bad.any():
         i, j = np.argwhere(bad)[0]
         raise InputError(f"{path}: {at(i)}: column '{columns[j]}' is {float(a[i, j])!r}; "
                          "sigmas must be > 0")
+    bad = a < SIGMA_MIN
+    if bad.any():
+        i, j = np.argwhere(bad)[0]
+        raise InputError(f"{path}: {at(i)}: column '{columns[j]}' is {plain_number(a[i, j])}; a sigma below "
+                         f"{SIGMA_MIN:g} {kind} is no measurement (no sensor is that exact, and the filter's covariance "
+                         "cannot follow it): another unit or column?")
     lim, what = SIGMA_LIMITS[kind]
     bad = ~(a <= lim)
     if bad.any():
