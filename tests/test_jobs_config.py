@@ -668,3 +668,26 @@ def test_windows_that_are_no_list_of_pairs_say_what_is_expected(tmp_path, text):
                                           r"end\] pairs in seconds after the first GNSS epoch, e\.g\. windows_s = "
                                           r"\[\[100, 110\]"):
         load_config(p)
+
+
+@pytest.mark.parametrize("section, key, value, shown", [
+    ("gnss", "lever_arm_b_m", [1e12, 0.0, 0.0], "x (forward) 1e+12 m"),
+    ("gnss", "lever_arm_b_m", [0.0, -1500, 0.0], "y (right) -1500 m"),
+    ("constraints", "nhc_lever_arm_b_m", [0.0, 0.0, 2000.0], "z (down) 2000 m"),
+    ("odometer", "lever_arm_b_m", [5000.0, 0.0, 0.0], "x (forward) 5000 m"),
+    ("height", "lever_arm_b_m", [0.0, 0.0, -790.5e3], "z (down) -790500 m"),
+])
+def test_a_lever_arm_beyond_a_kilometre_is_refused_naming_the_key(section, key, value, shown):
+    """`inskit navigate --lever-arm 1e12,0,0` ran the filter and ended in 'innovation covariance is not
+    positive definite: the filter diverged' (the 'non-holonomic constraint does not hold' retry before it),
+    naming no setting; 1e7 m ran to an unhealthy verdict blamed on lost fixes.  Every lever arm of the config
+    is held to +-1 km (millimetres under the metre key are caught from 1 m on)."""
+    data = {"imu": {"file": "imu.csv"}, "gnss": {"file": "gnss.csv"}}
+    if section in ("odometer", "height"):
+        data[section] = {"file": f"{section}.csv"}
+    data.setdefault(section, {})[key] = value
+    with pytest.raises(ConfigError, match=rf"c\.toml: field '{section}\.{key}': {re.escape(shown)} is beyond "
+                                          r"\+-1000 m: no vehicle carries its sensors that far apart"):
+        config_from_dict(data, source="c.toml")
+    data[section][key] = [999.0, -0.05, 0.79]  # within the bound: taken
+    assert tuple(getattr(getattr(config_from_dict(data, source="c.toml"), section), key)) == (999.0, -0.05, 0.79)

@@ -179,6 +179,24 @@ def check_angles(v):
     return v
 
 
+#: the largest lever-arm component a setting may hold [m]: no vehicle carries its sensors a kilometre apart;
+#: beyond it is a typo or another unit (``--lever-arm 1e12,0,0`` ended in 'innovation covariance is not positive
+#: definite: the filter diverged', naming no setting)
+LEVER_ARM_LIMIT_M = 1000.0
+
+
+def check_lever_arm(v):
+    """A pydantic after-validator of a lever-arm field [m] (a forward,
+    right, down triple): each component within
+    +-:data:`LEVER_ARM_LIMIT_M`, else refused naming the component and the
+    value (the field is named by the caller's location)."""
+    for name, x in zip(("x (forward) ", "y (right) ", "z (down) "), v):
+        if isinstance(x, (int, float)) and abs(x) <= MAX_SETTING and not abs(x) <= LEVER_ARM_LIMIT_M:
+            raise ValueError(f"{name}{x:g} m is beyond +-{LEVER_ARM_LIMIT_M:g} m: no vehicle carries its sensors "
+                             "that far apart (a typo, or millimetres?); expected metres in body axes")
+    return v
+
+
 def check_option_angles(option, rpy):
     """Angles [deg] given with a command-line ``option`` (roll, pitch, yaw)
     held to :func:`check_angles`' range, else an InputError naming the

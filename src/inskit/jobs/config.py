@@ -29,8 +29,8 @@ from typing import Literal
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 from pydantic_core import PydanticCustomError
 
-from ..config_files import (MASK_RANGE_DEG, check_angles, check_height, check_longitude, check_magnitude, check_mask,
-                            check_scalar_type, read_toml, validation_message)
+from ..config_files import (MASK_RANGE_DEG, check_angles, check_height, check_lever_arm, check_longitude,
+                            check_magnitude, check_mask, check_scalar_type, read_toml, validation_message)
 from ..errors import ConfigError, InputError
 from ..units import MAX_RATE_HZ
 
@@ -196,7 +196,9 @@ class GnssSection(_Strict):
     height_offset_m: float = Field(0.0, description="added to the fixes' heights (e.g. the geoid separation, "
                                    "-21.4 m on walk_0827, turns u-blox heights above sea level into ellipsoidal)")
     lever_arm_b_m: tuple[float, float, float] = Field(
-        (0.0, 0.0, 0.0), description="antenna position relative to the IMU in body axes (forward, right, down)")
+        (0.0, 0.0, 0.0), description="antenna position relative to the IMU in body axes (forward, right, down), "
+        "each within +-1 km")
+    _lever_arm = field_validator("lever_arm_b_m")(check_lever_arm)
     use_velocity: bool = Field(False, description="loose coupling: fuse the fixes' velocity as well as their "
                                "position")
     velocity_delay_s: float = Field(0.0, description="loose coupling with use_velocity: a fix's velocity "
@@ -559,7 +561,8 @@ class ConstraintsSection(_Strict):
     nhc_sigma_m_s: float = Field(0.1, gt=0, description="sigma of the lateral and vertical body velocity")
     nhc_lever_arm_b_m: tuple[float, float, float] = Field(
         (0.0, 0.0, 0.0), description="IMU to the point where the non-holonomic constraint holds (the centre "
-        "of the unsteered rear axle), body axes [m]; 0: at the IMU")
+        "of the unsteered rear axle), body axes [m], each within +-1 km; 0: at the IMU")
+    _lever_arm = field_validator("nhc_lever_arm_b_m")(check_lever_arm)
     rate_hz: float = Field(10.0, gt=0, le=1000, description="rate of the zero-velocity and non-holonomic updates")
     mounting: bool = Field(False, description="estimate the IMU's mounting in the vehicle (pitch and yaw of the "
                            "vehicle axes against the IMU's, after imu.mount_rpy_deg; 2 states) for the "
@@ -783,7 +786,8 @@ class OdometerSection(_Strict):
     rate_hz: float | None = Field(None, gt=0, description="use at most this many readings per second "
                                   "(default: every reading)")
     lever_arm_b_m: tuple[float, float, float] = Field((0.0, 0.0, 0.0), description="IMU to the wheel point, "
-                                                      "body axes [m]")
+                                                      "body axes [m], each within +-1 km")
+    _lever_arm = field_validator("lever_arm_b_m")(check_lever_arm)
     estimate_scale: bool = Field(True, description="estimate the odometer scale-factor error as a state")
     scale_sigma0: float = Field(0.01, gt=0, description="initial sigma of the scale-factor error [-]")
     scale_rw: float = Field(1e-6, ge=0, description="random walk of the scale-factor error [1/sqrt(s)]")
@@ -846,7 +850,8 @@ class HeightSection(_Strict):
     rate_hz: float = Field(1.0, gt=0, le=1000, description="use at most this many readings per second (the "
                            "readings are taken as independent); the rate of a constant height_m")
     lever_arm_b_m: tuple[float, float, float] = Field((0.0, 0.0, 0.0), description="IMU to the height sensor, "
-                                                      "body axes (forward, right, down) [m]")
+                                                      "body axes (forward, right, down) [m], each within +-1 km")
+    _lever_arm = field_validator("lever_arm_b_m")(check_lever_arm)
     estimate_bias: bool = Field(True, description="estimate the sensor's offset b as a state (a barometer: "
                                 "its datum and the weather); off: the heights are taken as unbiased")
     bias_model: Literal["constant", "random-walk", "gauss-markov"] = Field(
