@@ -1537,3 +1537,31 @@ def test_run_input_files_lists_every_file_a_run_reads_and_outputs_never_replace_
     moved = cfg.model_copy(update={"height": cfg.height.model_copy(update={"file": tmp_path / "out" / "biases.png"})})
     with pytest.raises(InputError, match=r"out/biases\.png: would overwrite an input of this run"):
         refuse_overwriting_inputs(moved, tmp_path / "out")
+
+
+def test_a_start_past_the_imu_log_names_what_set_it_and_the_log_span(tmp_path):
+    """`[imu] start_s = 1e6` on a 2 s log said only 'imu.csv: fewer than 10 IMU samples after the start time
+    1000000.000 s': neither the key that set the start nor where the log lies.  Now both, and the first fix
+    when it is the fixes that start late."""
+    from inskit import io
+    from inskit.errors import InputError
+    from inskit.jobs.config import config_from_dict
+    from inskit.jobs.navigate import load_inputs
+    from inskit.simulation import StationaryTrajectory, ideal_imu
+    from inskit.types import GnssData
+
+    t = np.arange(0.0, 2.0 + 1e-9, 0.01)
+    io.write_imu(tmp_path / "imu.csv", ideal_imu(StationaryTrajectory((0.7, 0.1, 10.0)), t, nodes=1))
+    tg = np.arange(0.0, 2.01, 0.5)
+    io.write_gnss(tmp_path / "gnss.csv", GnssData(tg, np.tile([0.7, 0.1, 10.0], (len(tg), 1)), np.ones((len(tg), 3))))
+    data = {"imu": {"file": "imu.csv", "start_s": 1e6}, "gnss": {"file": "gnss.csv"}}
+    with pytest.raises(InputError, match=r"^imu\.csv: fewer than 10 IMU samples after the start time 1000000\.000 s "
+                                         r"\(\[imu\] start_s\); the log's 201 samples span 0\.000\.\.2\.000 s \(after "
+                                         r"\[imu\] time_offset_s\): the run needs at least 10 from its start on$"):
+        load_inputs(config_from_dict(data, base_dir=tmp_path))
+    late = np.array([1.95, 2.0])  # the fixes start 5 IMU samples before the log's end
+    io.write_gnss(tmp_path / "gnss.csv", GnssData(late, np.tile([0.7, 0.1, 10.0], (2, 1)), np.ones((2, 3))),
+                  overwrite=True)
+    del data["imu"]["start_s"]
+    with pytest.raises(InputError, match=r"after the start time 1\.950 s \(the first GNSS fix of gnss\.csv\)"):
+        load_inputs(config_from_dict(data, base_dir=tmp_path))

@@ -418,7 +418,11 @@ def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = N
     start = max(gnss.time[0], cfg.imu.start_s if cfg.imu.start_s is not None else -np.inf)
     k0 = int(np.searchsorted(imu.time, start))
     if len(imu) - k0 < 10:
-        raise InputError(f"{ipath.name}: fewer than 10 IMU samples after the start time {start:.3f} s")
+        by = ("[imu] start_s" if cfg.imu.start_s is not None and cfg.imu.start_s >= gnss.time[0]
+              else f"the first GNSS fix of {gpath.name}")
+        raise InputError(f"{ipath.name}: fewer than 10 IMU samples after the start time {start:.3f} s ({by}); the "
+                         f"log's {len(imu)} samples span {imu.time[0]:.3f}..{imu.time[-1]:.3f} s (after "
+                         "[imu] time_offset_s): the run needs at least 10 from its start on")
     return imu.slice(k0), gnss
 
 
