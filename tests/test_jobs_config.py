@@ -691,3 +691,16 @@ def test_a_lever_arm_beyond_a_kilometre_is_refused_naming_the_key(section, key, 
         config_from_dict(data, source="c.toml")
     data[section][key] = [999.0, -0.05, 0.79]  # within the bound: taken
     assert tuple(getattr(getattr(config_from_dict(data, source="c.toml"), section), key)) == (999.0, -0.05, 0.79)
+
+
+@pytest.mark.parametrize("quality, why", [([], "an empty list keeps no fix"), ([1, 7], "no .pos row has Q = 7"),
+                                          ([0], "no .pos row has Q = 0")])
+def test_a_quality_list_that_can_keep_no_fix_is_refused_at_load(quality, why):
+    """`[gnss] quality = []` (or [7]) loaded, and the run failed on reading the file with '... no rows with
+    quality Q in []', which blamed the .pos file for the setting.  RTKLIB's flags are 1 to 6."""
+    data = {"imu": {"file": "imu.csv"}, "gnss": {"file": "g.pos", "format": "rtklib-pos", "quality": quality}}
+    with pytest.raises(ConfigError, match=rf"c\.toml: field 'gnss\.quality': expected one or more of RTKLIB's quality "
+                                          rf"flags Q, 1 to 6 .*, got {re.escape(str(quality))}: {why}$"):
+        config_from_dict(data, source="c.toml")
+    data["gnss"]["quality"] = [1, 2, 5]
+    assert config_from_dict(data, source="c.toml").gnss.quality == [1, 2, 5]

@@ -191,7 +191,8 @@ class GnssSection(_Strict):
         "inskit", description="layout of `file`: 'inskit' (our CSV of fixes, docs/formats.md) or 'rtklib-pos' "
         "(an RTKLIB .pos solution, GPS time)")
     time_offset_s: float = Field(0.0, description="added to every time tag of `file`")
-    quality: list[int] = Field([1, 2], description="format 'rtklib-pos' only (the one with a quality column): "
+    quality: list[int] = Field([1, 2], description="format 'rtklib-pos' only (the one with a quality column), one "
+                               "or more of 1..6: "
                                "the Q flags kept (1 fix, 2 float, 5 single, ...); other rows are dropped")
     height_offset_m: float = Field(0.0, description="added to the fixes' heights (e.g. the geoid separation, "
                                    "-21.4 m on walk_0827, turns u-blox heights above sea level into ellipsoidal)")
@@ -249,6 +250,16 @@ class GnssSection(_Strict):
                                       "velocity; withheld in outage windows like the fixes")
     speed_course_min_speed_m_s: float = Field(0.5, ge=0, description="below this speed (or 3 sigma of it) the "
                                               "course is meaningless and the reading is skipped [m/s]")
+    @field_validator("quality")
+    @classmethod
+    def _quality_flags(cls, v):
+        bad = [q for q in v if not 1 <= q <= 6]
+        if not v or bad:
+            raise ValueError(f"expected one or more of RTKLIB's quality flags Q, 1 to 6 (1 fix, 2 float, 3 SBAS, "
+                             f"4 DGPS, 5 single, 6 PPP), got {list(v)}: " + ("an empty list keeps no fix" if not v else
+                                                                              f"no .pos row has Q = {bad[0]}"))
+        return v
+
     @field_validator("sigma_scale_ned")
     @classmethod
     def _positive_scales(cls, v):
