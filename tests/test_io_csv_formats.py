@@ -975,3 +975,55 @@ def test_an_odometer_speed_beyond_the_limit_backwards_is_said_below_not_above(tm
     p.write_text("time_s,speed_m_s\n0.0,0.0\n0.1,400\n0.2,1.0\n")
     with pytest.raises(InputError, match=r"line 3: column 'speed_m_s' holds 400(\.0)?, above 150 m/s"):
         io.read_speed(p)
+
+
+def _moving_gnss(n=60, speed=12.0, heading_deg=10.0):
+    """Fixes of a drive at ``speed`` m/s on a straight ``heading_deg`` course, 1 Hz, 0.5 m sigmas, with the
+    matching north-east-down velocity."""
+    import pandas as pd
+
+    t = np.arange(n, dtype=float)
+    vn, ve = speed * np.cos(np.radians(heading_deg)), speed * np.sin(np.radians(heading_deg))
+    lat = 45.0 + np.degrees(vn * t / 6_367_000.0)
+    lon = 7.0 + np.degrees(ve * t / (6_388_000.0 * np.cos(np.radians(45.0))))
+    return pd.DataFrame({"time_s": t, "lat_deg": lat, "lon_deg": lon, "height_m": 300.0, "sigma_n_m": 0.5,
+                         "sigma_e_m": 0.5, "sigma_d_m": 1.0, "vn_m_s": vn, "ve_m_s": ve, "vd_m_s": 0.0,
+                         "sigma_vn_m_s": 0.1, "sigma_ve_m_s": 0.1, "sigma_vd_m_s": 0.1})
+
+
+@pytest.mark.parametrize("fault, match", [
+    ("zeros", r"its velocity columns say 0 times the speed its positions move at \(median over 59 pairs of "
+              r"consecutive fixes whose positions move\); expected 0\.67\.\.1\.5 \(m/s, the same motion\): zeros: a "
+              r"receiver that gave no velocity\? leave the six velocity columns out"),
+    ("kmh", r"its velocity columns say 3\.6 times .*: km/h\?"),
+    ("swapped", r"its velocity points 70 deg away from where its positions move .*: vn_m_s and ve_m_s swapped, or "
+                r"a sign \(east-north-up for north-east-down\)\?"),
+    ("sign", r"its velocity points 180 deg away"),
+])
+@pytest.mark.parametrize("kind", ["csv", "parquet"])
+def test_gnss_velocity_columns_that_do_not_describe_the_positions_motion_are_refused(tmp_path, fault, match, kind):
+    """The start-up takes heading and motion from the velocity of fixes coarser than 0.1 m, use_velocity or not,
+    and nothing compared that velocity with the positions: velocity columns of zeros made `inskit navigate` say
+    'the GNSS track never moves' of a 14 m/s drive; vn and ve swapped turned the IMU's axes by 90 deg ('the
+    readings were rotated into the vehicle's axes') and lost the filter; the sign flipped lost it too, and
+    km/h passed as 'healthy'.  read_gnss now refuses each, naming the file."""
+    df = _moving_gnss()
+    if fault == "zeros":
+        df[["vn_m_s", "ve_m_s", "vd_m_s"]] = 0.0
+    elif fault == "kmh":
+        df[["vn_m_s", "ve_m_s", "vd_m_s"]] *= 3.6
+    elif fault == "swapped":
+        df[["vn_m_s", "ve_m_s"]] = df[["ve_m_s", "vn_m_s"]].to_numpy()
+    else:
+        df[["vn_m_s", "ve_m_s", "vd_m_s"]] *= -1.0
+    p = tmp_path / f"gnss.{kind}"
+    df.to_parquet(p) if kind == "parquet" else df.to_csv(p, index=False)
+    with pytest.raises(InputError, match=rf"gnss\.{kind}: {match}"):
+        io.read_gnss(p)
+    good = _moving_gnss()
+    good.to_csv(tmp_path / "good.csv", index=False)
+    assert io.read_gnss(tmp_path / "good.csv").has_velocity
+    slow = _moving_gnss(speed=1.0)  # a walk: its positions' noise hides their motion, nothing to judge
+    slow[["vn_m_s", "ve_m_s"]] = 0.0
+    slow.to_csv(tmp_path / "slow.csv", index=False)
+    assert io.read_gnss(tmp_path / "slow.csv").has_velocity

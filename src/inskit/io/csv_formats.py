@@ -1349,7 +1349,75 @@ def read_gnss(path) -> GnssData:
     gnss = GnssData(a[:, 0], lla, a[:, 4:7], v, sv)
     if v is not None:  # the fixes' own motion against their velocity: radians under _deg, time in ms
         check_solution_time_unit(path, gnss)
+        check_gnss_velocity(path, gnss)
     return gnss
+
+
+#: :func:`check_gnss_velocity` judges pairs of consecutive fixes at most this far apart [s] whose positions move
+#: faster than this [m/s] and than this many times their own noise (sqrt(2) sigma_h / dt), and needs this many
+GNSS_VELOCITY_CHECK_MAX_DT_S = 2.0
+GNSS_VELOCITY_CHECK_MIN_SPEED_M_S = 2.0
+GNSS_VELOCITY_CHECK_NOISE_FACTOR = 5.0
+GNSS_VELOCITY_CHECK_MIN_PAIRS = 20
+#: the median ratio of the velocity columns' horizontal speed to the positions' own must lie within this band
+#: (1.00 on simulated fixes and drive_0708's .pos), the median angle between them within this [deg] (2 deg and 0.3)
+GNSS_VELOCITY_RATIO_BAND = (0.67, 1.5)
+GNSS_VELOCITY_MAX_ANGLE_DEG = 30.0
+
+
+def check_gnss_velocity(path, gnss: GnssData) -> None:
+    """Refuse fixes whose velocity columns do not describe how their
+    positions move: over pairs of consecutive fixes whose positions clearly
+    move (:data:`GNSS_VELOCITY_CHECK_MIN_SPEED_M_S`, well above their
+    noise), the median ratio of the velocity's horizontal speed to the
+    positions' outside :data:`GNSS_VELOCITY_RATIO_BAND` (zeros written by a
+    receiver that had none, km/h, knots) or the median angle between the two
+    beyond :data:`GNSS_VELOCITY_MAX_ANGLE_DEG` (vn and ve swapped, a sign:
+    east-north-up for north-east-down).  The start-up takes heading and
+    motion from the velocity of fixes coarser than 0.1 m, ``use_velocity``
+    or not: zeros said 'the GNSS track never moves' of a drive, a swap or
+    a sign turned the IMU's axes by 90 or 180 deg.  Silent with fewer than
+    :data:`GNSS_VELOCITY_CHECK_MIN_PAIRS` such pairs (fixes too sparse,
+    too noisy, or at rest)."""
+    from ..earth import principal_radii
+
+    t = gnss.time
+    n = len(t)
+    if n < 3 or gnss.v_n is None:
+        return
+    k = np.unique(np.linspace(0, n - 2, min(n - 1, TIME_UNIT_MAX_PAIRS)).astype(np.int64))
+    dt = t[k + 1] - t[k]
+    lat = gnss.lla[:, 0]
+    mid = 0.5 * (lat[k] + lat[k + 1])
+    rn, re = principal_radii(mid, 0.5 * (gnss.lla[k, 2] + gnss.lla[k + 1, 2]))
+    pn = (lat[k + 1] - lat[k]) * rn / dt
+    pe = np.angle(np.exp(1j * (gnss.lla[k + 1, 1] - gnss.lla[k, 1]))) * np.cos(mid) * re / dt
+    ps = np.hypot(pn, pe)
+    sig = gnss.sigma_ned
+    sig_h = np.maximum(np.hypot(sig[k, 0], sig[k, 1]), np.hypot(sig[k + 1, 0], sig[k + 1, 1])) / np.sqrt(2.0)
+    m = ((dt <= GNSS_VELOCITY_CHECK_MAX_DT_S) & (ps > GNSS_VELOCITY_CHECK_MIN_SPEED_M_S)
+         & (ps > GNSS_VELOCITY_CHECK_NOISE_FACTOR * np.sqrt(2.0) * sig_h / dt) & np.isfinite(ps))
+    if m.sum() < GNSS_VELOCITY_CHECK_MIN_PAIRS:
+        return
+    v = 0.5 * (gnss.v_n[k, :2] + gnss.v_n[k + 1, :2])[m]
+    vs = np.hypot(v[:, 0], v[:, 1])
+    pn, pe, ps = pn[m], pe[m], ps[m]
+    ratio = float(np.median(vs / ps))
+    lo, hi = GNSS_VELOCITY_RATIO_BAND
+    what = f"(median over {int(m.sum())} pairs of consecutive fixes whose positions move)"
+    if not lo <= ratio <= hi:
+        hint = ("zeros: a receiver that gave no velocity? leave the six velocity columns out" if ratio < 0.05 else
+                "km/h?" if abs(ratio - 3.6) < 0.4 else "knots?" if abs(ratio - 1.944) < 0.2 else
+                "mph?" if abs(ratio - 2.237) < 0.2 else "another unit or column?")
+        raise InputError(f"{path}: its velocity columns say {ratio:.3g} times the speed its positions move at "
+                         f"{what}; expected {lo:g}..{hi:g} (m/s, the same motion): {hint}")
+    ok = vs > 0
+    cos = (v[ok, 0] * pn[ok] + v[ok, 1] * pe[ok]) / (vs[ok] * ps[ok])
+    angle = float(np.degrees(np.median(np.arccos(np.clip(cos, -1.0, 1.0)))))
+    if angle > GNSS_VELOCITY_MAX_ANGLE_DEG:
+        raise InputError(f"{path}: its velocity points {angle:.0f} deg away from where its positions move {what}; "
+                         f"expected within {GNSS_VELOCITY_MAX_ANGLE_DEG:g} deg: vn_m_s and ve_m_s swapped, or a sign "
+                         "(east-north-up for north-east-down)?")
 
 
 def _check_latlon(path, lat, lon):
