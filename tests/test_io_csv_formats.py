@@ -1027,3 +1027,27 @@ def test_gnss_velocity_columns_that_do_not_describe_the_positions_motion_are_ref
     slow[["vn_m_s", "ve_m_s"]] = 0.0
     slow.to_csv(tmp_path / "slow.csv", index=False)
     assert io.read_gnss(tmp_path / "slow.csv").has_velocity
+
+
+def test_the_longest_run_of_repeated_rows_is_reported_with_its_line(tmp_path):
+    """A rate log whose output froze for 5 s (500 rows of one sample, mid-drive) was reported as '500 rows
+    repeat the previous row (the logger read one sample twice?), integrated as samples over their short
+    intervals', and the run said healthy.  The reader now gives the longest run, its span and its line, from
+    which navigate's verdict tells a frozen sensor from samples read twice (drive_0708, walk_0827: runs of 1)."""
+    t = 0.01 * np.arange(3000)
+    p = _write_rates(tmp_path / "imu.csv", t)
+    lines = p.read_text().splitlines(True)
+    frozen = lines[1001].split(",", 1)[1]  # data row 1000's six channels
+    for k in range(1002, 1501):  # data rows 1001..1499 repeat it
+        lines[k] = lines[k].split(",", 1)[0] + "," + frozen
+    lines[2001] = lines[2001].split(",", 1)[0] + "," + lines[2000].split(",", 1)[1]  # and one double read
+    p.write_text("".join(lines))
+    info = {}
+    C.read_imu(p, info=info)
+    assert info["repeated_rows"] == 500 and info["repeated_rows_longest_run"] == 499
+    assert info["repeated_rows_longest_run_at"] == "line 1003"
+    assert info["repeated_rows_longest_run_time_s"] == pytest.approx(10.01)
+    assert info["repeated_rows_longest_run_s"] == pytest.approx(4.99)
+    info = {}
+    C.read_imu(p, info=info, repeated="drop")  # counted on the rows as logged, dropped or not
+    assert info["repeated_rows_longest_run"] == 499 and info["repeated_rows_dropped"]

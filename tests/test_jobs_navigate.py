@@ -503,8 +503,11 @@ def test_repeated_imu_rows_are_reported_and_warned_of_when_kept(result):
     """The drive's 1138 re-read IMU rows (docs/formats.md): dropped by its config and said so in the
     summary; kept, the health verdict warns and names the key that drops them."""
     s = summary(result)
-    assert s["imu_repeated_rows"] == {"repeated_rows": 1138, "repeated_rows_fraction": pytest.approx(1138 / 54859),
-                                      "repeated_rows_dropped": True}
+    rep = dict(s["imu_repeated_rows"])
+    assert 0.0 < rep.pop("repeated_rows_longest_run_s") < 0.011  # each repeat alone, after a short interval
+    assert rep == {"repeated_rows": 1138, "repeated_rows_fraction": pytest.approx(1138 / 54859),
+                   "repeated_rows_dropped": True, "repeated_rows_longest_run": 1}
+    assert not [r for r in s["health"]["reasons"] if r.startswith("IMU:")]  # no frozen output
     assert not [w for w in s["health"]["warnings"] if w.startswith("IMU:")]
     cfg = load_config(EXAMPLE, {"output": {"plots": False}, "imu": {"repeated_rows": "keep"}})
     said = []
@@ -1565,3 +1568,22 @@ def test_a_start_past_the_imu_log_names_what_set_it_and_the_log_span(tmp_path):
     del data["imu"]["start_s"]
     with pytest.raises(InputError, match=r"after the start time 1\.950 s \(the first GNSS fix of gnss\.csv\)"):
         load_inputs(config_from_dict(data, base_dir=tmp_path))
+
+
+def test_a_frozen_imu_output_makes_the_run_unhealthy_naming_the_stretch():
+    """Rows repeating one sample 3 times in a row or more are the sensor's output frozen, not a sample read twice
+    (each of drive_0708's 1138 and walk_0827's 6958 repeats is alone): the verdict says unhealthy, with the file,
+    the line, the file's own time (an rtklibexplorer log's reader times carry [imu] time_offset_s) and the span."""
+    from types import SimpleNamespace
+
+    from inskit.jobs.navigate import frozen_imu_message
+
+    notes = {"repeated_rows": 500, "repeated_rows_longest_run": 499, "repeated_rows_longest_run_s": 4.99,
+             "repeated_rows_longest_run_at": "line 10003", "repeated_rows_longest_run_time_s": 243400.26}
+    imu = SimpleNamespace(file="imu_1934_gpst.csv.gz", format="rtklibexplorer", time_offset_s=-0.26)
+    msg = frozen_imu_message(notes, imu)
+    assert msg.startswith("IMU: imu_1934_gpst.csv.gz: 499 rows in a row from line 10003 (the file's time "
+                          "243400.520 s, 4.99 s of the log) repeat one sample in all six channels: the sensor's "
+                          "output froze"), msg
+    assert frozen_imu_message({**notes, "repeated_rows_longest_run": 2}, imu) is None  # double reads
+    assert frozen_imu_message({"repeated_rows": 0}, imu) is None

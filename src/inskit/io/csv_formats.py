@@ -847,11 +847,29 @@ def repeated_rows(path, t, values, mode="keep", info=None):
     if info is not None:
         info.update(repeated_rows=n, repeated_rows_fraction=n / max(len(t) - 1, 1),
                     repeated_rows_dropped=bool(mode == "drop" and n))
+        if n:
+            info.update(_longest_repeat_run(path, t, rep))
     if mode == "drop" and n:
         if len(t) - n < 2:
             raise InputError(f"{path}: {n} of {len(t)} rows repeat the previous one: fewer than two samples remain")
         return ~rep
     return None
+
+
+def _longest_repeat_run(path, t, rep) -> dict:
+    """The longest run of consecutive repeated rows (``rep``: the row
+    repeats the one before it): ``repeated_rows_longest_run`` (rows),
+    ``..._s`` (from the sample repeated to the last repeat [s], on the
+    file's times), ``..._at`` (the place of its first repeat:
+    :func:`at_row`) and ``..._time_s`` (that row's time).  A logger that
+    reads one sample twice repeats it once (drive_0708, walk_0827: every run
+    is one row); a longer run is the sensor's output frozen."""
+    edges = np.flatnonzero(np.diff(np.r_[0, rep.astype(np.int8), 0]))
+    starts, ends = edges[::2], edges[1::2]  # each run: rows starts[i] .. ends[i] - 1
+    i = int(np.argmax(ends - starts))
+    a, b = int(starts[i]), int(ends[i])
+    return {"repeated_rows_longest_run": b - a, "repeated_rows_longest_run_s": float(t[b - 1] - t[a - 1]),
+            "repeated_rows_longest_run_at": at_row(path, a), "repeated_rows_longest_run_time_s": float(t[a])}
 
 
 def _check_repeated_mode(mode):

@@ -2007,7 +2007,12 @@ def summary(res: NavigateResult) -> dict:
             "[gnss] height_offset_m = N, or write the .pos with ellipsoidal heights (RTKLIB out-height)")
     if notes.get("repeated_rows"):
         out["imu_repeated_rows"] = {k: notes[k] for k in ("repeated_rows", "repeated_rows_fraction",
-                                                          "repeated_rows_dropped")}
+                                                          "repeated_rows_dropped", "repeated_rows_longest_run",
+                                                          "repeated_rows_longest_run_s") if k in notes}
+        frozen = frozen_imu_message(notes, res.config.imu)
+        if frozen:
+            out["health"]["reasons"].append(frozen)
+            out["health"]["verdict"] = "unhealthy"
         if not notes["repeated_rows_dropped"]:
             out["health"]["warnings"].append(
                 f"IMU: {notes['repeated_rows']} rows ({notes['repeated_rows_fraction']:.1%}) repeat the previous row "
@@ -2165,6 +2170,30 @@ HEALTH_MAX_REJECTION_RUN = 4
 
 #: the non-holonomic constraint refused in more than this fraction of its updates is named as not holding
 NHC_BROKEN_FRACTION = 0.5
+
+
+#: a run of this many consecutive IMU rows or more repeating one sample in all six channels is the sensor's output
+#: frozen, not a sample read twice (a logger polling a little faster than the sensor repeats a sample once: every
+#: one of drive_0708's 1138 and walk_0827's 6958 repeats is alone)
+IMU_FROZEN_RUN_ROWS = 3
+
+
+def frozen_imu_message(notes: dict, imu_cfg) -> str | None:
+    """The health verdict's reason when the IMU log holds a run of
+    :data:`IMU_FROZEN_RUN_ROWS` or more rows repeating one sample (the
+    reader's ``repeated_rows_longest_run``, ...; ``imu_cfg``: the config's
+    ``[imu]``): the solution there was integrated, or bridged, on a sample
+    that is not the motion; None otherwise."""
+    run = notes.get("repeated_rows_longest_run", 0)
+    if run < IMU_FROZEN_RUN_ROWS:
+        return None
+    t = notes["repeated_rows_longest_run_time_s"]  # the rtklibexplorer reader's times carry [imu] time_offset_s
+    t -= imu_cfg.time_offset_s if imu_cfg.format == "rtklibexplorer" else 0.0
+    return (f"IMU: {Path(str(imu_cfg.file)).name}: {run} rows in a row from {notes['repeated_rows_longest_run_at']} "
+            f"(the file's time {t:.3f} s, {notes['repeated_rows_longest_run_s']:.3g} s of the log) repeat one sample "
+            "in all six channels: the sensor's output froze (a stuck sensor, a logger that lost it), not a sample "
+            "read twice; the solution there rests on no measured motion ([imu] repeated_rows = \"drop\" bridges "
+            "the stretch as a gap): cut the log there, or mend the logger")
 
 
 def time_tags_warnings(notes: dict, time_offset_s=0.0) -> list[str]:
