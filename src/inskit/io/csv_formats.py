@@ -1223,11 +1223,15 @@ def check_units_norms(path, wn, f_norm, gcol, acol, gunit, aunit, rows=None):
     rates.  The rules of the whole log first (they name the unit), then
     the samples one by one."""
     _check_units_of_log(path, wn, f_norm, gcol, acol, gunit, aunit, rows)
+    _check_accel_above_gravity(path, f_norm, acol, aunit)
     _check_imu_samples(path, wn, f_norm, gcol, acol, rows)
 
 
-def _check_units_of_log(path, wn, f_norm, gcol, acol, gunit, aunit, rows=None):
-    """The rules of :func:`check_units_norms` over the whole log."""
+def _check_accel_above_gravity(path, f_norm, acol, aunit):
+    """A whole log's median specific force above 3 g under an m/s^2 header
+    (ft/s^2, cm/s^2, mm/s^2; dv in cm/s, mm/s or ft/s), judged after the
+    other rules of the log, whose messages (deg/s ...) it does not take
+    over."""
     fn = float(np.median(f_norm))
     if aunit == "m_s2" and fn / G0 > _ACCEL_MS2_LIKE:
         other = "dv in cm/s, mm/s or ft/s (it must be m/s)" if acol.startswith("dv_") else \
@@ -1236,6 +1240,11 @@ def _check_units_of_log(path, wn, f_norm, gcol, acol, gunit, aunit, rows=None):
             f"{path}: column '{acol}': the median specific force is {fn:.4g} m/s^2 ({fn / G0:.3g} g), far above "
             f"gravity for a whole log: {other}? (or pass check_units=False / --no-unit-check)"
         )
+
+
+def _check_units_of_log(path, wn, f_norm, gcol, acol, gunit, aunit, rows=None):
+    """The rules of :func:`check_units_norms` over the whole log."""
+    fn = float(np.median(f_norm))
     if aunit in ("m_s2",) and fn < _ACCEL_G_LIKE:
         if acol.startswith("dv_"):  # increments have no g unit: the step they are divided by is the suspect
             raise InputError(
