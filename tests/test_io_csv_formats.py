@@ -1051,3 +1051,23 @@ def test_the_longest_run_of_repeated_rows_is_reported_with_its_line(tmp_path):
     info = {}
     C.read_imu(p, info=info, repeated="drop")  # counted on the rows as logged, dropped or not
     assert info["repeated_rows_longest_run"] == 499 and info["repeated_rows_dropped"]
+
+
+@pytest.mark.parametrize("header, scale, shown", [("m_s2", 0.0, "0 m/s\\^2"), ("g", 0.0, "0 g"),
+                                                  ("m_s2", 1e-4, "0\\.00\\d+ m/s\\^2"), ("g", 1e-3, "0\\.00\\d+ g")])
+def test_an_accelerometer_of_zeros_is_refused_as_such_not_as_values_in_g(tmp_path, header, scale, shown):
+    """accel_*_m_s2 columns of zeros (a dead or disconnected sensor) were refused as 'looks like values in g;
+    rename the columns accel_*_g', and renamed so, accel_*_g zeros were read without a word (navigate then
+    levelled on no gravity).  A median specific force far below 1 g in either unit is refused as what it is."""
+    t = 0.01 * np.arange(400)
+    rng = np.random.default_rng(3)
+    cols = {"time_s": t}
+    cols.update({f"gyro_{a}_rad_s": rng.normal(0, 1e-3, len(t)) for a in "xyz"})
+    cols.update({f"accel_{a}_{header}": scale * rng.normal(0, 1.0, len(t)) for a in "xyz"})
+    p = tmp_path / "imu.csv"
+    pd.DataFrame(cols).to_csv(p, index=False)
+    with pytest.raises(InputError, match=rf"imu\.csv: accel_{{x,y,z}}_{header}: the median specific force is {shown}, "
+                                         r"far below gravity \(1 g, 9\.81 m/s\^2\) in any unit: the accelerometer "
+                                         r"columns hold zeros or nearly"):
+        C.read_imu(p)
+    assert len(C.read_imu(p, check_units=False)) == 400  # free fall, on request

@@ -40,6 +40,8 @@ GNSS_VEL_COLUMNS = ["vn_m_s", "ve_m_s", "vd_m_s", "sigma_vn_m_s", "sigma_ve_m_s"
 # unit plausibility thresholds (see read_imu)
 _ACCEL_G_LIKE = 2.0       # median |f| in m/s^2 below this looks like g
 _ACCEL_MS2_LIKE = 3.0     # median |f| in g above this looks like m/s^2
+_ACCEL_DEAD_M_S2 = 0.3    # median |f| below this under an m_s2 header is neither m/s^2 nor g (which reads ~1)
+_ACCEL_DEAD_G = 0.2       # median |f| below this many g under a g header (m/s^2 there reads 9.8) is no accelerometer
 _GYRO_RAD_MAX = 10.0      # 99th percentile |w| in rad/s above this looks like deg/s
 _GYRO_RAD_MEDIAN = 1.0    # median |w| in rad/s above this looks like deg/s
 _IMU_STEP_MAX_S = 1.0     # a median IMU time step above this [s] (below 1 Hz) looks like ms, us or ns
@@ -1245,6 +1247,16 @@ def _check_accel_above_gravity(path, f_norm, acol, aunit):
 def _check_units_of_log(path, wn, f_norm, gcol, acol, gunit, aunit, rows=None):
     """The rules of :func:`check_units_norms` over the whole log."""
     fn = float(np.median(f_norm))
+    dead = fn == 0.0 or (not acol.startswith("dv_") and (aunit == "m_s2" and fn < _ACCEL_DEAD_M_S2
+                                                          or aunit == "g" and fn < _ACCEL_DEAD_G * G0))
+    if dead:  # neither g nor m/s^2: 'looks like values in g' (or nothing, under a g header) misled
+        cols = acol.replace("_x_", "_{x,y,z}_", 1)
+        raise InputError(
+            f"{path}: {cols}: the median specific force is {(fn if aunit == 'm_s2' else fn / G0):.4g} "
+            f"{'m/s^2' if aunit == 'm_s2' else 'g'}, far below gravity (1 g, 9.81 m/s^2) in any unit: the "
+            "accelerometer columns hold zeros or nearly (a dead or disconnected sensor, another column?) (or pass "
+            "check_units=False / --no-unit-check for a log in free fall)"
+        )
     if aunit in ("m_s2",) and fn < _ACCEL_G_LIKE:
         if acol.startswith("dv_"):  # increments have no g unit: the step they are divided by is the suspect
             raise InputError(
