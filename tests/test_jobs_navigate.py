@@ -1587,3 +1587,21 @@ def test_a_frozen_imu_output_makes_the_run_unhealthy_naming_the_stretch():
                           "output froze"), msg
     assert frozen_imu_message({**notes, "repeated_rows_longest_run": 2}, imu) is None  # double reads
     assert frozen_imu_message({"repeated_rows": 0}, imu) is None
+
+
+def test_an_aiding_log_with_its_time_in_milliseconds_is_refused():
+    """An odometer log with time_s in ms (0..300000 beside a 300 s IMU log) overlapped the IMU's span by its
+    first three readings, so it passed the overlap test: the run warned that it 'made no update (of its 3001
+    readings: 2998 outside the span ...)' and was unhealthy over 3 rejected readings, never naming the unit.
+    A day-long 10 Hz log beside a short IMU log still passes."""
+    from inskit.errors import InputError
+    from inskit.jobs.navigate import refuse_no_overlap
+    from inskit.types import ImuData
+
+    ti = np.arange(0.0, 300.0 + 1e-9, 0.01)
+    imu = ImuData(ti, np.zeros((len(ti), 3)), np.zeros((len(ti), 3)))
+    t_ms = 1000.0 * np.arange(0.0, 300.0 + 1e-9, 0.1)
+    with pytest.raises(InputError, match=r"^odo\.csv: odometer times step by 100 s \(median\) and span 300000 s, "
+                                         r"1000 times the IMU log's 300 s: is its time column in milliseconds"):
+        refuse_no_overlap("odo.csv", "odometer", t_ms, imu, "odometer.time_offset_s")
+    refuse_no_overlap("odo.csv", "odometer", np.arange(0.0, 86400.0, 0.1), imu, "odometer.time_offset_s")

@@ -652,15 +652,29 @@ def odometer_lag_warning(lag: dict | None, path, offset_s) -> str | None:
             f"{fix} (the odometer's lag against the track's: a receiver velocity that lags shifts it too)")
 
 
+#: an aiding log (odometer, speed and course) whose median step is above this [s] while it spans more than
+#: TIME_SPAN_RATIO_UNIT times the IMU log has a time column in milliseconds (a day-long 10 Hz log beside a short
+#: IMU log steps by 0.1 s)
+AIDING_STEP_MAX_S = 10.0
+
+
 def refuse_no_overlap(path, what, t, imu: ImuData, offset_key):
     """Refuse an aiding log (``what``: "odometer", "speed and course")
     whose time tags ``t`` [s, after its offset] all lie outside the IMU's
     span: none of its readings could be used, and a run without them would
-    pass for one with them.  ``offset_key`` names the config key that
-    shifts its time tags."""
+    pass for one with them; and one whose time column is in milliseconds
+    (:data:`AIDING_STEP_MAX_S`; it overlapped, and the run warned only that
+    it 'made no update').  ``offset_key`` names the config key that shifts
+    its time tags."""
     if t[-1] < imu.time[0] or t[0] > imu.time[-1]:
         raise InputError(f"{Path(path).name}: {what} times {t[0]:.3f}..{t[-1]:.3f} s do not overlap the IMU's "
                          f"{imu.time[0]:.3f}..{imu.time[-1]:.3f} s: mismatched time bases? ({offset_key})")
+    span, span_i = float(t[-1] - t[0]), float(imu.time[-1] - imu.time[0])
+    step = float(np.median(np.diff(t))) if len(t) > 1 else 0.0
+    if span_i > 0.0 and span > TIME_SPAN_RATIO_UNIT * span_i and step > AIDING_STEP_MAX_S:
+        raise InputError(f"{Path(path).name}: {what} times step by {step:.4g} s (median) and span {span:.6g} s, "
+                         f"{span / span_i:.4g} times the IMU log's {span_i:.6g} s: is its time column in "
+                         "milliseconds (a 10 Hz log steps by 100 ms)? times must be seconds")
 
 
 def odometer_measurement(cfg: NavigateConfig, imu: ImuData, gnss: GnssData | None = None):
