@@ -211,3 +211,19 @@ def test_profile_for_mechanize_is_interpolated_and_held_at_its_ends(tmp_path):
     assert said and "held over 4.000 s" in said[0]
     with pytest.raises(InputError, match="do not overlap"):
         height_profile_at(tmp_path / "p.csv", np.array([10.0, 11.0]))
+
+
+def test_a_height_log_with_its_time_in_milliseconds_is_refused(tmp_path):
+    """A barometer log with time_s in ms (0..300000 beside a 300 s IMU log) overlapped the IMU by its first
+    readings and went in, all but three of its heights outside the run; the odometer's rule now holds for it."""
+    from inskit.types import ImuData
+
+    ti = np.arange(0.0, 300.0 + 1e-9, 0.01)
+    imu = ImuData(ti, np.zeros((len(ti), 3)), np.zeros((len(ti), 3)))
+    th = np.arange(0.0, 300.0 + 1e-9, 1.0)
+    (tmp_path / "h.csv").write_text("time_s,height_m\n" + "".join(f"{1000.0 * float(x)!r},100.0\n" for x in th))
+    cfg = config_from_dict({"imu": {"file": "imu.csv"}, "gnss": {"file": "g.csv"}, "height": {"file": "h.csv"}},
+                           base_dir=tmp_path)
+    with pytest.raises(InputError, match=r"^h\.csv: height times step by 1000 s \(median\) and span 300000 s, 1000 "
+                                         r"times the IMU log's 300 s: is its time column in milliseconds"):
+        height_series(cfg, imu)

@@ -25,7 +25,8 @@ def height_series(cfg, imu: ImuData):
     Raises
     ------
     InputError
-        A log that does not overlap the IMU's, or ``sigma_m`` set beside a
+        A log that does not overlap the IMU's or whose time column is in
+        milliseconds (:func:`inskit.jobs.navigate.refuse_no_overlap`), or ``sigma_m`` set beside a
         file that has its own sigma_m column (it would be ignored).
     """
     h = cfg.height
@@ -42,10 +43,9 @@ def height_series(cfg, imu: ImuData):
             raise InputError(f"{path.name}: the file has a sigma_m column, so height.sigma_m = {h.sigma_m:g} would "
                              "be ignored; remove one of them")
         t = t + h.time_offset_s
-        if t[-1] < imu.time[0] or t[0] > imu.time[-1]:
-            raise InputError(f"{path.name}: height times {t[0]:.3f}..{t[-1]:.3f} s do not overlap the IMU's "
-                             f"{imu.time[0]:.3f}..{imu.time[-1]:.3f} s: mismatched time bases? "
-                             "(height.time_offset_s)")
+        from .navigate import refuse_no_overlap  # the odometer's rule: no overlap, or a time column in ms
+
+        refuse_no_overlap(path, "height", t, imu, "height.time_offset_s")
         if len(t) > 1:
             keep = np.r_[True, np.diff(np.floor(t * h.rate_hz)) > 0]
             t, z, s = t[keep], z[keep], s[keep]
