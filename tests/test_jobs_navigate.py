@@ -675,6 +675,29 @@ def test_an_odometer_that_reads_standing_still_while_the_track_moves_is_refused(
     check_odometer_speed("odo.csv", to, dropout, gnss)
 
 
+def test_an_odometer_whose_sign_is_backwards_is_refused():
+    """An odometer log negative while driving forward (the other sign convention) passed the speed check, which
+    takes magnitudes: `inskit navigate` lost the fixes every 16 s ('recovered from a lost state ... velocity
+    error of 28 m/s') and never named the log.  Reversing a while (a quarter of the drive) still passes."""
+    from inskit import earth
+    from inskit.errors import InputError
+    from inskit.jobs.navigate import check_odometer_speed
+    from inskit.types import GnssData
+
+    t = np.arange(0.0, 120.0, 1.0)
+    speed = np.where(t < 20.0, 0.0, 12.0)
+    lla = earth.ned_to_lla(np.column_stack([np.cumsum(speed), 0 * t, 0 * t]),
+                           np.array([np.radians(45.0), np.radians(7.0), 100.0]))
+    gnss = GnssData(t, lla, np.full((len(t), 3), 0.02))
+    to = np.arange(0.0, 120.0, 0.1)
+    v = np.interp(to, t - 0.5, speed)
+    with pytest.raises(InputError, match=r"^odo\.csv: the odometer speed is negative \(reversing\) at \d+ of the \d+ "
+                                         r"moments the vehicle moves: its sign is backwards\?"):
+        check_odometer_speed("odo.csv", to, -v, gnss)
+    some = np.where(to > 95.0, -v, v)  # the last quarter of the motion reversing
+    check_odometer_speed("odo.csv", to, some, gnss)
+
+
 def test_a_speed_and_course_log_in_the_wrong_units_is_refused_by_the_track():
     """Speed in km/h and course in radians under speed_m_s / course_deg went ahead to 1746 m and 13.7 km of outage
     error, blamed on the attitude: both are checked against the fixes' track (a drive north, then east, then

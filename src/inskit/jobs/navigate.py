@@ -457,6 +457,8 @@ ODOMETER_SPEED_RATIO = (0.8, 1.25)
 #: moments the GNSS track moves is refused (:func:`check_odometer_speed`): the ratio test, over the moments both
 #: say it moves, never saw a log of zeros
 ODOMETER_STILL_FRACTION = 0.5
+#: ... and one negative (reversing) at more than this fraction of the moments it moves: a sign backwards
+ODOMETER_REVERSE_FRACTION = 0.5
 
 
 def check_speed_course(path, t, speed, course, gnss: GnssData, min_speed_m_s=2.0):
@@ -510,8 +512,11 @@ def check_odometer_speed(path, t, v, gnss: GnssData, min_speed_m_s=2.0, what="od
     reads half ``min_speed_m_s`` or less at more than
     :data:`ODOMETER_STILL_FRACTION` of the moments the track moves (a log of
     zeros: a dead sensor, another column; km/s) is refused too: the ratio,
-    taken where both say the vehicle moves, never saw it.  ``track``: the
-    fixes' :func:`gnss_speed` when the caller has it already."""
+    taken where both say the vehicle moves, never saw it; so is one
+    negative at more than :data:`ODOMETER_REVERSE_FRACTION` of the moments
+    it moves (its sign backwards: the ratio takes magnitudes, and the filter
+    lost the fixes again and again).  ``track``: the fixes'
+    :func:`gnss_speed` when the caller has it already."""
     if len(gnss.time) < 3:
         return
     sp = (gnss_speed(gnss) if track is None else track)[0]
@@ -534,6 +539,11 @@ def check_odometer_speed(path, t, v, gnss: GnssData, min_speed_m_s=2.0, what="od
     moving = track_moving & (o > 0.5 * min_speed_m_s)
     if moving.sum() < 10:
         return
+    back = moving & (np.asarray(v, float)[inside] < 0.0)
+    if back.sum() > ODOMETER_REVERSE_FRACTION * moving.sum():  # a vehicle drives forward most of its time
+        raise InputError(f"{path}: the {what} is negative (reversing) at {int(back.sum())} of the "
+                         f"{int(moving.sum())} moments the vehicle moves: its sign is backwards? expected the "
+                         "speed along the forward axis, positive driving forward (negate the column)")
     r = float(np.median(o[moving] / g[moving]))
     if not lo <= r <= hi:
         hint = (" (km/h read as m/s?)" if abs(r - 3.6) < 0.4 else " (mph read as m/s?)" if abs(r - 2.237) < 0.25
