@@ -184,7 +184,7 @@ def _exp_gyrofree(out, log):
         q.append(published(f"analytic position error at 10 s, {ax} (our reading of the inputs)", analytic[j],
                            PUBLISHED_ANALYTIC[j], 0.005, unit="m", known_difference=True,
                            note="the source states neither the angles, their signs, d nor the unit; the note of "
-                                "`inskit reproduce gyrofree` lists the closest readings"))
+                                "`inskit reproduce gyrofree --out DIR` lists the closest readings"))
     for j, ax in enumerate("XYZ"):
         q.append(published(f"simulated position error at 10 s (fig. 14), {ax}", simulated[j], PUBLISHED_SIMULATED[j],
                            0.05, unit="m", known_difference=True,
@@ -411,17 +411,20 @@ EXPERIMENTS = {
                     "`inskit demo --checks`", _exp_demo, True),
     "spp-abpo": ("README claim and RTKLIB's published figures (data/abpo/README.md); `inskit spp`", _exp_spp, True),
     "tight-blockage": ("README claim (source 000: tight coupling below four satellites); "
-                       "`inskit reproduce tight-coupling --experiment blockage`", _exp_tight("blockage"), True),
-    "tight-walk": ("README claim; `inskit reproduce tight-coupling --experiment walk`", _exp_tight("walk"), False),
+                       "`inskit reproduce tight-coupling --out DIR --experiment blockage`", _exp_tight("blockage"),
+                       True),
+    "tight-walk": ("README claim; `inskit reproduce tight-coupling --out DIR --experiment walk`", _exp_tight("walk"),
+                   False),
     "drive-0708": ("README claim; `inskit navigate examples/drive_0708.toml --smooth`", _exp_drive, False),
     "walk-startup": ("README claim (issue 14: the job's own start-up on a walk); "
                      "`inskit navigate examples/walk_0827.toml`", _exp_walk_startup, False),
     "schemes-car": ("README claim; `inskit schemes examples/car.toml --outage 1200,1260 --seed 1`", _exp_schemes,
                     False),
-    "alignment-ga": ("source 002, figures 6-9 and headline case; `inskit reproduce alignment-ga`", _exp_alignment,
-                     False),
-    "gyrofree": ("source 003, figures 11-14; `inskit reproduce gyrofree`", _exp_gyrofree, False),
-    "integration-filters": ("source 004, table 1; `inskit reproduce integration-filters`", _exp_filters, False),
+    "alignment-ga": ("source 002, figures 6-9 and headline case; `inskit reproduce alignment-ga --out DIR`",
+                     _exp_alignment, False),
+    "gyrofree": ("source 003, figures 11-14; `inskit reproduce gyrofree --out DIR`", _exp_gyrofree, False),
+    "integration-filters": ("source 004, table 1; `inskit reproduce integration-filters --out DIR`", _exp_filters,
+                            False),
     "odometer-study": ("README claim; `inskit.jobs.odometer_study.odometer_study()`", _exp_odometer, False),
     "bench": ("README throughput (machine-dependent); `inskit bench --json`", _exp_bench, False),
 }
