@@ -353,3 +353,22 @@ def test_rest_and_motion_are_found_against_the_fixes_as_the_filter_takes_them(tm
         res = navigate(cfg)
         zupts.append(res.forward.counts.get("zupt", {}).get("used", 0))
     assert zupts[0] == 0 and zupts[1] > 100, zupts  # 19 s of rest at 10 Hz
+
+
+def test_in_motion_keys_that_auto_leaves_unused_are_said(tmp_path):
+    """init.yaw_deg with mode "auto" on a log that starts at rest: auto
+    levelled at rest (static-then-track, the yaw from the track) and the
+    yaw given was dropped without a word (found by the review of navigate's
+    inputs).  Now the health says which keys went unused and what would use
+    them; without those keys it says nothing."""
+    from inskit.jobs.navigate import summary
+
+    _simulate(tmp_path, STATIC_FIRST, 12)
+    res = navigate(_cfg(tmp_path, yaw_deg=YAW0_DEG, course_average_s=5.0))
+    assert res.startup.mode == "static-then-track"
+    w = [x for x in summary(res)["health"]["warnings"] if x.startswith("init: ")]
+    assert w == ["init: init.course_average_s, init.yaw_deg (of the in-motion start-up) were not used: mode \"auto\" "
+                 "found rest at the start and levelled there (static-then-track: the yaw from the GNSS track once "
+                 "moving); set init.mode = \"in-motion\" to start from the yaw given, or leave them out"]
+    res = navigate(_cfg(tmp_path))
+    assert not [x for x in summary(res)["health"]["warnings"] if x.startswith("init: ")]

@@ -451,6 +451,18 @@ class NoiseSection(_Strict):
 INIT_GIVEN_KEYS = ("lat_deg", "lon_deg", "height_m", "v_ned_m_s", "rpy_deg")
 #: [init] keys of mode "static-then-track"
 INIT_STATIC_KEYS = ("min_static_s", "heading_speed_m_s")
+#: [init] keys of the in-motion start-up only
+INIT_INMOTION_KEYS = ("course_average_s", "level_window_s", "yaw_deg")
+
+
+def unused_inmotion_keys(init, startup_mode) -> list[str]:
+    """The in-motion start-up's keys (:data:`INIT_INMOTION_KEYS`) that
+    ``init`` sets but a run started ``startup_mode`` did not use: mode
+    "auto" that found rest at the start and levelled there
+    (static-then-track, which takes the yaw from the track)."""
+    if init.mode != "auto" or startup_mode != "static-then-track":
+        return []
+    return _changed(init, INIT_INMOTION_KEYS)
 
 
 class InitSection(_Strict):
@@ -523,7 +535,7 @@ class InitSection(_Strict):
 
     @model_validator(mode="after")
     def _given_complete(self):
-        inmotion_keys = ("course_average_s", "level_window_s", "yaw_deg")  # keys of the in-motion start-up only
+        inmotion_keys = INIT_INMOTION_KEYS
         if self.mode == "given":
             missing = [k for k in ("lat_deg", "lon_deg", "height_m", "rpy_deg") if getattr(self, k) is None]
             if missing:

@@ -1983,6 +1983,17 @@ def summary(res: NavigateResult) -> dict:
         out["truth_errors"] = truth_errors(res, res.truth)
     out["recoveries"] = recoveries_summary(getattr(fw, "recoveries", []))
     out["health"] = health(fw, res.gaps or (), res.rate_changes or ())
+    if res.startup is not None:  # what the start-up chosen by mode "auto" left unused, said (it was silent)
+        from .config import unused_inmotion_keys
+
+        unused = unused_inmotion_keys(res.config.init, res.startup.mode)
+        if unused:
+            out["health"]["warnings"].append(
+                f"init: {', '.join(f'init.{k}' for k in unused)} (of the in-motion start-up) "
+                f"{'was' if len(unused) == 1 else 'were'} not used: mode \"auto\" found rest at the start and "
+                "levelled there (static-then-track: the yaw from the GNSS track once moving); set init.mode = "
+                "\"in-motion\" to start from "
+                + ("the yaw given" if "yaw_deg" in unused else "them") + ", or leave them out")
     if res.constraint_check:  # the default constraint did not hold: the run was made again without it
         out["constraint_check"] = dict(res.constraint_check)
         out["health"]["warnings"].append(
