@@ -151,7 +151,12 @@ def test_navigate_never_overwrites_its_inputs_even_with_overwrite(walkthrough, t
 def test_navigate_config_forms_and_errors(tmp_path, monkeypatch):
     """A dict config starts its relative paths in the working directory; bad keys and files are named."""
     monkeypatch.chdir(tmp_path)
-    with pytest.raises(InputError, match=re.escape(f"{tmp_path / 'gnss.csv'}: no such file")):
+    with pytest.raises(InputError, match=re.escape(f"{tmp_path / 'imu.csv'}: no such file (field 'imu.file')")):
+        inskit.navigate({"imu": {"file": "imu.csv"}, "gnss": {"file": "gnss.csv"}})
+    (tmp_path / "imu.csv").write_text("time_s\n")
+    (tmp_path / "gnss.csv").mkdir()  # a folder given as a file: named by its key, before anything is read
+    with pytest.raises(InputError, match=re.escape(f"{tmp_path / 'gnss.csv'}: is a folder; expected a file "
+                                                   "(field 'gnss.file')")):
         inskit.navigate({"imu": {"file": "imu.csv"}, "gnss": {"file": "gnss.csv"}})
     with pytest.raises(inskit.ConfigError, match=r"filter\.scheme"):
         inskit.navigate(ROOT / "examples" / "drive_0708.toml", filter={"scheme": "kalman"})

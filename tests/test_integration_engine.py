@@ -125,7 +125,8 @@ def test_cli_navigate_bad_config_one_line(tmp_path):
     r = subprocess.run([sys.executable, "-m", "inskit.cli", "navigate", str(p), "--out", str(tmp_path / "o")],
                        capture_output=True, text=True)
     assert r.returncode == 2
-    assert r.stderr.strip().count("\n") == 0 and "missing.pos: no such file" in r.stderr
+    # the first input missing, named by its key (every input is checked before any is read)
+    assert r.stderr.strip().count("\n") == 0 and "missing.csv: no such file (field 'imu.file')" in r.stderr
 
 
 class _RowFix:

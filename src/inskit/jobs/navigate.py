@@ -1039,6 +1039,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
     if inputs is None:
         from .warm import warm_compiled_code
 
+        check_input_files(cfg)  # every input there, each named by its key, before any is read
         warm_compiled_code()  # numba's own start-up, beside the reading (which pyarrow does without the GIL)
         raw = load_raw_gnss(cfg, log) if (tight or cfg.gnss.file is None) else None
         imu, gnss = load_inputs(cfg, time_offset_s, raw, notes=imu_notes)
@@ -2515,17 +2516,35 @@ def bank_tie_text(best) -> str:
             "start-up's")
 
 
-def run_input_files(cfg: NavigateConfig) -> list:
-    """Every file a navigate run of ``cfg`` reads, resolved: the IMU log,
-    the fixes, the RINEX observation and navigation files, the speed and
-    course log, the odometer, height and truth files (those the config
-    names)."""
+def run_input_keys(cfg: NavigateConfig) -> list:
+    """``(key, path)`` of every file a navigate run of ``cfg`` reads,
+    resolved, with the config key that names it: the IMU log, the fixes,
+    the RINEX observation and navigation files, the speed and course log,
+    the odometer, height and truth files (those the config names)."""
     g = cfg.gnss
-    files = [cfg.imu.file, g.file, g.obs, g.nav, g.speed_course,
-             cfg.odometer.file if cfg.odometer is not None else None,
-             cfg.truth.file if cfg.truth is not None else None,
-             cfg.height.file if cfg.height is not None else None]
-    return [cfg.resolve(f) for f in files if f is not None]
+    keys = [("imu.file", cfg.imu.file), ("gnss.file", g.file), ("gnss.obs", g.obs), ("gnss.nav", g.nav),
+            ("gnss.speed_course", g.speed_course),
+            ("odometer.file", cfg.odometer.file if cfg.odometer is not None else None),
+            ("truth.file", cfg.truth.file if cfg.truth is not None else None),
+            ("height.file", cfg.height.file if cfg.height is not None else None)]
+    return [(k, cfg.resolve(f)) for k, f in keys if f is not None]
+
+
+def run_input_files(cfg: NavigateConfig) -> list:
+    """The files of :func:`run_input_keys`."""
+    return [p for _, p in run_input_keys(cfg)]
+
+
+def check_input_files(cfg: NavigateConfig) -> None:
+    """Refuse, before any reading, an input of the run that is missing or a
+    folder, naming the config key that gives it (a folder given as
+    ``[gnss] file`` said only '/tmp: is a folder; expected a file', and a
+    missing IMU log was found only after the fixes had been read)."""
+    for key, p in run_input_keys(cfg):
+        if p.is_dir():
+            raise InputError(f"{p}: is a folder; expected a file (field '{key}')")
+        if not p.exists():
+            raise InputError(f"{p}: no such file (field '{key}')")
 
 
 def run_output_names() -> list:
