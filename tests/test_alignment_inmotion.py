@@ -372,3 +372,41 @@ def test_in_motion_keys_that_auto_leaves_unused_are_said(tmp_path):
                  "moving); set init.mode = \"in-motion\" to start from the yaw given, or leave them out"]
     res = navigate(_cfg(tmp_path))
     assert not [x for x in summary(res)["health"]["warnings"] if x.startswith("init: ")]
+
+
+def test_fixes_that_claim_far_less_error_than_they_have_are_named_when_refused(tmp_path):
+    """Fixes of 0.5 m noise whose file claims 1e-6 m: most were refused and
+    the run unhealthy (or, on another drive, 'covariance lost positiveness
+    ... check sensor noise settings'), and neither the fixes' sigmas nor
+    the keys that put them right were named (found by the review of
+    navigate's inputs).  The refusals' reason, and a divergence after the
+    fixes were lost, now say what the fixes claim."""
+    import dataclasses
+
+    import pandas as pd
+
+    from inskit.jobs.navigate import lost_fixes_hint, run, summary
+
+    sim = _simulate(tmp_path, STATIC_FIRST, 12)
+    g = pd.read_csv(tmp_path / "gnss.csv")
+    g[["sigma_n_m", "sigma_e_m", "sigma_d_m"]] = 1e-6
+    g.to_csv(tmp_path / "g6.csv", index=False)
+    cfg = config_from_dict({"imu": {"file": str(tmp_path / "imu.csv")},
+                            "gnss": {"file": str(tmp_path / "g6.csv"), "lever_arm_b_m": [0.0, 0.0, -1.2]}})
+    s = summary(run(cfg))
+    r = [x for x in s["health"]["reasons"] if x.startswith("gnss_pos: ") and "updates rejected (" in x]
+    assert s["health"]["verdict"] == "unhealthy" and len(r) == 1
+    assert r[0].endswith("; the fixes claim a median sigma of 1e-06 m horizontally and 1e-06 m vertically (as the "
+                         "filter takes them, [gnss] sigma_floor_m = 0): fixes noisier than they claim are refused "
+                         "until the filter is lost; if they are, floor them ([gnss] sigma_floor_m) or scale them "
+                         "(sigma_scale_ned)"), r
+    # a divergence's message after the fixes were lost gets the same; one that lost no fix, nothing
+    formal = dataclasses.replace(sim.gnss, sigma_ned=np.full_like(sim.gnss.sigma_ned, 1e-6))
+    lost = "covariance lost positiveness at t = 31.000 s; before it the filter was lost: gnss_pos 3 of 31 updates used"
+    assert "claim a median sigma of 1e-06 m" in lost_fixes_hint(lost, formal, cfg.gnss)
+    assert lost_fixes_hint("covariance lost positiveness at t = 31.000 s", formal, cfg.gnss) == ""
+    assert lost_fixes_hint("...; before it the filter was lost: nhc 3 of 31 updates used", formal, cfg.gnss) == ""
+    # the fixes as they are: nothing of it
+    ok = config_from_dict({"imu": {"file": str(tmp_path / "imu.csv")},
+                           "gnss": {"file": str(tmp_path / "gnss.csv"), "lever_arm_b_m": [0.0, 0.0, -1.2]}})
+    assert not [x for x in summary(run(ok))["health"]["reasons"] if "the fixes claim" in x]

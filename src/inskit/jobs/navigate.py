@@ -981,6 +981,40 @@ def nhc_broken(res: NavigateResult) -> str | None:
     return None
 
 
+def lost_fixes_hint(message, gnss: GnssData, g) -> str:
+    """What a divergence's message (``message``, with the engine's
+    :func:`inskit.integration.engine.lost_note`) adds when the GNSS position
+    fixes were refused before it: the sigma the fixes claim, as the filter
+    takes them (``g``: the ``[gnss]`` section), and the keys that put a
+    claim right.  Fixes of 0.58 m noise whose file claimed 1e-6 m ended in
+    'covariance lost positiveness ... check sensor noise settings', naming
+    neither the fixes nor their sigmas.  ``""`` when the fixes were not
+    lost."""
+    lost = message.partition("before it the filter was lost:")[2]
+    if "gnss_pos " not in lost:
+        return ""
+    return fixes_claim_hint(gnss, g)
+
+
+#: a run whose GNSS position updates are refused more than this fraction of the time has the fixes' claimed
+#: sigma said beside the refusals (:func:`fixes_claim_hint`)
+FIXES_LOST_FRACTION = 0.5
+
+
+def fixes_claim_hint(gnss: GnssData, g) -> str:
+    """``"; the fixes claim ..."``: the median sigma the fixes claim, as the
+    filter takes them (``g``: the ``[gnss]`` section), and the keys that
+    put a claim right; said beside a divergence after the fixes were lost
+    (:func:`lost_fixes_hint`) and beside a run that refused most of them."""
+    sig = fix_sigmas(gnss.sigma_ned, g.sigma_floor_m, g.sigma_scale_ned)
+    h = float(np.median(np.hypot(sig[:, 0], sig[:, 1]) / np.sqrt(2.0)))
+    v = float(np.median(sig[:, 2]))
+    return (f"; the fixes claim a median sigma of {h:.3g} m horizontally and {v:.3g} m vertically (as the filter "
+            f"takes them, [gnss] sigma_floor_m = {g.sigma_floor_m:g}): fixes noisier than they claim are refused "
+            "until the filter is lost; if they are, floor them ([gnss] sigma_floor_m) or scale them "
+            "(sigma_scale_ned)")
+
+
 def run(cfg: NavigateConfig, *, log=None, stream_dir=None, **kw) -> NavigateResult:
     """:func:`navigate`, and again without the non-holonomic constraint when
     it was on by default (not set by the user) and does not hold.
@@ -1225,12 +1259,21 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
             if log:
                 log(bank_line(bank))
         streams = pending = truth_parts = None
-        if stream_dir is not None and streams_run(cfg):
-            out, sm, streams, pending, truth_parts = _run_streamed(cfg, imu, gnss, windows, initial, meas, settings,
-                                                                   extra, smooth, progress, stream_dir, log, truth)
-        else:
-            out = run_filter(imu, initial, meas, settings, smoother=smooth, progress=progress, extra_noise=extra)
-            sm = rts_smooth(out) if smooth else None
+        from ..filters.kalman import FilterDivergence
+
+        try:
+            if stream_dir is not None and streams_run(cfg):
+                out, sm, streams, pending, truth_parts = _run_streamed(cfg, imu, gnss, windows, initial, meas,
+                                                                       settings, extra, smooth, progress, stream_dir,
+                                                                       log, truth)
+            else:
+                out = run_filter(imu, initial, meas, settings, smoother=smooth, progress=progress, extra_noise=extra)
+                sm = rts_smooth(out) if smooth else None
+        except FilterDivergence as exc:
+            hint = "" if tight else lost_fixes_hint(str(exc), gnss, cfg.gnss)
+            if not hint:
+                raise
+            raise FilterDivergence(f"{exc}{hint}") from None
         if log:
             for r in out.recoveries:
                 if r.get("fixes_position"):
@@ -1984,6 +2027,13 @@ def summary(res: NavigateResult) -> dict:
         out["truth_errors"] = truth_errors(res, res.truth)
     out["recoveries"] = recoveries_summary(getattr(fw, "recoveries", []))
     out["health"] = health(fw, res.gaps or (), res.rate_changes or ())
+    c = fw.counts.get("gnss_pos")
+    if (res.config.gnss.coupling != "tight" and c
+            and c["rejected"] > FIXES_LOST_FRACTION * (c["used"] + c["rejected"])):
+        reasons = out["health"]["reasons"]  # the refusals' reason says what the fixes claim (it named no sigma)
+        k = next((i for i, r in enumerate(reasons) if r.startswith("gnss_pos: ") and "updates rejected (" in r), None)
+        if k is not None:
+            reasons[k] += fixes_claim_hint(res.gnss, res.config.gnss)
     if res.startup is not None:  # what the start-up chosen by mode "auto" left unused, said (it was silent)
         from .config import unused_inmotion_keys
 
