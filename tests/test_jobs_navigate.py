@@ -1602,12 +1602,16 @@ def test_a_frozen_imu_output_makes_the_run_unhealthy_naming_the_stretch():
     from inskit.jobs.navigate import frozen_imu_message
 
     notes = {"repeated_rows": 500, "repeated_rows_longest_run": 499, "repeated_rows_longest_run_s": 4.99,
-             "repeated_rows_longest_run_at": "line 10003", "repeated_rows_longest_run_time_s": 243400.26}
+             "repeated_rows_longest_run_at": "line 10003", "repeated_rows_longest_run_time_s": 243400.26,
+             "reader_time_offset_s": -0.26}  # as load_inputs notes it for this reader
     imu = SimpleNamespace(file="imu_1934_gpst.csv.gz", format="rtklibexplorer", time_offset_s=-0.26)
     msg = frozen_imu_message(notes, imu)
     assert msg.startswith("IMU: imu_1934_gpst.csv.gz: 499 rows in a row from line 10003 (the file's time "
                           "243400.520 s, 4.99 s of the log) repeat one sample in all six channels: the sensor's "
                           "output froze"), msg
+    # an inskit-format log: its reader's times are the file's, whatever [imu] time_offset_s
+    inskit_imu = SimpleNamespace(file="imu.csv", format="inskit", time_offset_s=5.0)
+    assert "(the file's time 243400.260 s," in frozen_imu_message({**notes, "reader_time_offset_s": 0.0}, inskit_imu)
     assert frozen_imu_message({**notes, "repeated_rows_longest_run": 2}, imu) is None  # double reads
     assert frozen_imu_message({"repeated_rows": 0}, imu) is None
 
@@ -1628,3 +1632,31 @@ def test_an_aiding_log_with_its_time_in_milliseconds_is_refused():
                                          r"1000 times the IMU log's 300 s: is its time column in milliseconds"):
         refuse_no_overlap("odo.csv", "odometer", t_ms, imu, "odometer.time_offset_s")
     refuse_no_overlap("odo.csv", "odometer", np.arange(0.0, 86400.0, 0.1), imu, "odometer.time_offset_s")
+
+
+def test_the_notes_say_the_offset_their_reader_put_in_their_times(tmp_path):
+    """The IMU reader's notes (time-tag checks, repeated rows) carry times
+    with [imu] time_offset_s for the rtklibexplorer log (its reader applies
+    it) but not for the inskit format (the offset is added after reading):
+    the messages took the offset off both (suspected by the review of
+    navigate's inputs), giving an inskit log's file time wrong by the
+    offset.  load_inputs now notes the offset in the notes' times."""
+    from inskit import io
+    from inskit.jobs.config import config_from_dict, load_config
+    from inskit.jobs.navigate import load_inputs
+
+    cfg = load_config(EXAMPLE)
+    notes = {}
+    load_inputs(cfg, notes=notes)
+    assert cfg.imu.format == "rtklibexplorer" and cfg.imu.time_offset_s != 0.0
+    assert notes["reader_time_offset_s"] == cfg.imu.time_offset_s
+    notes = {}
+    load_inputs(cfg, time_offset_s=-0.3, notes=notes)  # a calibration's trial offset, not the config's
+    assert notes["reader_time_offset_s"] == -0.3
+    sim = _simulated(LAG_CAR[:2])
+    io.write_imu(tmp_path / "imu.csv", sim.imu)
+    io.write_gnss(tmp_path / "gnss.csv", sim.gnss)
+    notes = {}
+    load_inputs(config_from_dict({"imu": {"file": str(tmp_path / "imu.csv"), "time_offset_s": 0.5},
+                                  "gnss": {"file": str(tmp_path / "gnss.csv")}}), notes=notes)
+    assert notes["reader_time_offset_s"] == 0.0  # the inskit reader's times are the file's

@@ -401,6 +401,9 @@ def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = N
             t_imu += imu_off
         rotate_to_body(np.radians(cfg.imu.mount_rpy_deg), dth, dv)
         imu = ImuData(t_imu, dth, dv)
+    if notes is not None:  # the offset in the times of the reader's notes (the rtklibexplorer reader applies it; the
+        # inskit reader's times are the file's, the offset added above): what a message takes off for the file's time
+        notes["reader_time_offset_s"] = float(imu_off) if cfg.imu.format == "rtklibexplorer" else 0.0
     if gnss.time[-1] < imu.time[0] or gnss.time[0] > imu.time[-1]:
         raise InputError(
             f"GNSS ({gpath.name}: {gnss.time[0]:.3f}..{gnss.time[-1]:.3f} s) and IMU ({ipath.name}: "
@@ -1091,7 +1094,7 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
             for c in imu_notes.get("time_tag_rate_changes", ()):
                 log(f"IMU: the time tags smoothed apart on either side of the rate change from "
                     f"{c['rate_before_hz']:.4g} Hz to {c['rate_after_hz']:.4g} Hz at t = "
-                    f"{c['t_s'] - cfg.imu.time_offset_s:.3f} s (the file's time)")
+                    f"{c['t_s'] - imu_notes.get('reader_time_offset_s', 0.0):.3f} s (the file's time)")
     else:
         imu, gnss = inputs[:2]
         raw = inputs[2] if len(inputs) > 2 else None
@@ -2110,7 +2113,7 @@ def summary(res: NavigateResult) -> dict:
             "time_tag_interval_median_s", "time_tags_moved_rms_s", "time_tags_moved_max_s", "time_tag_jitter_s",
             "time_tags_moved_net_rms_s", "time_tags_moved_net_max_s", "time_tags_left_out_spread_max_s",
             "time_tags_beyond_jitter", "time_tag_rate_changes") if k in notes}
-        out["health"]["warnings"] += time_tags_warnings(notes, res.config.imu.time_offset_s)
+        out["health"]["warnings"] += time_tags_warnings(notes, notes.get("reader_time_offset_s", 0.0))
         if notes["time_smoothing_samples"] == 1 and notes["time_tag_jitter_fraction"] > JITTER_HINT_FRACTION:
             med = notes["time_tag_interval_median_s"]
             out["health"]["warnings"].append(
@@ -2274,7 +2277,7 @@ def frozen_imu_message(notes: dict, imu_cfg) -> str | None:
     if run < IMU_FROZEN_RUN_ROWS:
         return None
     t = notes["repeated_rows_longest_run_time_s"]  # the rtklibexplorer reader's times carry [imu] time_offset_s
-    t -= imu_cfg.time_offset_s if imu_cfg.format == "rtklibexplorer" else 0.0
+    t -= notes.get("reader_time_offset_s", 0.0)
     return (f"IMU: {Path(str(imu_cfg.file)).name}: {run} rows in a row from {notes['repeated_rows_longest_run_at']} "
             f"(the file's time {t:.3f} s, {notes['repeated_rows_longest_run_s']:.3g} s of the log) repeat one sample "
             "in all six channels: the sensor's output froze (a stuck sensor, a logger that lost it), not a sample "
@@ -2287,8 +2290,8 @@ def time_tags_warnings(notes: dict, time_offset_s=0.0) -> list[str]:
     figure of the reader's check beyond its limit
     (``notes["time_tags_beyond_jitter"]``,
     :func:`inskit.io.time_tags.smoothing_check`), naming the summary key
-    (under ``imu_time_tags``), the time (the file's: ``time_offset_s`` taken
-    off) and row where the tags moved most, and what to do."""
+    (under ``imu_time_tags``), the time (the file's: ``time_offset_s``, the
+    offset the reader put in the notes' times, taken off) and row where the tags moved most, and what to do."""
     out = []
     n = notes.get("time_smoothing_samples")
     for b in notes.get("time_tags_beyond_jitter") or ():
