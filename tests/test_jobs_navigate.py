@@ -1660,3 +1660,38 @@ def test_the_notes_say_the_offset_their_reader_put_in_their_times(tmp_path):
     load_inputs(config_from_dict({"imu": {"file": str(tmp_path / "imu.csv"), "time_offset_s": 0.5},
                                   "gnss": {"file": str(tmp_path / "gnss.csv")}}), notes=notes)
     assert notes["reader_time_offset_s"] == 0.0  # the inskit reader's times are the file's
+
+
+def test_a_gyro_column_in_another_unit_is_told_by_the_tracks_turns(tmp_path):
+    """Gyro rates in rad/s under a deg/s header read 57.3 times too little:
+    the magnitudes cannot tell (a static log's rates are tiny either way),
+    and the drive ended unhealthy, 436 m of outage error, the unit never
+    named (found by the review of navigate's inputs).  The gyros' turning
+    is now set against the GNSS track's over its turns: the simulated car
+    reads 1.0 and runs; its gyros read 57.3 times too little, or too much,
+    are refused naming the file and the likely unit; check_units = false
+    runs it as it is."""
+    from inskit import io
+    from inskit.errors import InputError
+    from inskit.jobs.config import config_from_dict
+    from inskit.jobs.navigate import check_gyro_turns, navigate
+    from inskit.simulation.scenario import load_scenario, simulate
+    from inskit.types import ImuData
+
+    sim = simulate(load_scenario(Path(__file__).resolve().parents[1] / "examples" / "car.toml"), seed=1)
+    check_gyro_turns("imu.csv", sim.imu, sim.gnss)  # the true unit: silent
+    for k, unit in ((np.pi / 180.0, "rad/s under a deg/s header"), (180.0 / np.pi, "deg/s under a rad/s header")):
+        wrong = ImuData(sim.imu.time, sim.imu.dtheta_b * k, sim.imu.dv_b)
+        with pytest.raises(InputError, match=rf"^imu\.csv: while the GNSS track turns \(\d+ turns of over 15 deg in 3 s "
+                                             rf"at over 3 m/s\), the gyros turn a median [0-9.]+ times as much as its "
+                                             rf"course: a gyro column in another unit \({unit}"):
+            check_gyro_turns("imu.csv", wrong, sim.gnss)
+    # navigate refuses it before the start-up; check_units = false runs it as it is
+    t = sim.imu.time <= 700.0
+    io.write_imu(tmp_path / "imu.csv", ImuData(sim.imu.time[t], sim.imu.dtheta_b[t] * np.pi / 180.0, sim.imu.dv_b[t]))
+    io.write_gnss(tmp_path / "gnss.csv", sim.gnss.select(sim.gnss.time <= 700.0))
+    cfg = {"imu": {"file": str(tmp_path / "imu.csv")},
+           "gnss": {"file": str(tmp_path / "gnss.csv"), "lever_arm_b_m": [0.0, 0.0, -1.2]}}
+    with pytest.raises(InputError, match=r"imu\.csv: while the GNSS track turns"):
+        navigate(config_from_dict(cfg))
+    navigate(config_from_dict({**cfg, "imu": {**cfg["imu"], "check_units": False}}))

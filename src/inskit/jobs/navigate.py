@@ -716,6 +716,63 @@ def odometer_measurement(cfg: NavigateConfig, imu: ImuData, gnss: GnssData | Non
     return m
 
 
+#: the gyros' turning over the GNSS track's (median over its turns) outside which a gyro column is in another unit
+#: (rad/s under a deg/s header reads 57.3 times too little; deg/s under rad/s, 57.3 times too much)
+GYRO_TURN_RATIO = (0.1, 10.0)
+#: turns the check of :func:`check_gyro_turns` needs before it judges
+GYRO_TURN_MIN_MOMENTS = 10
+
+
+def check_gyro_turns(path, imu: ImuData, gnss: GnssData, min_speed_m_s=3.0, window_s=3.0, min_turn_deg=15.0):
+    """Refuse an IMU log whose gyros turn far less, or far more, than the
+    GNSS track (:data:`GYRO_TURN_RATIO`): a gyro column in another unit
+    that the magnitudes alone cannot tell (rad/s under the rtklibexplorer
+    log's deg/s header: a drive ended unhealthy, 436 m of outage error, the
+    unit never named; found by the review of navigate's inputs).
+
+    Over windows of about ``window_s`` of fixes (one after the other) where
+    the track moves above ``min_speed_m_s`` throughout and its course turns
+    by more than ``min_turn_deg`` and five times the course's noise
+    (:func:`inskit.alignment.coarse.gnss_speed`), the angle the gyros
+    turned (the norm of the summed angle increments, whatever the mounting)
+    is set against the course's change; the median of the ratios over at
+    least :data:`GYRO_TURN_MIN_MOMENTS` such turns is judged.  Silent with
+    fewer (a walk, a ship, a log at rest).  drive_0708 reads 1.0, the
+    simulated car 1.0."""
+    t = gnss.time
+    if len(t) < 2 * GYRO_TURN_MIN_MOMENTS:
+        return
+    k = max(1, int(round(window_s / float(np.median(np.diff(t))))))
+    i = np.arange(0, len(t) - k, k)
+    j = i + k
+    speed, course, sig_v = gnss_speed(gnss)
+    low = np.minimum.reduceat(speed, np.column_stack([i, j]).ravel())[::2]  # the slowest fix of each window
+    low = np.minimum(low, speed[j])
+    dc = np.abs(np.angle(np.exp(1j * (course[j] - course[i]))))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        noise = 5.0 * np.sqrt(2.0) * sig_v / np.maximum(low, 1e-9)
+    turning = ((low > min_speed_m_s) & (dc > min_turn_deg * DEG) & (dc > noise) & (t[j] - t[i] <= 2.0 * window_s)
+               & (t[i] >= imu.time[0]) & (t[j] < imu.time[-1]))
+    a = np.searchsorted(imu.time, t[i][turning], side="right")  # the increments over (t_i, t_j]
+    b = np.searchsorted(imu.time, t[j][turning], side="right")
+    keep = b > a + 1
+    if keep.sum() < GYRO_TURN_MIN_MOMENTS:
+        return
+    a, b, dc = a[keep], b[keep], dc[turning][keep]
+    # rows a..b-1 of each turn (b < the last row: the turns end before the log does); reduceat's sums between
+    # the turns (odd places) are dropped
+    sums = np.add.reduceat(imu.dtheta_b, np.column_stack([a, b]).ravel())[::2]
+    ratio = float(np.median(np.linalg.norm(sums, axis=1) / dc))
+    if GYRO_TURN_RATIO[0] <= ratio <= GYRO_TURN_RATIO[1]:
+        return
+    guess = ("rad/s under a deg/s header reads 57.3 times too little" if ratio < 1.0
+             else "deg/s under a rad/s header reads 57.3 times too much")
+    raise InputError(f"{path}: while the GNSS track turns ({len(a)} turns of over {min_turn_deg:g} deg in "
+                     f"{window_s:g} s at over {min_speed_m_s:g} m/s), the gyros turn a median {ratio:.3g} times as "
+                     f"much as its course: a gyro column in another unit ({guess}); check the units of its header, "
+                     "or set [imu] check_units = false to run it as it is")
+
+
 def speed_course_measurement(cfg: NavigateConfig, windows, lever, imu: ImuData, gnss: GnssData | None = None):
     """GNSS speed and course over ground as horizontal-velocity updates,
     withheld inside the outage windows like the fixes; refuses a log that
@@ -1126,6 +1183,8 @@ def navigate(cfg: NavigateConfig, *, smooth=False, progress=None, time_offset_s=
         raise InputError(f"{src}: {len(gnss)} GNSS fix(es), {int(used.sum())} of them outside the outages"
                          "; the filter needs at least two")
     gnss_used = gnss.select(used)
+    if cfg.imu.check_units:  # a gyro column in another unit, told by the track's turns
+        check_gyro_turns(cfg.resolve(cfg.imu.file).name if cfg.imu.file else "the IMU data", imu, gnss_used)
     lever = np.asarray(cfg.gnss.lever_arm_b_m, float)
     startup = None
     measured = {}
