@@ -1418,19 +1418,11 @@ def check_gnss_velocity(path, gnss: GnssData) -> None:
     a sign turned the IMU's axes by 90 or 180 deg.  Silent with fewer than
     :data:`GNSS_VELOCITY_CHECK_MIN_PAIRS` such pairs (fixes too sparse,
     too noisy, or at rest)."""
-    from ..earth import principal_radii
-
     t = gnss.time
-    n = len(t)
-    if n < 3 or gnss.v_n is None:
+    if len(t) < 3 or gnss.v_n is None:
         return
-    k = np.unique(np.linspace(0, n - 2, min(n - 1, TIME_UNIT_MAX_PAIRS)).astype(np.int64))
-    dt = t[k + 1] - t[k]
-    lat = gnss.lla[:, 0]
-    mid = 0.5 * (lat[k] + lat[k + 1])
-    rn, re = principal_radii(mid, 0.5 * (gnss.lla[k, 2] + gnss.lla[k + 1, 2]))
-    pn = (lat[k + 1] - lat[k]) * rn / dt
-    pe = np.angle(np.exp(1j * (gnss.lla[k + 1, 1] - gnss.lla[k, 1]))) * np.cos(mid) * re / dt
+    k, dt, dn, de = _row_pairs(t, gnss.lla)
+    pn, pe = dn / dt, de / dt
     ps = np.hypot(pn, pe)
     sig = gnss.sigma_ned
     sig_h = np.maximum(np.hypot(sig[k, 0], sig[k, 1]), np.hypot(sig[k + 1, 0], sig[k + 1, 1])) / np.sqrt(2.0)
@@ -1457,6 +1449,24 @@ def check_gnss_velocity(path, gnss: GnssData) -> None:
         raise InputError(f"{path}: its velocity points {angle:.0f} deg away from where its positions move {what}; "
                          f"expected within {GNSS_VELOCITY_MAX_ANGLE_DEG:g} deg: vn_m_s and ve_m_s swapped, or a sign "
                          "(east-north-up for north-east-down)?")
+
+
+def _row_pairs(t, lla):
+    """``(k, dt, dn, de)``: at most :data:`TIME_UNIT_MAX_PAIRS` pairs of
+    consecutive rows ``k, k + 1`` spread over a file, their time step [s]
+    and the north and east displacement between them [m] (the chord on the
+    WGS84 radii of curvature at the mid-point; the longitude the short way
+    round)."""
+    from ..earth import principal_radii
+
+    n = len(t)
+    k = np.unique(np.linspace(0, n - 2, min(n - 1, TIME_UNIT_MAX_PAIRS)).astype(np.int64))
+    lat = lla[:, 0]
+    mid = 0.5 * (lat[k] + lat[k + 1])
+    rn, re = principal_radii(mid, 0.5 * (lla[k, 2] + lla[k + 1, 2]))
+    dn = (lat[k + 1] - lat[k]) * rn
+    de = np.angle(np.exp(1j * (lla[k + 1, 1] - lla[k, 1]))) * np.cos(mid) * re
+    return k, t[k + 1] - t[k], dn, de
 
 
 def _check_latlon(path, lat, lon):
@@ -1617,18 +1627,9 @@ def check_solution_time_unit(path, sol: NavSolution | GnssData) -> None:
     :data:`TIME_UNIT_MIN_ROWS` moving rows, is not checked.  The distance
     between rows: the chord on the WGS84 radii of curvature."""
     t = sol.time
-    n = len(t)
-    if n < 3:
+    if len(t) < 3:
         return
-    k = np.unique(np.linspace(0, n - 2, min(n - 1, TIME_UNIT_MAX_PAIRS)).astype(np.int64))
-    dt = t[k + 1] - t[k]
-    from ..earth import principal_radii
-
-    lat = sol.lla[:, 0]
-    mid = 0.5 * (lat[k] + lat[k + 1])
-    rn, re = principal_radii(mid, 0.5 * (sol.lla[k, 2] + sol.lla[k + 1, 2]))
-    dn = (lat[k + 1] - lat[k]) * rn
-    de = np.angle(np.exp(1j * (sol.lla[k + 1, 1] - sol.lla[k, 1]))) * np.cos(mid) * re
+    k, dt, dn, de = _row_pairs(t, sol.lla)
     pos_speed = np.hypot(dn, de) / dt
     v = 0.5 * (np.hypot(sol.v_n[k, 0], sol.v_n[k, 1]) + np.hypot(sol.v_n[k + 1, 0], sol.v_n[k + 1, 1]))
     m = (v > TIME_UNIT_MIN_SPEED_M_S) & (dt > 0) & np.isfinite(pos_speed)
