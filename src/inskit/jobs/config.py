@@ -92,7 +92,8 @@ class ImuSection(_Strict):
         (0.0, 0.0, 0.0), description="roll, pitch, yaw (ZYX) of the rotation from the body axes (forward, right, "
         "down) to the sensor axes; the readings are rotated into body axes")
     check_units: bool = Field(True, description="refuse a log whose magnitudes betray a wrong unit (e.g. deg/s "
-                              "under a rad/s header; docs/formats.md)")
+                              "under a rad/s header), or whose gyros turn far less or more than the GNSS track "
+                              "(rad/s under a deg/s header); name its lone spikes (docs/formats.md)")
     first_row: Literal["initial", "increment", "discard"] = Field(
         "initial", description="what the first row of an increment file (dtheta/dv columns) is: 'initial' (the "
         "initial epoch, zero increments; a first row that holds increments is refused, the file seems to lack its "
