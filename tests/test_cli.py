@@ -156,6 +156,26 @@ def test_mechanize_warnings_are_in_its_json_too(files, tmp_path, capsys):
     assert code == 0 and json.loads(out)["warnings"] == []
 
 
+def test_mechanize_names_a_lone_imu_spike(files, tmp_path, capsys):
+    """A corrupt row (one gyro sample of 87 rad/s) was integrated by mechanize without a word, the solution
+    turned by radians; now its warnings name it, as navigate's do (inskit.integration.gaps.imu_spikes), and
+    --no-unit-check leaves them out."""
+    from inskit.types import ImuData
+
+    imu = io.read_imu(files / "imu.csv")
+    dth = imu.dtheta_b.copy()
+    dth[300, 2] = 87.0 * float(imu.time[300] - imu.time[299])
+    io.write_imu(tmp_path / "spike.csv", ImuData(imu.time, dth, imu.dv_b))
+    base = ("mechanize", tmp_path / "spike.csv", "--init-from", files / "truth.csv", "--json")
+    code, out, err = _in_process(capsys, *base)
+    assert code == 0, err
+    w = [x for x in json.loads(out)["warnings"] if "lone sample" in x]
+    assert len(w) == 1 and w[0].startswith(f"IMU: spike.csv: 1 lone sample far beyond its neighbours (t = "
+                                           f"{imu.time[300]:.3f} s, gyro 87 rad/s beside "), w
+    code, out, err = _in_process(capsys, *base, "--no-unit-check")
+    assert code == 0 and not [x for x in json.loads(out)["warnings"] if "lone sample" in x]
+
+
 def test_mechanize_says_when_the_solution_leaves_the_earth(files, tmp_path, capsys):
     """`mechanize` of the bundled drive's IMU (mounted upside down) with roll 0 in --init fell to a height of
     -3259 km at 13 km/s and printed it as a result: no warning, and the --out file it wrote was refused by

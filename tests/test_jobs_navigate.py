@@ -1697,13 +1697,10 @@ def test_a_gyro_column_in_another_unit_is_told_by_the_tracks_turns(tmp_path):
     navigate(config_from_dict({**cfg, "imu": {**cfg["imu"], "check_units": False}}))
 
 
-def test_a_lone_imu_spike_below_the_readers_limits_is_named(tmp_path, monkeypatch):
-    """One gyro sample of 5000 deg/s (87 rad/s) in a drive, below the
-    readers' 1000 rad/s limit, was integrated without a word: the run
-    unhealthy, no row named (found by the review of navigate's inputs).
-    Lone spikes are now listed with their file times (block by block, the
-    same across block edges) and said in the health warnings; a real
-    bump's ringing (tens of deg/s from one sample to the next) is not one."""
+def test_load_inputs_notes_the_imu_spikes_at_the_file_times(tmp_path):
+    """navigate names the IMU's lone spikes (:func:`inskit.integration.gaps.imu_spikes`,
+    tested in tests/test_integration_gaps.py): load_inputs notes them with the file's times
+    ([imu] time_offset_s taken back off), and the summary says them."""
     from inskit import io
     from inskit.jobs import navigate as N
     from inskit.jobs.config import config_from_dict
@@ -1712,27 +1709,11 @@ def test_a_lone_imu_spike_below_the_readers_limits_is_named(tmp_path, monkeypatc
     n = 2000
     t = np.arange(n) * 0.01
     rng = np.random.default_rng(0)
-    w = np.radians(50.0) * np.sign(rng.standard_normal((n, 3)))  # ringing at +-50 deg/s, sample to sample
+    w = np.radians(5.0) * np.sign(rng.standard_normal((n, 3)))
     f = np.tile([0.0, 0.0, -9.81], (n, 1)) + rng.standard_normal((n, 3))
-    w[700, 0], f[1500, 2] = 87.0, 60.0 * 9.80665  # a gyro spike, an accelerometer one (60 g beside 1 g)
-    imu = ImuData(t, np.r_[np.zeros((1, 3)), w[1:] * 0.01], np.r_[np.zeros((1, 3)), f[1:] * 0.01])
-    got = N.imu_spikes(imu)
-    assert [(s["row"], s["sensor"]) for s in got] == [(700, "gyro"), (1500, "accel")]
-    assert got[0]["value"] == pytest.approx(np.linalg.norm(w[700])) and got[0]["t_s"] == t[700]
-    for block in (7, 700, 701):  # the spike at a block's first, last or inner row: the same
-        monkeypatch.setattr(N, "SPIKE_BLOCK_ROWS", block)
-        assert N.imu_spikes(imu) == got
-    assert N.imu_spikes(ImuData(t, np.r_[np.zeros((1, 3)), np.radians(50.0) * 0.01 * np.ones((n - 1, 3))],
-                                imu.dv_b)) == [got[1]]  # the ringing alone: no gyro spike
-    msg = N.spikes_warning(got, "imu.csv")
-    assert msg.startswith("IMU: imu.csv: 2 lone samples far beyond their neighbours (t = 7.000 s, gyro 87 rad/s "
-                          "beside 1.51; t = 15.000 s, accel 60 g beside ") and "corrupt rows?" in msg, msg
-    assert N.spikes_warning([], "imu.csv") is None
-    # load_inputs notes them with the file's times ([imu] time_offset_s taken back off); a calmer log (the
-    # reader's unit check reads a median of 50 deg/s as deg/s under a rad/s header)
-    calm = w * 0.1
-    calm[700, 0] = 87.0
-    io.write_imu(tmp_path / "imu.csv", ImuData(t, np.r_[np.zeros((1, 3)), calm[1:] * 0.01], imu.dv_b))
+    w[700, 0], f[1500, 2] = 87.0, 60.0 * 9.80665
+    io.write_imu(tmp_path / "imu.csv", ImuData(t, np.r_[np.zeros((1, 3)), w[1:] * 0.01],
+                                               np.r_[np.zeros((1, 3)), f[1:] * 0.01]))
     g = _simulated(LAG_CAR[:1]).gnss
     io.write_gnss(tmp_path / "gnss.csv", g.select(g.time <= t[-1]))
     notes = {}

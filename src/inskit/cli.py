@@ -192,8 +192,11 @@ def mechanize(imu_file, init_text, init_from, frame, height, height_ref, no_coni
         warnings.append(msg)
 
     href = None if height == "free" else (init.lla[2] if height_ref is None else _height_ref(height_ref, imu, warn))
-    from .integration.gaps import find_gaps, find_rate_changes, refuse_long_gaps
+    from .integration.gaps import find_gaps, find_rate_changes, imu_spikes, refuse_long_gaps, spikes_warning
 
+    spiked = spikes_warning(imu_spikes(imu) if not no_unit_check else [], Path(imu_file).name)
+    if spiked:  # a corrupt row integrated as it is: said, as navigate says it
+        warn(spiked)
     for ch in find_rate_changes(imu):
         warn(f"{imu_file}: the sampling rate changes from {ch.rate_before_hz:.4g} Hz to "
              f"{ch.rate_after_hz:.4g} Hz near t = {ch.t_s:.3f} s (row {ch.row})")

@@ -146,6 +146,60 @@ def bridge_gaps(imu: ImuData, gaps):
     return ImuData(np.concatenate(t_parts), np.concatenate(th_parts), np.concatenate(v_parts)), out
 
 
+#: a lone IMU sample whose angular rate [rad/s] or specific force [m/s^2] exceeds these, and ten times both its
+#: neighbours', is a spike (a corrupt row): no vehicle's or person's motion jumps so for one sample (drive_0708's
+#: pitch rate rings at +-50 deg/s, 0.9 rad/s, from one sample to the next at a bump)
+SPIKE_RATE_RAD_S, SPIKE_FORCE_M_S2, SPIKE_FACTOR = 20.0, 30.0 * 9.80665, 10.0
+#: rows per block of :func:`imu_spikes` (its temporaries stay a few megabytes on logs of any length)
+SPIKE_BLOCK_ROWS = 1 << 18
+
+
+def imu_spikes(imu: ImuData) -> list[dict]:
+    """The IMU's lone spikes: rows whose mean angular rate above
+    :data:`SPIKE_RATE_RAD_S` (or specific force above
+    :data:`SPIKE_FORCE_M_S2`) exceeds :data:`SPIKE_FACTOR` times both
+    neighbours' (row 0, the initial epoch, and a missing neighbour count
+    zero), sorted by row: ``{"row", "t_s", "sensor", "value", "neighbour"}``
+    (``value``, ``neighbour`` [rad/s] or [m/s^2]).  Below the readers'
+    limits (1000 rad/s, 1000 g, refused), such a row was integrated without
+    a word: a 5000 deg/s sample in drive_0708 left the run unhealthy, no row
+    named (found by the review of navigate's inputs); ``inskit mechanize`` integrates such
+    a row alike.  Block by block."""
+    t, n = imu.time, len(imu.time)
+    out = []
+    for sensor, x, lim in (("gyro", imu.dtheta_b, SPIKE_RATE_RAD_S), ("accel", imu.dv_b, SPIKE_FORCE_M_S2)):
+        for a in range(1, n, SPIKE_BLOCK_ROWS):
+            b = min(n, a + SPIKE_BLOCK_ROWS)
+            lo, hi = max(1, a - 1), min(n, b + 1)  # one neighbour row either side
+            r = np.sqrt(np.einsum("ij,ij->i", x[lo:hi], x[lo:hi])) / (t[lo:hi] - t[lo - 1:hi - 1])
+            if not (r[a - lo:b - lo] > lim).any():
+                continue
+            prev, nxt = np.zeros_like(r), np.zeros_like(r)
+            prev[1:], nxt[:-1] = r[:-1], r[1:]
+            near = np.maximum(prev, nxt)
+            idx = np.flatnonzero((r > lim) & (r > SPIKE_FACTOR * near))
+            idx = idx[(idx >= a - lo) & (idx < b - lo)]
+            out += [{"row": int(lo + i), "t_s": float(t[lo + i]), "sensor": sensor, "value": float(r[i]),
+                     "neighbour": float(near[i])} for i in idx]
+    return sorted(out, key=lambda sp: sp["row"])
+
+
+def spikes_warning(spikes, imu_file) -> str | None:
+    """The health warning of :func:`imu_spikes` (None without spikes): how
+    many, the first three with their times (the file's) and values."""
+    if not spikes:
+        return None
+    unit = {"gyro": ("rad/s", 1.0), "accel": ("g", 9.80665)}
+    shown = "; ".join(f"t = {sp['t_s']:.3f} s, {sp['sensor']} {sp['value'] / unit[sp['sensor']][1]:.3g} "
+                      f"{unit[sp['sensor']][0]} beside {sp['neighbour'] / unit[sp['sensor']][1]:.3g}"
+                      for sp in spikes[:3])
+    more = f" (and {len(spikes) - 3} more)" if len(spikes) > 3 else ""
+    return (f"IMU: {imu_file}: {len(spikes)} lone sample{'s' if len(spikes) > 1 else ''} far beyond "
+            f"{'their' if len(spikes) > 1 else 'its'} neighbours ({shown}{more}; the file's times): "
+            + ("corrupt rows? each was" if len(spikes) > 1 else "a corrupt row? it was")
+            + " integrated as it is, a jump in attitude or velocity there")
+
+
 def gap_process_noise(layout: StateLayout, length_s, rate_sigma=np.radians(5.0), accel_sigma=1.0):
     """(layout.size,) variances a gap of ``length_s`` adds: an unknown rate
     change of ``rate_sigma`` [rad/s] and acceleration change ``accel_sigma``

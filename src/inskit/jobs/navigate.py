@@ -405,6 +405,8 @@ def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = N
         # inskit reader's times are the file's, the offset added above): what a message takes off for the file's time
         notes["reader_time_offset_s"] = float(imu_off) if cfg.imu.format == "rtklibexplorer" else 0.0
         if cfg.imu.check_units:
+            from ..integration.gaps import imu_spikes
+
             notes["spikes"] = [dict(sp, t_s=sp["t_s"] - float(imu_off)) for sp in imu_spikes(imu)]  # file's times
     if gnss.time[-1] < imu.time[0] or gnss.time[0] > imu.time[-1]:
         raise InputError(
@@ -429,59 +431,6 @@ def load_inputs(cfg: NavigateConfig, time_offset_s=None, raw: RawGnss | None = N
                          f"log's {len(imu)} samples span {imu.time[0]:.3f}..{imu.time[-1]:.3f} s (after "
                          "[imu] time_offset_s): the run needs at least 10 from its start on")
     return imu.slice(k0), gnss
-
-
-#: a lone IMU sample whose angular rate [rad/s] or specific force [m/s^2] exceeds these, and ten times both its
-#: neighbours', is a spike (a corrupt row): no vehicle's or person's motion jumps so for one sample (drive_0708's
-#: pitch rate rings at +-50 deg/s, 0.9 rad/s, from one sample to the next at a bump)
-SPIKE_RATE_RAD_S, SPIKE_FORCE_M_S2, SPIKE_FACTOR = 20.0, 30.0 * 9.80665, 10.0
-#: rows per block of :func:`imu_spikes` (its temporaries stay a few megabytes on logs of any length)
-SPIKE_BLOCK_ROWS = 1 << 18
-
-
-def imu_spikes(imu: ImuData) -> list[dict]:
-    """The IMU's lone spikes: rows whose mean angular rate above
-    :data:`SPIKE_RATE_RAD_S` (or specific force above
-    :data:`SPIKE_FORCE_M_S2`) exceeds :data:`SPIKE_FACTOR` times both
-    neighbours' (row 0, the initial epoch, and a missing neighbour count
-    zero), sorted by row: ``{"row", "t_s", "sensor", "value", "neighbour"}``
-    (``value``, ``neighbour`` [rad/s] or [m/s^2]).  Below the readers'
-    limits (1000 rad/s, 1000 g, refused), such a row was integrated without
-    a word: a 5000 deg/s sample in drive_0708 left the run unhealthy, no row
-    named (found by the review of navigate's inputs).  Block by block."""
-    t, n = imu.time, len(imu.time)
-    out = []
-    for sensor, x, lim in (("gyro", imu.dtheta_b, SPIKE_RATE_RAD_S), ("accel", imu.dv_b, SPIKE_FORCE_M_S2)):
-        for a in range(1, n, SPIKE_BLOCK_ROWS):
-            b = min(n, a + SPIKE_BLOCK_ROWS)
-            lo, hi = max(1, a - 1), min(n, b + 1)  # one neighbour row either side
-            r = np.sqrt(np.einsum("ij,ij->i", x[lo:hi], x[lo:hi])) / (t[lo:hi] - t[lo - 1:hi - 1])
-            if not (r[a - lo:b - lo] > lim).any():
-                continue
-            prev, nxt = np.zeros_like(r), np.zeros_like(r)
-            prev[1:], nxt[:-1] = r[:-1], r[1:]
-            near = np.maximum(prev, nxt)
-            idx = np.flatnonzero((r > lim) & (r > SPIKE_FACTOR * near))
-            idx = idx[(idx >= a - lo) & (idx < b - lo)]
-            out += [{"row": int(lo + i), "t_s": float(t[lo + i]), "sensor": sensor, "value": float(r[i]),
-                     "neighbour": float(near[i])} for i in idx]
-    return sorted(out, key=lambda sp: sp["row"])
-
-
-def spikes_warning(spikes, imu_file) -> str | None:
-    """The health warning of :func:`imu_spikes` (None without spikes): how
-    many, the first three with their times (the file's) and values."""
-    if not spikes:
-        return None
-    unit = {"gyro": ("rad/s", 1.0), "accel": ("g", 9.80665)}
-    shown = "; ".join(f"t = {sp['t_s']:.3f} s, {sp['sensor']} {sp['value'] / unit[sp['sensor']][1]:.3g} "
-                      f"{unit[sp['sensor']][0]} beside {sp['neighbour'] / unit[sp['sensor']][1]:.3g}"
-                      for sp in spikes[:3])
-    more = f" (and {len(spikes) - 3} more)" if len(spikes) > 3 else ""
-    return (f"IMU: {imu_file}: {len(spikes)} lone sample{'s' if len(spikes) > 1 else ''} far beyond "
-            f"{'their' if len(spikes) > 1 else 'its'} neighbours ({shown}{more}; the file's times): "
-            + ("corrupt rows? each was" if len(spikes) > 1 else "a corrupt row? it was")
-            + " integrated as it is, a jump in attitude or velocity there")
 
 
 #: GNSS fixes and an IMU log of one run whose spans differ more than this many times have a time column in
@@ -2203,6 +2152,8 @@ def summary(res: NavigateResult) -> dict:
         out["health"]["warnings"] += [f"truth: {w}" for w in attitude_unit_warnings(
             fw.solution, res.truth, "the solution", out["truth_file"]) if w.startswith(out["truth_file"])]
     notes = res.imu_notes or {}
+    from ..integration.gaps import spikes_warning
+
     warn = spikes_warning(notes.get("spikes"), Path(str(res.config.imu.file)).name)
     if warn:
         out["health"]["warnings"].append(warn)
