@@ -462,3 +462,19 @@ def test_a_pos_sigma_beyond_reason_is_refused_naming_its_line(tmp_path, field, v
     p.write_text("".join(lines))
     with pytest.raises(InputError, match=rf"big\.pos: line {k + 1}: " + match.split(": ", 1)[1]):
         read_pos(p)
+
+
+def test_a_pos_velocity_that_does_not_describe_the_positions_motion_is_refused(tmp_path):
+    """read_gnss refused fixes whose velocity columns do not describe how their positions move (420c12f), but
+    read_pos, whose velocity the start-up takes heading and motion from alike, read vn and ve swapped or in
+    km/h without a word: the same check now runs on a .pos with velocity, naming its columns."""
+    header, rows = _pos_rows(2197)  # the whole drive: it moves
+    assert read_pos(_write_pos(tmp_path / "ok.pos", header, rows))[0].v_n is not None
+    swapped = [f[:15] + [f[16], f[15]] + f[17:] for f in rows]
+    with pytest.raises(InputError, match=r"swapped\.pos: its velocity points \d+ deg away from where its positions "
+                                         r"move .*: vn\(m/s\) and ve\(m/s\) swapped, or a sign"):
+        read_pos(_write_pos(tmp_path / "swapped.pos", header, swapped))
+    kmh = [f[:15] + [f"{float(x) * 3.6:.4f}" for x in f[15:18]] + f[18:] for f in rows]
+    with pytest.raises(InputError, match=r"kmh\.pos: its velocity columns say 3\.\d+ times the speed its positions "
+                                         r"move at .*: km/h\?"):
+        read_pos(_write_pos(tmp_path / "kmh.pos", header, kmh))

@@ -1404,7 +1404,7 @@ GNSS_VELOCITY_RATIO_BAND = (0.67, 1.5)
 GNSS_VELOCITY_MAX_ANGLE_DEG = 30.0
 
 
-def check_gnss_velocity(path, gnss: GnssData) -> None:
+def check_gnss_velocity(path, gnss: GnssData, names=("vn_m_s", "ve_m_s")) -> None:
     """Refuse fixes whose velocity columns do not describe how their
     positions move: over pairs of consecutive fixes whose positions clearly
     move (:data:`GNSS_VELOCITY_CHECK_MIN_SPEED_M_S`, well above their
@@ -1417,7 +1417,8 @@ def check_gnss_velocity(path, gnss: GnssData) -> None:
     or not: zeros said 'the GNSS track never moves' of a drive, a swap or
     a sign turned the IMU's axes by 90 or 180 deg.  Silent with fewer than
     :data:`GNSS_VELOCITY_CHECK_MIN_PAIRS` such pairs (fixes too sparse,
-    too noisy, or at rest)."""
+    too noisy, or at rest).  ``names``: the file's north and east velocity
+    columns, for the message (an RTKLIB ``.pos``: ``vn(m/s)``, ``ve(m/s)``)."""
     t = gnss.time
     if len(t) < 3 or gnss.v_n is None:
         return
@@ -1447,7 +1448,7 @@ def check_gnss_velocity(path, gnss: GnssData) -> None:
     angle = float(np.degrees(np.median(np.arccos(np.clip(cos, -1.0, 1.0)))))
     if angle > GNSS_VELOCITY_MAX_ANGLE_DEG:
         raise InputError(f"{path}: its velocity points {angle:.0f} deg away from where its positions move {what}; "
-                         f"expected within {GNSS_VELOCITY_MAX_ANGLE_DEG:g} deg: vn_m_s and ve_m_s swapped, or a sign "
+                         f"expected within {GNSS_VELOCITY_MAX_ANGLE_DEG:g} deg: {names[0]} and {names[1]} swapped, or a sign "
                          "(east-north-up for north-east-down)?")
 
 

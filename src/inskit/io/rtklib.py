@@ -20,10 +20,10 @@ from ..errors import InputError
 from ..files import require_file
 from ..types import GnssData, ImuData, check_euler, plain_number
 from ..units import DEG, G0, MAX_HEIGHT_M
-from .csv_formats import (GZIP_ERRORS, CheckedBytes, TextFault, _header_names, at_row, check_imu_time,
-                          check_imu_units, check_ranges, check_sigmas, check_time_column, cut_short_note,
-                          gzip_damage_message, lean_columns, numeric_columns, read_table, repeated_rows,
-                          require_columns)
+from .csv_formats import (GZIP_ERRORS, CheckedBytes, TextFault, _header_names, at_row, check_gnss_velocity,
+                          check_imu_time, check_imu_units, check_ranges, check_sigmas, check_time_column,
+                          cut_short_note, gzip_damage_message, lean_columns, numeric_columns, read_table,
+                          repeated_rows, require_columns)
 from .time_tags import smooth_time_tags
 
 GPS_EPOCH = datetime(1980, 1, 6, tzinfo=timezone.utc)
@@ -283,7 +283,10 @@ def read_pos(path, *, quality=(1, 2), week0=None, time_offset_s=0.0, info=None):
             v = sv = None  # velocity sigmas absent: treat the velocity as unusable
         else:
             check_sigmas(path, sv, ["sdvn", "sdve", "sdvu"], "m/s", where=line)
-    return GnssData(t[keep], lla, sig, v, sv), week0
+    g = GnssData(t[keep], lla, sig, v, sv)
+    if v is not None:  # the velocity the start-up takes heading and motion from, against the positions' own motion
+        check_gnss_velocity(path, g, names=("vn(m/s)", "ve(m/s)"))
+    return g, week0
 
 
 #: a data row of a .pos file: a calendar date and time (``2025/07/08 19:34:18.499``) or a GPS week and seconds of
