@@ -560,3 +560,15 @@ def test_a_truth_rate_slower_than_the_scenario_is_refused(tmp_path, capsys):
     res = json.loads(capsys.readouterr().out)
     assert dur % 2.0 > 0.1  # the truth's last row, on its 2 s grid, falls short of the end
     assert res["duration_s"] == pytest.approx(dur, abs=1.0 / sc.imu.rate_hz)
+
+
+def test_a_rate_given_apart_replaces_the_imu_rate_but_never_hides_a_bad_imu_section(tmp_path):
+    """load_scenario(imu_rate_hz=...) (gyrofree simulate --rate) checks the scenario at that rate; an [imu]
+    that is no table is still refused as such, not replaced by one holding the rate alone."""
+    p = tmp_path / "s.toml"
+    p.write_text('name = "x"\n[start]\nlat_deg = 45.0\nlon_deg = 10.0\n[imu]\nrate_hz = 100.0\n'
+                 '[[segment]]\ntype = "static"\nduration_s = 5.0\n')
+    assert load_scenario(p, imu_rate_hz=1000.0).imu.rate_hz == 1000.0
+    p.write_text(p.read_text().replace("[imu]\nrate_hz = 100.0\n", "").replace('name = "x"\n', 'name = "x"\nimu = 5\n'))
+    with pytest.raises(ConfigError, match=r"imu"):
+        load_scenario(p, imu_rate_hz=1000.0)

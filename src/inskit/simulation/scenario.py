@@ -305,9 +305,8 @@ def load_scenario(path, *, imu_rate_hz=None) -> Scenario:
     vibration above the Nyquist frequency): a command that samples the
     scenario at its own rate (``inskit gyrofree simulate --rate``)."""
     data = read_toml(path, "scenario")
-    if imu_rate_hz is not None:
-        imu = data.get("imu")
-        data["imu"] = {**(imu if isinstance(imu, dict) else {}), "rate_hz": float(imu_rate_hz)}
+    if imu_rate_hz is not None and isinstance(data.get("imu", {}), dict):  # an [imu] of another shape: refused below
+        data["imu"] = {**data.get("imu", {}), "rate_hz": float(imu_rate_hz)}
     try:
         sc = Scenario.model_validate(data)
     except ValidationError as exc:
